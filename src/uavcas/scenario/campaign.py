@@ -1,0 +1,158 @@
+"""Campaign axes, presets, the seeded permutation and shard selection.
+
+The paper preset is the Cartesian product of Table 'tab:config_space': 16 attack compositions x
+{5,10,15,20} UAVs x {logdist,3gpp} x {spiral,grid,hover_transit,random} x {10,30} dBm, with
+2 BSs, image payload, adaptive MCS and a -95 dBm noise floor: 1,024 configurations. `index` is
+the position in that product (compositions vary slowest); `position` is where the seeded
+permutation put it, so that any prefix or shard covers every axis proportionally.
+"""
+
+from __future__ import annotations
+
+import itertools
+import re
+from dataclasses import dataclass
+
+import numpy as np
+
+from .codec import Scenario, ScenarioError, parse
+
+REPLAY_CONSERVATIVE = "replay=50,200,10,5,inc"
+REPLAY_AGGRESSIVE = "replay=100,100,20,3,rand"
+
+# Table 'tab:collab_taxonomy' of the paper, tokens in canonical order.
+PAPER_COMPOSITIONS: tuple[str, ...] = (
+    "benign",
+    "dos=1000",
+    "ddos=1000",
+    "blackhole",
+    "wormhole",
+    REPLAY_CONSERVATIVE,
+    REPLAY_AGGRESSIVE,
+    "blackhole+dos=1000",
+    "blackhole+ddos=1000",
+    "dos=1000+wormhole",
+    "ddos=1000+wormhole",
+    "blackhole+wormhole",
+    f"blackhole+{REPLAY_CONSERVATIVE}",
+    f"ddos=1000+{REPLAY_CONSERVATIVE}",
+    f"dos=1000+{REPLAY_CONSERVATIVE}",
+    f"{REPLAY_CONSERVATIVE}+wormhole",
+)
+
+
+@dataclass(frozen=True)
+class ManifestEntry:
+    index: int  # position in the unpermuted preset
+    position: int  # position in the seeded permutation
+    config: str
+    seed: int  # the run's own seed, derived from (campaign seed, index)
+    windows: int
+    window_s: float
+
+    def to_dict(self) -> dict:
+        return {
+            "index": self.index,
+            "position": self.position,
+            "config": self.config,
+            "seed": self.seed,
+            "windows": self.windows,
+            "window_s": self.window_s,
+        }
+
+
+@dataclass(frozen=True)
+class Preset:
+    name: str
+    configs: tuple[str, ...]
+    windows: int
+    window_s: float
+
+
+def _paper_configs() -> tuple[str, ...]:
+    out = []
+    for comp, n, pl, mission, tx in itertools.product(
+        PAPER_COMPOSITIONS, (5, 10, 15, 20), ("logdist", "3gpp"),
+        ("spiral", "grid", "hover_transit", "random"), (10, 30),
+    ):
+        out.append(f"{comp}-{n}-2-image-{pl}-adaptive-{mission}-{tx}-95")
+    return tuple(out)
+
+
+# The quick preset is the default main job: small swarms, short runs, and every kind of class a
+# first look needs (benign, a flood, stealth attacks, a collaborative pair, both path-loss models).
+QUICK_CONFIGS: tuple[str, ...] = (
+    "benign-5-2-image-logdist-adaptive-random-30-95",
+    "dos=1000-5-2-image-logdist-adaptive-spiral-30-95",
+    "blackhole-5-2-image-3gpp-adaptive-grid-30-95",
+    "wormhole-6-2-image-logdist-adaptive-hover_transit-10-95",
+    f"{REPLAY_AGGRESSIVE}-5-2-image-logdist-adaptive-random-30-95",
+    "blackhole+dos=1000-6-2-image-3gpp-adaptive-random-10-95",
+)
+
+PRESETS: dict[str, Preset] = {
+    "paper": Preset("paper", _paper_configs(), windows=12, window_s=5.0),
+    "quick": Preset("quick", QUICK_CONFIGS, windows=3, window_s=5.0),
+}
+
+
+def run_seed(campaign_seed: int, index: int) -> int:
+    """A run's seed: stable in (campaign seed, index), independent of order and sharding."""
+    return int(np.random.SeedSequence([campaign_seed, index]).generate_state(1, np.uint32)[0])
+
+
+def permutation(n: int, seed: int) -> np.ndarray:
+    return np.random.Generator(np.random.PCG64(seed)).permutation(n)
+
+
+_SHARD = re.compile(r"^(0|[1-9][0-9]*)/([1-9][0-9]*)$")
+
+
+def parse_shard(text: str) -> tuple[int, int]:
+    m = _SHARD.match(text.strip())
+    if not m:
+        raise ValueError(f"shard: expected K/N with 0 <= K < N, got {text!r}")
+    k, n = int(m.group(1)), int(m.group(2))
+    if k >= n:
+        raise ValueError(f"shard: K must be < N, got {text!r}")
+    return k, n
+
+
+def manifest(
+    preset: str | Preset = "paper", seed: int = 0, shard: tuple[int, int] | None = None
+) -> list[ManifestEntry]:
+    """Entries in permutation order; a shard K/N is the K-th of N contiguous, near-equal slices."""
+    p = PRESETS[preset] if isinstance(preset, str) else preset
+    for c in p.configs:  # a preset is data; refuse it loudly if it is not valid
+        parse(c)
+    order = permutation(len(p.configs), seed)
+    entries = [
+        ManifestEntry(
+            index=int(idx),
+            position=pos,
+            config=p.configs[idx],
+            seed=run_seed(seed, int(idx)),
+            windows=p.windows,
+            window_s=p.window_s,
+        )
+        for pos, idx in enumerate(order)
+    ]
+    if shard is not None:
+        k, n = shard
+        bounds = np.linspace(0, len(entries), n + 1).round().astype(int)
+        entries = entries[bounds[k] : bounds[k + 1]]
+    return entries
+
+
+__all__ = [
+    "ManifestEntry",
+    "PAPER_COMPOSITIONS",
+    "PRESETS",
+    "Preset",
+    "Scenario",
+    "ScenarioError",
+    "manifest",
+    "parse_shard",
+    "permutation",
+    "run_seed",
+]

@@ -1,0 +1,123 @@
+"""Typed values of a plan: what the twin should do, per window.
+
+A `Plan` is pure data. It is produced by `uavcas.twin.plan()` without root or side effects and is
+consumed by the emulator (`uavcas.emulation`), the labeller and the reports. Its JSON form
+(`plan.json`) is the contract between those stages; `SCHEMA_VERSION` changes when it does.
+"""
+
+from __future__ import annotations
+
+from typing import Literal
+
+from pydantic import BaseModel, ConfigDict, Field
+
+SCHEMA_VERSION = 1
+
+NodeKind = Literal["uav", "bs"]
+LinkKind = Literal["air", "backhaul"]
+Family = Literal["dos", "ddos", "blackhole", "wormhole", "replay"]
+
+
+class _Frozen(BaseModel):
+    model_config = ConfigDict(frozen=True, extra="forbid")
+
+
+class Node(_Frozen):
+    """One emulated host (a UAV or a base station) with its own stack and its own switch."""
+
+    name: str  # "uav0".."uavN-1", "bs0".."bsM-1"
+    kind: NodeKind
+    index: int  # position in Plan.nodes; switch i belongs to node i
+    ip: str  # IPv4 inside the emulation's private /16
+    mac: str  # locally administered, derived from the index (static ARP/FDB need it up front)
+
+
+class Link(_Frozen):
+    """An active undirected link in one window, with the parameters the channel chain gave it.
+
+    `a` precedes `b` in node order. Air links carry the full chain; backhaul (BS-BS, wired) links
+    have no radio fields. Rate, delay and loss apply to each direction independently.
+    """
+
+    a: str
+    b: str
+    kind: LinkKind
+    distance_m: float
+    pathloss_db: float | None
+    snr_db: float | None
+    mcs: int | None
+    rate_mbps: float
+    delay_ms: float
+    loss: float = Field(ge=0.0, le=1.0)
+    los: bool | None = None  # sampled LOS state where the path-loss model has one (3GPP)
+
+
+class Route(_Frozen):
+    """The hop-by-hop path a flow between two nodes takes in one window (node names, ends included)."""
+
+    src: str
+    dst: str
+    hops: list[str]
+
+
+class Window(_Frozen):
+    index: int
+    t_s: float  # start of the window, seconds from the start of the run
+    duration_s: float
+    positions: dict[str, tuple[float, float, float]]  # metres, x/y in the area, z altitude
+    links: list[Link]
+    routes: list[Route]  # benign traffic paths (UAV i <-> BS i mod n_bs) and attack paths
+    wormholes: list["WormholeOverride"] = Field(default_factory=list)
+
+
+class WormholeOverride(_Frozen):
+    """While active, traffic between `victim` and `bs` is forced through `attacker`'s switch."""
+
+    victim: str
+    attacker: str
+    bs: str
+
+
+class Attack(_Frozen):
+    """One scheduled attack. Times are seconds from the start of the run; stop is exclusive."""
+
+    attack_id: str  # stable within the plan: "<family>-<k>"
+    family: Family
+    attackers: list[str]
+    victims: list[str]
+    start_s: float
+    stop_s: float
+    params: dict[str, float | int | str] = Field(default_factory=dict)
+
+
+class Plan(_Frozen):
+    schema_version: int = SCHEMA_VERSION
+    config: str  # the scenario string, canonical form
+    seed: int
+    window_s: float
+    profile: str  # channel/mobility profile name the plan was made with
+    area_m: tuple[float, float, float, float]  # x_max, y_max, z_min, z_max
+    nodes: list[Node]
+    windows: list[Window]
+    attacks: list[Attack]
+
+    @property
+    def duration_s(self) -> float:
+        return len(self.windows) * self.window_s
+
+    def node(self, name: str) -> Node:
+        for n in self.nodes:
+            if n.name == name:
+                return n
+        raise KeyError(f"no node named {name!r} in the plan")
+
+    def to_json(self) -> str:
+        """Byte-stable JSON: same plan, same bytes."""
+        return self.model_dump_json(indent=1) + "\n"
+
+    @classmethod
+    def from_json(cls, text: str) -> "Plan":
+        return cls.model_validate_json(text)
+
+
+Window.model_rebuild()
