@@ -1,9 +1,84 @@
-"""`uavcas plan CONFIG`: the pure digital-twin plan of one scenario."""
+"""`uavcas plan CONFIG`: the pure digital-twin plan of one scenario, its summary and figures."""
 
 from __future__ import annotations
 
+from collections import Counter
+from pathlib import Path
+
 import typer
+from rich.table import Table
+
+from uavcas.scenario import ScenarioError
+
+from .common import atomic_write_text, console, fail
+
+
+def plan_cmd(
+    config: str = typer.Argument(..., help="Scenario string, e.g. dos=1000-20-2-image-logdist-adaptive-random-30-95"),
+    seed: int = typer.Option(0, "--seed", help="Seed: the same seed and config give the same plan."),
+    windows: int = typer.Option(12, "--windows", min=1, help="Number of windows."),
+    window_s: float = typer.Option(5.0, "--window-s", min=0.1, help="Window length in seconds."),
+    profile: str = typer.Option(None, "--profile", help="Channel/mobility profile name or JSON path."),
+    out: Path = typer.Option(None, "--out", help="Write plan.json here."),
+    figure: Path = typer.Option(None, "--figure", help="Directory for one topology PNG per window."),
+) -> None:
+    """Plan a scenario: positions, links and their rate/delay/loss per window, attack schedule."""
+    from uavcas.twin import plan as make_plan
+    from uavcas.twin.profile import ProfileError
+
+    try:
+        p = make_plan(config, seed=seed, windows=windows, window_s=window_s, profile=profile)
+    except ScenarioError as e:
+        raise fail(str(e)) from None
+    except ProfileError as e:
+        raise fail(f"--profile: {e}") from None
+    print_summary(p)
+    if out is not None:
+        atomic_write_text(out, p.to_json())
+        console.print(f"plan written to {out}")
+    if figure is not None:
+        from uavcas.report.topology import draw_plan_windows
+
+        paths = draw_plan_windows(p, figure)
+        console.print(f"{len(paths)} topology figures written to {figure}")
+
+
+def print_summary(p) -> None:
+    uavs = sum(n.kind == "uav" for n in p.nodes)
+    console.print(
+        f"[bold]{p.config}[/] seed={p.seed} profile={p.profile}: {uavs} UAVs, "
+        f"{len(p.nodes) - uavs} BSs, {len(p.windows)} windows x {p.window_s:g} s"
+    )
+    t = Table(title="windows", show_lines=False)
+    for col in ("window", "t_s", "links", "air", "mean rate Mbit/s", "mean delay ms", "max loss", "max hops"):
+        t.add_column(col, justify="right")
+    mcs_hist: Counter[int] = Counter()
+    for w in p.windows:
+        air = [lk for lk in w.links if lk.kind == "air"]
+        mcs_hist.update(lk.mcs for lk in air)
+        t.add_row(
+            str(w.index),
+            f"{w.t_s:g}",
+            str(len(w.links)),
+            str(len(air)),
+            f"{sum(lk.rate_mbps for lk in air) / max(1, len(air)):.1f}",
+            f"{sum(lk.delay_ms for lk in air) / max(1, len(air)):.2f}",
+            f"{max((lk.loss for lk in air), default=0):.2e}",
+            str(max((len(r.hops) - 1 for r in w.routes), default=0)),
+        )
+    console.print(t)
+    console.print(
+        "MCS histogram (air links, all windows): "
+        + ", ".join(f"MCS{k}: {mcs_hist[k]}" for k in sorted(mcs_hist))
+    )
+    if not p.attacks:
+        console.print("attacks: none (benign)")
+    for a in p.attacks:
+        console.print(
+            f"attack {a.attack_id}: {', '.join(a.attackers)} -> {', '.join(a.victims)} "
+            f"from {a.start_s:.3f} s to {a.stop_s:.3f} s {a.params or ''}"
+        )
 
 
 def register(app: typer.Typer) -> None:
-    pass
+    app.command("plan")(plan_cmd)

@@ -1,0 +1,3 @@
+from uavcas.cli import main
+
+main()

@@ -1,0 +1,196 @@
+"""`plan(scenario, seed) -> Plan`: what the twin should do, window by window.
+
+Pure and deterministic: no clock, no environment, no global RNG. Independent seeded streams for
+base-station placement, mobility, shadowing and the attack schedule, so changing one (say, the
+attack draw) leaves the others as they were.
+
+Per window k (t = k * window_s): mobility gives positions; the routing rule gives the active
+links (plus wormhole detours while one is scheduled); the channel chain gives every link its
+rate, delay and loss. The channel is evaluated for every node pair each window, active or not,
+so correlated shadowing evolves with the geometry rather than with the routing.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from uavcas.channel import Channel
+from uavcas.mobility import Area, make_mission
+from uavcas.scenario import Scenario
+from uavcas.topology.routing import Topology, nearest_neighbour_topology, route, with_wormholes
+
+from .model import Attack, Link, Node, Plan, Route, Window, WormholeOverride
+from .profile import DEFAULT_PROFILE, TwinProfile, load_profile
+from .schedule import schedule_attacks
+
+# Stream ids for SeedSequence([seed, stream]); never renumber (it would change every plan).
+_BS_STREAM, _MOBILITY_STREAM, _CHANNEL_STREAM, _ATTACK_STREAM = 1, 2, 3, 4
+
+
+def node_ip(kind: str, k: int) -> str:
+    """UAV k -> 10.77.1.(k+1), BS k -> 10.77.0.(k+1): one private /16 per emulation."""
+    return f"10.77.{1 if kind == 'uav' else 0}.{k + 1}"
+
+
+def node_mac(index: int) -> str:
+    # Locally administered unicast (02:...), "ua" in the second octet, the node index after.
+    return f"02:75:61:00:{index >> 8:02x}:{index & 0xFF:02x}"
+
+
+def _nodes(scenario: Scenario) -> list[Node]:
+    nodes = []
+    for k in range(scenario.n_uav):
+        nodes.append(Node(name=f"uav{k}", kind="uav", index=k, ip=node_ip("uav", k), mac=node_mac(k)))
+    for k in range(scenario.n_bs):
+        i = scenario.n_uav + k
+        nodes.append(Node(name=f"bs{k}", kind="bs", index=i, ip=node_ip("bs", k), mac=node_mac(i)))
+    return nodes
+
+
+def _rng(seed: int, stream: int) -> np.random.Generator:
+    return np.random.Generator(np.random.PCG64(np.random.SeedSequence([seed, stream])))
+
+
+def _child_seed(seed: int, stream: int) -> int:
+    return int(np.random.SeedSequence([seed, stream]).generate_state(1, np.uint32)[0])
+
+
+def _bs_positions(n_bs: int, area: Area, mast_m: float, rng: np.random.Generator) -> np.ndarray:
+    margin = 0.1 * min(area.x_max_m, area.y_max_m)
+    xy = rng.uniform([margin, margin], [area.x_max_m - margin, area.y_max_m - margin], (n_bs, 2))
+    return np.c_[xy, np.full(n_bs, mast_m)]
+
+
+def _round(x: float, nd: int) -> float:
+    return float(round(float(x), nd))
+
+
+def plan(
+    scenario: Scenario | str,
+    seed: int = 0,
+    windows: int = 12,
+    window_s: float = 5.0,
+    profile: TwinProfile | str | None = None,
+) -> Plan:
+    if isinstance(scenario, str):
+        scenario = Scenario.parse(scenario)
+    if windows < 1:
+        raise ValueError(f"windows must be >= 1, got {windows}")
+    if not window_s > 0:
+        raise ValueError(f"window_s must be > 0, got {window_s}")
+    prof = load_profile(profile) if not isinstance(profile, TwinProfile) else profile
+    prof = prof or DEFAULT_PROFILE
+    area = prof.area
+    nodes = _nodes(scenario)
+    n_uav, n = scenario.n_uav, len(nodes)
+    names = [nd.name for nd in nodes]
+    is_bs = np.array([nd.kind == "bs" for nd in nodes])
+
+    bs_pos = _bs_positions(scenario.n_bs, area, prof.bs_mast_m, _rng(seed, _BS_STREAM))
+    mission = make_mission(
+        scenario.mission, n_uav, seed=_child_seed(seed, _MOBILITY_STREAM), area=area,
+        params=prof.mobility_params(scenario.mission),
+    )
+    times = np.arange(windows) * window_s
+    uav_tracks = np.asarray(mission.positions(times), dtype=float)  # (windows, n_uav, 3)
+    channel = Channel(
+        pathloss=scenario.pathloss,
+        profile=prof.pathloss,
+        seed=_child_seed(seed, _CHANNEL_STREAM),
+        tx_power_dbm=float(scenario.tx_dbm),
+        noise_dbm=scenario.noise_dbm,
+        modulation=scenario.fixed_mcs if scenario.fixed_mcs is not None else "adaptive",
+        n_nodes=n,
+        **prof.channel_kwargs(),
+    )
+    iu, ju = np.triu_indices(n, k=1)
+    all_pairs = np.c_[iu, ju]
+    pair_index = {(int(a), int(b)): k for k, (a, b) in enumerate(all_pairs)}
+
+    # Topology of window 0 decides the blackhole relay; the schedule needs it before the windows.
+    pos0 = np.vstack([uav_tracks[0], bs_pos])
+    topo0 = nearest_neighbour_topology(pos0, is_bs)
+    first_hop = {
+        names[u]: names[route(topo0, n, u, n_uav + u % scenario.n_bs, is_bs)[1]]
+        for u in range(n_uav)
+    }
+    attacks = schedule_attacks(
+        scenario, names[:n_uav], windows * window_s, _rng(seed, _ATTACK_STREAM), first_hop
+    )
+
+    out_windows = []
+    for w in range(windows):
+        t0, t1 = w * window_s, (w + 1) * window_s
+        pos = np.vstack([uav_tracks[w], bs_pos])
+        topo = nearest_neighbour_topology(pos, is_bs)
+        active_wormholes = [a for a in attacks if a.family == "wormhole" and a.start_s < t1 and a.stop_s > t0]
+        pairs = [
+            (names.index(v), names.index(a.attackers[0])) for a in active_wormholes for v in a.victims
+        ]
+        if pairs:
+            topo = with_wormholes(topo, pos, is_bs, pairs)
+        arr = channel.evaluate(pos, all_pairs, is_bs)  # advances shadowing for every pair
+        links = [_link(names, topo, e, arr, pair_index[e], prof) for e in topo.edges]
+        out_windows.append(
+            Window(
+                index=w,
+                t_s=_round(t0, 6),
+                duration_s=float(window_s),
+                positions={names[i]: tuple(_round(c, 3) for c in pos[i]) for i in range(n)},
+                links=links,
+                routes=_routes(names, topo, is_bs, n_uav, scenario.n_bs, attacks, t0, t1),
+                wormholes=[
+                    WormholeOverride(victim=names[v], attacker=names[a], bs=names[b])
+                    for v, a, b in topo.overrides
+                ],
+            )
+        )
+    return Plan(
+        config=scenario.to_string(),
+        seed=seed,
+        window_s=float(window_s),
+        profile=prof.name,
+        area_m=(area.x_max_m, area.y_max_m, area.z_min_m, area.z_max_m),
+        nodes=nodes,
+        windows=out_windows,
+        attacks=attacks,
+    )
+
+
+def _link(names, topo: Topology, edge, arr, k: int, prof: TwinProfile) -> Link:
+    i, j = edge
+    reason = topo.reasons[topo.edges.index(edge)]
+    if reason == "backhaul":
+        return Link(
+            a=names[i], b=names[j], kind="backhaul", distance_m=_round(arr.distance_m[k], 3),
+            pathloss_db=None, snr_db=None, mcs=None, rate_mbps=prof.backhaul_rate_mbps,
+            delay_ms=prof.backhaul_delay_ms, loss=0.0,
+        )
+    los = None if arr.los is None else bool(arr.los[k])
+    return Link(
+        a=names[i],
+        b=names[j],
+        kind="air",
+        distance_m=_round(arr.distance_m[k], 3),
+        pathloss_db=_round(arr.pathloss_db[k], 3),
+        snr_db=_round(arr.snr_db[k], 3),
+        mcs=int(arr.mcs[k]),
+        rate_mbps=_round(arr.rate_mbps[k], 4),
+        delay_ms=_round(arr.delay_ms[k], 4),
+        loss=min(1.0, max(0.0, _round(arr.loss[k], 8))),
+        los=los,
+    )
+
+
+def _routes(names, topo, is_bs, n_uav, n_bs, attacks: list[Attack], t0, t1) -> list[Route]:
+    n = len(names)
+    wanted: list[tuple[int, int]] = [(u, n_uav + u % n_bs) for u in range(n_uav)]
+    for a in attacks:
+        if a.start_s < t1 and a.stop_s > t0 and a.family in ("dos", "ddos"):
+            wanted += [(names.index(x), names.index(v)) for x in a.attackers for v in a.victims]
+    seen, out = set(), []
+    for s, d in wanted:
+        if (s, d) not in seen:
+            seen.add((s, d))
+            out.append(Route(src=names[s], dst=names[d], hops=[names[h] for h in route(topo, n, s, d, is_bs)]))
+    return out

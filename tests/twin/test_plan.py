@@ -1,0 +1,133 @@
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from uavcas.scenario import PRESETS, parse
+from uavcas.twin import Plan, plan
+from uavcas.topology.routing import Topology, is_connected_to_bs
+
+MISSIONS = ("spiral", "grid", "hover_transit", "random")
+
+
+def _connected(p: Plan) -> bool:
+    idx = {nd.name: nd.index for nd in p.nodes}
+    is_bs = np.array([nd.kind == "bs" for nd in p.nodes])
+    for w in p.windows:
+        edges = tuple(sorted(tuple(sorted((idx[lk.a], idx[lk.b]))) for lk in w.links))
+        if not is_connected_to_bs(Topology(edges, ("x",) * len(edges)), len(p.nodes), is_bs):
+            return False
+    return True
+
+
+@pytest.mark.parametrize("mission", MISSIONS)
+@pytest.mark.parametrize("pathloss", ("logdist", "3gpp"))
+def test_every_window_is_connected_and_routes_are_valid(mission, pathloss):
+    p = plan(f"dos=1000-15-2-image-{pathloss}-adaptive-{mission}-10-95", seed=3)
+    assert len(p.windows) == 12 and _connected(p)
+    for w in p.windows:
+        links = {(lk.a, lk.b) for lk in w.links} | {(lk.b, lk.a) for lk in w.links}
+        assert {r.src for r in w.routes} >= {f"uav{k}" for k in range(15)}
+        for r in w.routes:
+            assert all(h in links for h in zip(r.hops, r.hops[1:])), r
+        for lk in w.links:
+            assert 0.0 <= lk.loss <= 1.0 and lk.rate_mbps > 0 and lk.delay_ms > 0
+
+
+def test_same_seed_same_bytes_other_seed_other_plan():
+    cfg = "blackhole+dos=1000-10-2-image-3gpp-adaptive-random-30-95"
+    a, b, c = plan(cfg, seed=5).to_json(), plan(cfg, seed=5).to_json(), plan(cfg, seed=6).to_json()
+    assert a == b != c
+    assert Plan.from_json(a).to_json() == a
+
+
+def test_plan_json_has_the_documented_fields():
+    d = json.loads(plan("ddos=1000-8-2-image-logdist-adaptive-grid-30-95", seed=1).to_json())
+    assert {"config", "seed", "nodes", "windows", "attacks"} <= set(d)
+    assert {"name", "kind", "ip"} <= set(d["nodes"][0])
+    w = d["windows"][0]
+    assert {"t_s", "positions", "links"} <= set(w)
+    assert {"a", "b", "distance_m", "pathloss_db", "snr_db", "mcs", "rate_mbps", "delay_ms", "loss"} <= set(w["links"][0])
+    (atk,) = d["attacks"]
+    assert {"family", "attackers", "victims", "start_s", "stop_s", "params"} <= set(atk)
+    assert atk["family"] == "ddos" and len(atk["attackers"]) >= 2
+
+
+def test_attack_schedule_follows_the_paper():
+    starts = set()
+    for seed in range(30):
+        p = plan("blackhole+ddos=1000-10-2-image-logdist-adaptive-random-30-95", seed=seed, windows=12)
+        bh, dd = sorted(p.attacks, key=lambda a: a.family)
+        assert bh.victims == dd.victims and (bh.start_s, bh.stop_s) == (dd.start_s, dd.stop_s)
+        assert 10.0 <= dd.stop_s - dd.start_s <= 20.0 and 0 <= dd.start_s and dd.stop_s <= 60.0
+        assert len(dd.attackers) >= 2 and not set(dd.attackers) & set(dd.victims)
+        assert not set(bh.attackers) & set(dd.attackers)
+        assert all(x.startswith("uav") for x in dd.attackers + dd.victims + bh.attackers)
+        starts.add(dd.start_s)
+    assert len(starts) == 30 and min(starts) > 0.0
+
+
+def test_wormhole_windows_detour_the_victim_through_the_attacker():
+    p = plan("wormhole-10-2-image-logdist-adaptive-spiral-30-95", seed=2)
+    (atk,) = p.attacks
+    (victim,), (attacker,) = atk.victims, atk.attackers
+    hit = [w for w in p.windows if w.t_s < atk.stop_s and w.t_s + w.duration_s > atk.start_s]
+    assert hit
+    for w in hit:
+        assert [(o.victim, o.attacker) for o in w.wormholes] == [(victim, attacker)]
+        (r,) = [r for r in w.routes if r.src == victim]
+        assert r.hops[:2] == [victim, attacker]
+    for w in p.windows:
+        if w not in hit:
+            assert not w.wormholes
+
+
+def test_physics_varies_with_distance_and_tx_power():
+    # Across the campaign geometry, MCS, rate and loss depend on the link and on TX power.
+    rates, mcs = {}, set()
+    for tx in (10, 30):
+        vals = []
+        for mission in MISSIONS:
+            for pl in ("logdist", "3gpp"):
+                p = plan(f"benign-20-2-image-{pl}-adaptive-{mission}-{tx}-95", seed=11)
+                air = [lk for w in p.windows for lk in w.links if lk.kind == "air"]
+                vals += [lk.rate_mbps for lk in air]
+                mcs |= {lk.mcs for lk in air}
+                d = np.array([lk.distance_m for lk in air])
+                snr = np.array([lk.snr_db for lk in air])
+                assert np.corrcoef(d, snr)[0, 1] < -0.3  # farther -> weaker
+        rates[tx] = np.mean(vals)
+    assert len(mcs) >= 4
+    assert rates[30] > rates[10]
+
+
+def test_quick_preset_plans():
+    for cfg in PRESETS["quick"].configs:
+        p = plan(cfg, seed=1, windows=3)
+        assert p.config == cfg and len(p.windows) == 3 and _connected(p)
+        assert set(a.family for a in p.attacks) == set(parse(cfg).families)
+
+
+def _cli(*args):
+    return subprocess.run([sys.executable, "-m", "uavcas.cli", *args], capture_output=True, text=True)
+
+
+def test_cli_plan_writes_json_and_figures(tmp_path):
+    out, figs = tmp_path / "plan.json", tmp_path / "figs"
+    r = _cli("plan", "dos=1000-6-2-image-logdist-adaptive-random-30-95", "--seed", "1", "--windows", "3",
+             "--out", str(out), "--figure", str(figs))
+    assert r.returncode == 0, r.stderr
+    assert "MCS" in r.stdout and "dos-0" in r.stdout
+    assert Plan.from_json(out.read_text()).windows[2].index == 2
+    assert sorted(p.name for p in figs.glob("*.png")) == [f"topology_w0{k}.png" for k in range(3)]
+    again = tmp_path / "again.json"
+    assert _cli("plan", "dos=1000-6-2-image-logdist-adaptive-random-30-95", "--seed", "1", "--windows", "3",
+                "--out", str(again)).returncode == 0
+    assert again.read_bytes() == out.read_bytes()
+
+
+def test_cli_plan_refuses_bad_config(tmp_path):
+    r = _cli("plan", "dos=1000-6-2-image-nowhere-adaptive-random-30-95", "--out", str(tmp_path / "p.json"))
+    assert r.returncode == 2 and "field 'pathloss'" in r.stderr and not (tmp_path / "p.json").exists()
