@@ -1,1 +1,37 @@
-"""channel"""
+"""Wireless channel of the twin, vectorised over links with numpy.
+
+positions -> path loss (log-distance per altitude, TR 36.777 aerial UMa/RMa/UMi, two-ray, free
+space) -> Gudmundson-correlated shadowing -> SNR (link budget) -> 802.11a/g MCS -> BER -> PER ->
+802.11 ARQ -> LinkParams(rate_mbps, delay_ms, loss). `Channel` runs the chain once per window.
+"""
+
+from .budget import LinkBudget, LinkLayer, LinkParams, link_params
+from .geometry import LinkGeometry, PathLossResult
+from .mcs import MCS_80211AG, McsTable, ber, parse_modulation, per
+from .model import Channel, LinkArrays
+from .pathloss import (
+    DEFAULT_PROFILE,
+    PAPER_RELATIVE_PROFILE,
+    PATHLOSS_NAMES,
+    PROFILES,
+    FreeSpace,
+    LogDistance,
+    PathLossModel,
+    PathLossProfile,
+    RMaAV,
+    TwoRay,
+    UMaAV,
+    UMiAV,
+    free_space_loss_db,
+    get_profile,
+    make_pathloss,
+)
+from .shadowing import GudmundsonShadowing
+
+__all__ = [
+    "DEFAULT_PROFILE", "MCS_80211AG", "PAPER_RELATIVE_PROFILE", "PATHLOSS_NAMES", "PROFILES",
+    "Channel", "FreeSpace", "GudmundsonShadowing", "LinkArrays", "LinkBudget", "LinkGeometry",
+    "LinkLayer", "LinkParams", "LogDistance", "McsTable", "PathLossModel", "PathLossProfile",
+    "PathLossResult", "RMaAV", "TwoRay", "UMaAV", "UMiAV", "ber", "free_space_loss_db",
+    "get_profile", "link_params", "make_pathloss", "parse_modulation", "per",
+]

@@ -1,0 +1,173 @@
+"""Link budget and link-layer model: path loss -> SNR -> (MCS, BER, PER) -> LinkParams.
+
+SNR (dB, per link; links are reciprocal, so one value serves both directions):
+
+    SNR = P_tx + G_tx + G_rx - (PL + X_shadow) - N
+
+P_tx from the scenario (10 or 30 dBm in the paper campaign); G_tx = G_rx = 0 dBi by default:
+the AERPAW path-loss fit is on gain-compensated data and the paper states no antenna gains, so
+isotropic antennas keep the paper's chain "TX power - path loss - noise" (a 2.15 dBi dipole
+pair would add 4.3 dB); N = noise floor in dBm, a configuration value (-95 dBm by default, the
+scenario's noise field).
+
+Link layer: 802.11a/g OFDM DCF, IEEE Std 802.11-2020 (Clause 17 PHY, Clause 10 MAC), for a
+packet of `packet_bytes` (1500, the IP MTU the emulation carries) in an MPDU with 36 octets of
+MAC overhead (24 header + 8 LLC/SNAP + 4 FCS):
+
+    T_data(rate)  = 16 + 4 + 4 ceil((16 + 8 L_mpdu + 6) / N_DBPS) us        (TXTIME, 17.4.3)
+    T_ack         = same for the 14-octet ACK at the highest basic rate <= data rate (6/12/24)
+    T_k           = DIFS + E[backoff_k] + T_data + SIFS + T_ack              (attempt k = 0, 1, ...)
+    DIFS = SIFS + 2 slot = 34 us, SIFS = 16 us, slot = 9 us,
+    E[backoff_k] = slot * min(2^k (CWmin + 1) - 1, CWmax) / 2, CWmin = 15, CWmax = 1023.
+
+A failed attempt is charged like a successful one (its ACK timeout, SIFS + slot + 25 us PHY
+RX-start delay = 50 us, is within about 10 us of SIFS + T_ack = 44..60 us). With PER p per
+attempt and `retry_limit` R retransmissions:
+
+    loss      = p^(R + 1)                                   (residual loss after ARQ)
+    E[T]      = sum_{k=0..R} p^k T_k                        (expected MAC time per packet)
+    delay_ms  = d / c + processing_delay_ms + E[T]          (one-way latency of a packet)
+    rate_mbps = 8 packet_bytes / E[T]                       (rate_model "dcf")
+              = PHY rate of the MCS                         (rate_model "phy", the paper's)
+
+"dcf" is the default: the emulated link should carry what an 802.11a link carries, which at
+54 Mbit/s with 1500-byte packets is about 30 Mbit/s (cf. Jun, Peddabachagari & Sichitiu,
+"Theoretical maximum throughput of IEEE 802.11 and its applications", NCA 2003), and a lossy
+link spends channel time on retries. The shaper applies rate_mbps as the link's capacity and
+delay_ms as its latency. `retry_limit` defaults to 6: dot11ShortRetryLimit = 7 counts
+transmission *attempts* (802.11-2020 Annex C; ns-3's FrameRetryLimit likewise), i.e. one
+transmission and 6 retries. retry_limit=0 with rate_model="phy" reproduces the paper's raw
+chain (loss = PER, rate = PHY rate). PER is computed on the whole MPDU, as the FCS covers it.
+`processing_delay_ms` (0.1 ms) stands for the radio's driver/firmware hand-off per hop; the
+emulated kernel adds its own real forwarding cost on top.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+from pydantic import BaseModel, ConfigDict, Field
+from scipy.constants import c as SPEED_OF_LIGHT_M_S
+
+from .mcs import MCS_80211AG, McsTable, per
+
+# IEEE 802.11-2020 Clause 17 OFDM PHY characteristics (20 MHz) and Clause 10 DCF timing.
+SLOT_US = 9.0
+SIFS_US = 16.0
+DIFS_US = SIFS_US + 2 * SLOT_US
+CW_MIN = 15
+CW_MAX = 1023
+PREAMBLE_US = 16.0
+SIGNAL_US = 4.0
+SYMBOL_US = 4.0
+SERVICE_BITS, TAIL_BITS = 16, 6
+ACK_BYTES = 14
+MANDATORY_BASIC_RATES_MBPS = (6.0, 12.0, 24.0)  # ACK rate rule, 802.11-2020 10.6.6.5.2
+
+
+class LinkBudget(BaseModel):
+    """Radio parameters shared by all links of a scenario."""
+
+    model_config = ConfigDict(frozen=True, extra="forbid")
+
+    tx_power_dbm: float = 20.0
+    tx_gain_dbi: float = 0.0
+    rx_gain_dbi: float = 0.0
+    noise_dbm: float = -95.0
+
+    def rx_power_dbm(self, loss_db) -> np.ndarray:
+        return self.tx_power_dbm + self.tx_gain_dbi + self.rx_gain_dbi - np.asarray(loss_db, dtype=float)
+
+    def snr_db(self, loss_db) -> np.ndarray:
+        """SNR for a total loss (path loss + shadowing) in dB."""
+        return self.rx_power_dbm(loss_db) - self.noise_dbm
+
+
+class LinkLayer(BaseModel):
+    """802.11 DCF link-layer assumptions turning PER into rate, delay and residual loss."""
+
+    model_config = ConfigDict(frozen=True, extra="forbid")
+
+    packet_bytes: int = Field(1500, gt=0)
+    mac_overhead_bytes: int = Field(36, ge=0)
+    retry_limit: int = Field(6, ge=0)  # retransmissions; dot11ShortRetryLimit 7 = 7 attempts
+    rate_model: Literal["dcf", "phy"] = "dcf"
+    processing_delay_ms: float = Field(0.1, ge=0)
+
+    @property
+    def mpdu_bits(self) -> int:
+        return 8 * (self.packet_bytes + self.mac_overhead_bytes)
+
+
+DEFAULT_LINK_LAYER = LinkLayer()
+
+
+@dataclass(frozen=True, eq=False)
+class LinkParams:
+    """What the emulator applies to each link (both directions), one entry per link."""
+
+    rate_mbps: np.ndarray
+    delay_ms: np.ndarray
+    loss: np.ndarray
+
+
+def ppdu_airtime_us(payload_bits, n_dbps) -> np.ndarray:
+    """TXTIME of an OFDM PPDU (802.11-2020 17.4.3), 20 MHz channel."""
+    bits = SERVICE_BITS + np.asarray(payload_bits) + TAIL_BITS
+    return PREAMBLE_US + SIGNAL_US + SYMBOL_US * np.ceil(bits / np.asarray(n_dbps))
+
+
+def attempt_time_us(mcs, table: McsTable, link: LinkLayer, attempt: int) -> np.ndarray:
+    """Channel time of attempt `attempt` (0 = first): DIFS + mean backoff + DATA + SIFS + ACK."""
+    mcs = np.asarray(mcs)
+    rate = table.rate_mbps[mcs]
+    basic = np.array(MANDATORY_BASIC_RATES_MBPS)
+    ack_rate = basic[np.searchsorted(basic, rate, side="right") - 1]
+    ack_ndbps = table.n_dbps[np.searchsorted(table.rate_mbps, ack_rate)]
+    cw = min((CW_MIN + 1) * 2**attempt - 1, CW_MAX)
+    return (
+        DIFS_US
+        + SLOT_US * cw / 2.0
+        + ppdu_airtime_us(link.mpdu_bits, table.n_dbps[mcs])
+        + SIFS_US
+        + ppdu_airtime_us(8 * ACK_BYTES, ack_ndbps)
+    )
+
+
+def link_params(
+    snr_db,
+    mcs,
+    distance_m,
+    table: McsTable = MCS_80211AG,
+    link: LinkLayer = DEFAULT_LINK_LAYER,
+) -> LinkParams:
+    """Rate, delay and residual loss per link from its SNR and MCS (formulas: module docstring)."""
+    mcs = np.asarray(mcs, dtype=np.int64)
+    return link_params_from_per(mpdu_per(snr_db, mcs, table, link), mcs, distance_m, table, link)
+
+
+def mpdu_per(snr_db, mcs, table: McsTable = MCS_80211AG, link: LinkLayer = DEFAULT_LINK_LAYER) -> np.ndarray:
+    """Per-attempt error rate of the MPDU: 1 - (1 - BER)^L with L = link.mpdu_bits."""
+    return per(table.ber(snr_db, mcs), link.mpdu_bits)
+
+
+def link_params_from_per(
+    per_, mcs, distance_m, table: McsTable = MCS_80211AG, link: LinkLayer = DEFAULT_LINK_LAYER
+) -> LinkParams:
+    """`link_params` for an already computed per-attempt PER."""
+    p = np.asarray(per_, dtype=float)
+    mcs = np.asarray(mcs, dtype=np.int64)
+    expected_us = np.zeros(p.shape)
+    reach = np.ones(p.shape)  # probability that attempt k happens: p^k
+    for k in range(link.retry_limit + 1):
+        expected_us += reach * attempt_time_us(mcs, table, link, k)
+        reach = reach * p
+    loss = reach  # p^(R+1): every attempt failed
+    if link.rate_model == "dcf":
+        rate = 8.0 * link.packet_bytes / expected_us
+    else:
+        rate = table.rate_mbps[mcs].astype(float)
+    delay = np.asarray(distance_m, dtype=float) / SPEED_OF_LIGHT_M_S * 1e3 + link.processing_delay_ms
+    return LinkParams(rate_mbps=rate, delay_ms=delay + expected_us / 1e3, loss=loss)

@@ -1,0 +1,72 @@
+"""Boustrophedon (lawn-mower) coverage of a bounding box at fixed altitude and constant speed.
+
+Lanes run parallel to one side of the box, `lane_spacing_m` apart, joined at alternate ends;
+the UAV flies the sweep at `speed_mps` and then flies it back in reverse (ping-pong), so its
+speed never changes and it never leaves the box. Either every UAV sweeps its own box around a
+seeded anchor, or all share `box_m` with stratified phases along the sweep so they spread out.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from uavcas.mobility.area import Area
+from uavcas.mobility.base import MissionBase, SeedLike, anchor_box, as_seed_sequence, ping_pong, seeded_anchors
+from uavcas.mobility.params import GridParams
+from uavcas.mobility.path import Polyline
+
+
+def boustrophedon(x0: float, y0: float, x1: float, y1: float, spacing_m: float, along_x: bool = True) -> np.ndarray:
+    """Vertices (V, 2) of a lawn-mower sweep of [x0,x1] x [y0,y1] with lanes along x (or y)."""
+    if not along_x:
+        return boustrophedon(y0, x0, y1, x1, spacing_m, True)[:, ::-1].copy()
+    n_lanes = int(np.floor((y1 - y0) / spacing_m + 1e-9)) + 1
+    ys = y0 + spacing_m * np.arange(n_lanes)
+    verts = []
+    for k, y in enumerate(ys):
+        a, b = (x0, x1) if k % 2 == 0 else (x1, x0)
+        verts += [(a, y), (b, y)]
+    return np.asarray(verts, dtype=float)
+
+
+class GridMission(MissionBase):
+    kind = "grid"
+
+    def __init__(self, n_uav: int, params: GridParams | None = None, area: Area | None = None, seed: SeedLike = 0):
+        if n_uav < 1:
+            raise ValueError(f"n_uav must be >= 1, got {n_uav}")
+        self.n_uav = int(n_uav)
+        self.params = p = params or GridParams()
+        self.area = area or Area()
+        self.altitude_m = self.area.clamp_altitude(p.altitude_m)
+        anchors_ss, phase_ss = as_seed_sequence(seed).spawn(2)
+        rng = np.random.default_rng(phase_ss)
+        along_x = rng.random(self.n_uav) < 0.5  # lane orientation per UAV, for variety
+        size = np.array([self.area.x_max_m, self.area.y_max_m])
+
+        if p.box_m is not None:
+            # A shared box (e.g. fitted from a flight): clipped to the area, never refused.
+            lo = np.clip(np.array(p.box_m[:2]), 0.0, size)
+            hi = np.clip(np.array(p.box_m[2:]), 0.0, size)
+            boxes = np.tile(np.concatenate([lo, hi]), (self.n_uav, 1))
+        else:
+            half = np.minimum(np.array([p.box_width_m, p.box_height_m]) / 2.0, size / 2.0 - p.margin_m)
+            half = np.maximum(half, 0.0)
+            alo, ahi = anchor_box(self.area, float(half.max()), p.margin_m)
+            centres = seeded_anchors(np.random.default_rng(anchors_ss), self.n_uav, alo, ahi, p.min_separation_m)
+            boxes = np.concatenate([np.maximum(centres - half, 0.0), np.minimum(centres + half, size)], axis=1)
+        self.boxes_m = boxes
+        self.paths = [Polyline(boustrophedon(*boxes[i], p.lane_spacing_m, bool(along_x[i]))) for i in range(self.n_uav)]
+        lengths = np.array([pl.length_m for pl in self.paths])
+        # Stratified phases over the out-and-back period: with a shared box, UAV i starts in the
+        # i-th of n equal slices of the sweep (random order, random offset inside the slice).
+        order = rng.permutation(self.n_uav)
+        self.s0_m = (order + rng.random(self.n_uav)) / self.n_uav * 2.0 * lengths
+
+    def _positions(self, t: np.ndarray) -> np.ndarray:
+        out = np.empty((t.size, self.n_uav, 3))
+        for i, pl in enumerate(self.paths):
+            s = ping_pong(self.s0_m[i] + self.params.speed_mps * t, pl.length_m)
+            out[:, i, :2] = pl.at(s)
+        out[..., 2] = self.altitude_m
+        return out
