@@ -1,0 +1,112 @@
+"""Arrow schema of `flows.parquet` (column names from `schema.py`, dtypes fixed here) and I/O.
+
+Dtypes: identity strings are `string`; ports int32, protocol int16, seed/flow_id/packets/bytes
+int64; times float64 (Unix seconds for first_ts/last_ts); axis columns as Scenario.axes() gives
+them (n_uav, n_bs, tx_dbm int64; noise_dbm float64; others string); sequences are list columns:
+seq_time_s list<float64>, seq_size list<int32>, seq_flags list<int16>, seq_dir list<int8>
+(+1 forward, -1 backward); the 47 features float64; label_<family> bool; label, label_source string.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pandas as pd
+import pyarrow as pa
+import pyarrow.parquet as pq
+
+from uavcas.atomic import atomic_path
+
+from .schema import (
+    AXIS_COLUMNS,
+    COUNT_COLUMNS,
+    FEATURES,
+    ID_COLUMNS,
+    LABEL_COLUMNS,
+    SEQUENCE_COLUMNS,
+)
+
+_ID_TYPES = {
+    "run_id": pa.string(),
+    "config": pa.string(),
+    "seed": pa.int64(),
+    "view": pa.string(),
+    "flow_id": pa.int64(),
+    "src_ip": pa.string(),
+    "src_port": pa.int32(),
+    "dst_ip": pa.string(),
+    "dst_port": pa.int32(),
+    "protocol": pa.int16(),
+    "first_ts": pa.float64(),
+    "last_ts": pa.float64(),
+    "capture_point": pa.string(),
+}
+_AXIS_TYPES = {
+    "attacks": pa.string(),
+    "n_uav": pa.int64(),
+    "n_bs": pa.int64(),
+    "payload": pa.string(),
+    "pathloss": pa.string(),
+    "modulation": pa.string(),
+    "mission": pa.string(),
+    "tx_dbm": pa.int64(),
+    "noise_dbm": pa.float64(),
+}
+_COUNT_TYPES = {"packets": pa.int64(), "bytes": pa.int64(), "duration_s": pa.float64()}
+_SEQ_TYPES = {
+    "seq_time_s": pa.list_(pa.float64()),
+    "seq_size": pa.list_(pa.int32()),
+    "seq_flags": pa.list_(pa.int16()),
+    "seq_dir": pa.list_(pa.int8()),
+}
+META_KEY = b"uavcas"
+
+
+def arrow_schema() -> pa.Schema:
+    fields = [pa.field(c, _ID_TYPES[c]) for c in ID_COLUMNS]
+    fields += [pa.field(c, _AXIS_TYPES[c]) for c in AXIS_COLUMNS]
+    fields += [pa.field(c, _COUNT_TYPES[c]) for c in COUNT_COLUMNS]
+    fields += [pa.field(c, _SEQ_TYPES[c]) for c in SEQUENCE_COLUMNS]
+    fields += [pa.field(c, pa.float64()) for c in FEATURES]
+    fields += [pa.field(c, pa.bool_()) for c in LABEL_COLUMNS]
+    fields += [pa.field("label", pa.string()), pa.field("label_source", pa.string())]
+    return pa.schema(fields)
+
+
+COLUMNS: tuple[str, ...] = tuple(arrow_schema().names)
+
+
+def to_table(df: pd.DataFrame, meta: dict | None = None) -> pa.Table:
+    """DataFrame with every schema column -> Arrow table in schema order and dtypes."""
+    missing = [c for c in COLUMNS if c not in df.columns]
+    if missing:
+        raise ValueError(f"flow frame lacks schema columns: {missing}")
+    schema = arrow_schema()
+    arrays = []
+    for f in schema:
+        col = df[f.name]
+        arr = pa.array(col.array) if isinstance(col.dtype, pd.ArrowDtype) else pa.array(col.to_numpy(), from_pandas=True)
+        if isinstance(arr, pa.ChunkedArray):
+            arr = arr.combine_chunks()
+        arrays.append(arr.cast(f.type))
+    table = pa.Table.from_arrays(arrays, schema=schema)
+    if meta is not None:
+        table = table.replace_schema_metadata({META_KEY: json.dumps(meta, sort_keys=True).encode()})
+    return table
+
+
+def write_table(table: pa.Table, path: Path) -> None:
+    with atomic_path(path) as tmp:
+        pq.write_table(table, tmp, compression="zstd")
+
+
+def table_meta(path: Path) -> dict:
+    md = pq.read_schema(path).metadata or {}
+    return json.loads(md[META_KEY]) if META_KEY in md else {}
+
+
+def read_flows(path: str | Path, columns: list[str] | None = None) -> pd.DataFrame:
+    """Read flows.parquet (or a shard); list columns stay Arrow-backed (no per-row Python lists)."""
+    table = pq.read_table(path, columns=columns)
+    return table.to_pandas(types_mapper=lambda t: pd.ArrowDtype(t) if pa.types.is_list(t) else None)

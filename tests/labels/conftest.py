@@ -1,0 +1,11 @@
+"""The synthetic run directory shared by the label tests (built once per session)."""
+
+from __future__ import annotations
+
+import pytest
+from synth_run import build_run
+
+
+@pytest.fixture(scope="session")
+def synth_run_dir(tmp_path_factory):
+    return build_run(tmp_path_factory.mktemp("run") / "run-synth")

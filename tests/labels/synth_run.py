@@ -1,0 +1,142 @@
+"""A small, realistic synthetic RUN_DIR (scapy pcaps, hand-made Plan, attack log, run.json).
+
+Timeline (seconds after T0; attack windows are logged in attacks.jsonl as epoch times):
+- HTTP sessions bs0 -> uav0:80 at 1, 11, 21, 31, 41, 51 and bs0 -> uav3:80 at 2, 12, ..., 52.
+- Benign HTTP sessions uav1 -> uav0:80 at 5 and 45 (the flood's host pair OUTSIDE the window).
+- DoS dos-0: uav1 SYN-floods uav0:80 in [20, 30): 50 SYNs, new source port each, every 5th
+  answered by a SYN-ACK and an RST.
+- Replay replay-0 by uav2: 3 packets of the uav3 -> bs0 session at 12 re-sent at ~13.5 with TTL-5
+  and seq+k; each logged as an `inject` record.
+- Blackhole blackhole-0 on uav3 in [40, 50): the session at 42 is affected.
+Capture points: s-bs0 sees every packet to/from bs0 (except one dropped packet of the session at
+1); s-uav0 sees every packet to/from uav0 (duplicates of the bs0 <-> uav0 sessions, +50 us).
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+from scapy.layers.inet import IP, TCP
+from scapy.layers.l2 import Ether
+from scapy.packet import Raw
+from scapy.utils import wrpcap
+
+from uavcas.twin.model import Attack, Node, Plan, Window
+
+T0 = 1_700_000_000.0
+CONFIG = "blackhole+dos=1000+replay=50,200,10,5,inc-4-1-image-logdist-adaptive-random-30-95"
+IPS = {"uav0": "10.10.0.1", "uav1": "10.10.0.2", "uav2": "10.10.0.3", "uav3": "10.10.0.4", "bs0": "10.10.1.1"}
+MACS = {n: f"02:00:00:00:00:{i:02x}" for i, n in enumerate(IPS)}
+DOS_WINDOW = (20.0, 30.0)
+BLACKHOLE_WINDOW = (40.0, 50.0)
+N_FLOOD = 50
+
+
+def _pkt(t, a, b, sport, dport, flags, seq=1000, ack=0, payload=b"", ttl=64, ip_id=1):
+    p = (
+        Ether(src=MACS[a], dst=MACS[b])
+        / IP(src=IPS[a], dst=IPS[b], ttl=ttl, id=ip_id)
+        / TCP(sport=sport, dport=dport, flags=flags, seq=seq, ack=ack)
+    )
+    if payload:
+        p = p / Raw(payload)
+    p.time = T0 + t
+    return p
+
+
+def http_session(t, client, server, sport, ip_id0=100):
+    """12 packets: handshake, GET, 4 data segments with ACKs, FIN exchange."""
+    c, s = 5000, 9000
+    pk = [
+        _pkt(t, client, server, sport, 80, "S", c, ip_id=ip_id0),
+        _pkt(t + 0.01, server, client, 80, sport, "SA", s, c + 1, ip_id=ip_id0 + 1),
+        _pkt(t + 0.02, client, server, sport, 80, "A", c + 1, s + 1, ip_id=ip_id0 + 2),
+        _pkt(t + 0.03, client, server, sport, 80, "PA", c + 1, s + 1, b"GET /img.jpg HTTP/1.1\r\n\r\n", ip_id=ip_id0 + 3),
+    ]
+    for k in range(4):
+        pk.append(_pkt(t + 0.05 + 0.02 * k, server, client, 80, sport, "A", s + 1 + 1000 * k, c + 26, b"x" * 1000, ip_id=ip_id0 + 4 + k))
+    pk.append(_pkt(t + 0.14, client, server, sport, 80, "A", c + 26, s + 4001, ip_id=ip_id0 + 8))
+    pk.append(_pkt(t + 0.15, server, client, 80, sport, "FA", s + 4001, c + 26, ip_id=ip_id0 + 9))
+    pk.append(_pkt(t + 0.16, client, server, sport, 80, "FA", c + 26, s + 4002, ip_id=ip_id0 + 10))
+    pk.append(_pkt(t + 0.17, server, client, 80, sport, "A", s + 4002, c + 27, ip_id=ip_id0 + 11))
+    return pk
+
+
+def make_plan() -> Plan:
+    names = list(IPS)
+    nodes = [
+        Node(name=n, kind="bs" if n.startswith("bs") else "uav", index=i, ip=IPS[n], mac=MACS[n])
+        for i, n in enumerate(names)
+    ]
+    windows = [
+        Window(index=k, t_s=5.0 * k, duration_s=5.0, positions={n: (0.0, 0.0, 50.0) for n in names}, links=[], routes=[])
+        for k in range(12)
+    ]
+    attacks = [
+        Attack(attack_id="dos-0", family="dos", attackers=["uav1"], victims=["uav0"], start_s=DOS_WINDOW[0], stop_s=DOS_WINDOW[1], params={"interval_us": 1000}),
+        Attack(attack_id="replay-0", family="replay", attackers=["uav2"], victims=["uav3"], start_s=10.0, stop_s=20.0),
+        Attack(attack_id="blackhole-0", family="blackhole", attackers=["uav2"], victims=["uav3"], start_s=BLACKHOLE_WINDOW[0], stop_s=BLACKHOLE_WINDOW[1]),
+    ]
+    return Plan(config=CONFIG, seed=7, window_s=5.0, profile="test", area_m=(1000.0, 1000.0, 30.0, 110.0), nodes=nodes, windows=windows, attacks=attacks)
+
+
+def build_run(run_dir: Path, run_id: str = "run-synth") -> Path:
+    run_dir.mkdir(parents=True, exist_ok=True)
+    (run_dir / "pcap").mkdir(exist_ok=True)
+    pkts = []
+    for k, t in enumerate((1, 11, 21, 31, 41, 51)):
+        pkts += http_session(t, "bs0", "uav0", 40000 + k, ip_id0=100 * k)
+    for k, t in enumerate((2, 12, 22, 32, 42, 52)):
+        pkts += http_session(t, "bs0", "uav3", 41000 + k, ip_id0=1000 + 100 * k)
+    for k, t in enumerate((5, 45)):
+        pkts += http_session(t, "uav1", "uav0", 42000 + k, ip_id0=3000 + 100 * k)
+    for i in range(N_FLOOD):
+        t = DOS_WINDOW[0] + 0.1 + 0.19 * i
+        sp = 1024 + i
+        pkts.append(_pkt(t, "uav1", "uav0", sp, 80, "S", 77 + i, ip_id=5000 + i))
+        if i % 5 == 0:
+            pkts.append(_pkt(t + 0.001, "uav0", "uav1", 80, sp, "SA", 9, 78 + i, ip_id=6000 + i))
+            pkts.append(_pkt(t + 0.002, "uav1", "uav0", sp, 80, "R", 78 + i, ip_id=7000 + i))
+    # Replay: re-send the uav3 -> bs0 data segments of the session at 12 (ttl - 5, seq + k).
+    orig = [p for p in http_session(12, "bs0", "uav3", 41001, ip_id0=1100) if p[IP].src == IPS["uav3"] and len(p[TCP].payload)][:3]
+    injects = []
+    for k, o in enumerate(orig):
+        r = o.copy()
+        r[IP].ttl = o[IP].ttl - 5
+        r[TCP].seq = o[TCP].seq + k + 1
+        r.time = T0 + 13.5 + 0.1 * k
+        pkts.append(r)
+        injects.append({"event": "inject", "attack_id": "replay-0", "family": "replay", "t_unix": float(r.time),
+                        "src_ip": r[IP].src, "dst_ip": r[IP].dst, "src_port": r[TCP].sport, "dst_port": r[TCP].dport,
+                        "protocol": 6, "ip_id": r[IP].id, "ttl": r[IP].ttl, "seq": r[TCP].seq, "orig_seq": o[TCP].seq})
+    pkts.sort(key=lambda p: float(p.time))
+    bs = [p for p in pkts if IPS["bs0"] in (p[IP].src, p[IP].dst)]
+    bs = [p for p in bs if not (p[IP].id == 3 and p[IP].dst == IPS["uav0"])]  # one packet missed at s-bs0
+    u0 = []
+    for p in pkts:
+        if IPS["uav0"] in (p[IP].src, p[IP].dst):
+            q = p.copy()
+            q.time = p.time + 50e-6
+            u0.append(q)
+    wrpcap(str(run_dir / "pcap" / "s-bs0.pcap"), bs)
+    wrpcap(str(run_dir / "pcap" / "s-uav0.pcap"), u0)
+
+    plan = make_plan()
+    (run_dir / "plan.json").write_text(plan.to_json())
+    log = [
+        {"event": "start", "attack_id": "replay-0", "family": "replay", "attackers": ["uav2"], "attacker_ips": [IPS["uav2"]],
+         "victims": ["uav3"], "victim_ips": [IPS["uav3"]], "t_unix": T0 + 10.0, "params": {}},
+        *injects,
+        {"event": "stop", "attack_id": "replay-0", "family": "replay", "t_unix": T0 + 20.0},
+        {"event": "start", "attack_id": "dos-0", "family": "dos", "attackers": ["uav1"], "attacker_ips": [IPS["uav1"]],
+         "victims": ["uav0"], "victim_ips": [IPS["uav0"]], "t_unix": T0 + DOS_WINDOW[0], "params": {"interval_us": 1000}},
+        {"event": "rate", "attack_id": "dos-0", "family": "dos", "attacker": "uav1", "measured_pps": 5.2, "nominal_pps": 1000, "hping_interval_us": 1000},
+        {"event": "stop", "attack_id": "dos-0", "family": "dos", "t_unix": T0 + DOS_WINDOW[1]},
+        {"event": "start", "attack_id": "blackhole-0", "family": "blackhole", "attackers": ["uav2"], "attacker_ips": [IPS["uav2"]],
+         "victims": ["uav3"], "victim_ips": [IPS["uav3"]], "t_unix": T0 + BLACKHOLE_WINDOW[0], "params": {}},
+        {"event": "stop", "attack_id": "blackhole-0", "family": "blackhole", "t_unix": T0 + BLACKHOLE_WINDOW[1]},
+    ]
+    (run_dir / "attacks.jsonl").write_text("".join(json.dumps(r) + "\n" for r in log))
+    (run_dir / "run.json").write_text(json.dumps({"run_id": run_id, "t0_unix": T0, "exit_status": 0}) + "\n")
+    return run_dir
