@@ -1,0 +1,105 @@
+"""`uavcas doctor` and `uavcas clean`: the emulation core's own commands."""
+
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+
+import typer
+from rich.table import Table
+
+from .common import atomic_write_text, console, fail
+
+TOOLS_SHOWN = ("nginx", "hping3", "tcpdump", "curl", "wget", "iperf3", "nft", "iptables", "ethtool")
+
+
+def doctor(
+    no_measure: bool = typer.Option(False, "--no-measure", help="Only report features and tools."),
+    json_out: Path = typer.Option(None, "--json", help="Also write the result as JSON here."),
+    prefix: str = typer.Option(None, "--prefix", help="Prefix for the test emulation (default: random)."),
+) -> None:
+    """Report kernel features, the chosen shaper and tools; measure a two-hop shaped path."""
+    from uavcas.emulation.doctor import run_doctor
+    from uavcas.emulation.naming import check_prefix
+
+    if prefix is not None:
+        try:
+            check_prefix(prefix)
+        except ValueError as e:
+            raise fail(f"--prefix: {e}") from None
+    if os.geteuid() != 0 and not no_measure:
+        raise fail("doctor's measurement needs root (network namespaces); use --no-measure to only report")
+    res = run_doctor(prefix, measure=not no_measure)
+    f = res.features
+    feats = Table(title="kernel features", show_header=True)
+    feats.add_column("feature")
+    feats.add_column("found")
+    for name in ("netns", "netem", "htb", "tbf", "nft", "nft_bridge_numgen", "nfqueue", "br_netfilter"):
+        feats.add_row(name, _yes(getattr(f, name)))
+    feats.add_row("cgroup cpu", f.cgroup or "[red]none[/]")
+    feats.add_row("shaper", f"[bold]{f.shaper}[/]")
+    tools = Table(title="tools", show_header=True)
+    tools.add_column("tool")
+    tools.add_column("path")
+    for t in TOOLS_SHOWN:
+        tools.add_row(t, f.tools.get(t) or "[red]missing[/]")
+    tools.add_row("python scapy", _yes(f.python_scapy))
+    console.print(feats)
+    console.print(tools)
+    if res.checks:
+        meas = Table(title="two-hop self-measurement (uav0 -> uav1 -> uav2)", show_header=True)
+        for col in ("figure", "configured", "expected", "measured", "tolerance", "ok"):
+            meas.add_column(col)
+        for c in res.checks:
+            meas.add_row(f"{c.name} [{c.unit}]", f"{c.configured:.3f}", f"{c.expected:.3f}", f"{c.measured:.3f}",
+                         f"[{c.low:.3f}, {c.high:.3f}]", _yes(c.ok))
+        console.print(meas)
+        if res.retried:
+            console.print(f"re-measured once: {', '.join(res.retried)}")
+    if json_out is not None:
+        atomic_write_text(json_out, json.dumps({
+            "features": f.to_dict(), "ok": res.ok if not no_measure else None, "error": res.error,
+            "checks": [{**c.__dict__, "ok": c.ok} for c in res.checks]}, indent=1, default=float) + "\n")
+    if f.shaper == "none":
+        raise fail("no usable shaper on this kernel (need netem, or htb + nft numgen + NFQUEUE + br_netfilter)")
+    if res.error:
+        raise fail(f"self-measurement failed: {res.error}", code=1)
+    if not no_measure and not res.ok:
+        raise fail("a measured figure is outside its tolerance (see the table)", code=1)
+    console.print("[bold green]doctor: ok[/]")
+
+
+def clean(
+    prefix: str = typer.Option(None, "--prefix", help="Only this run's prefix (default: every dead registered run)."),
+    force: bool = typer.Option(False, "--force", help="Also clean a run that is still alive."),
+) -> None:
+    """Remove what crashed emulation runs left: processes, namespaces (with their links and rules), cgroups."""
+    from uavcas.emulation.cleanup import clean as do_clean
+    from uavcas.emulation.naming import check_prefix
+
+    if os.geteuid() != 0:
+        raise fail("clean needs root")
+    if prefix is not None:
+        try:
+            check_prefix(prefix)
+        except ValueError as e:
+            raise fail(f"--prefix: {e}") from None
+    reports = do_clean(prefix, force=force)
+    if not reports:
+        console.print("nothing to clean")
+    for r in reports:
+        if r.skipped_live:
+            console.print(f"{r.prefix}: live run, skipped (use --force)")
+        else:
+            console.print(f"{r.prefix}: removed {len(r.namespaces)} namespaces, killed {len(r.killed_pids)} "
+                          f"processes, removed {len(r.cgroups)} cgroups")
+
+
+def _yes(v: bool) -> str:
+    return "[green]yes[/]" if v else "[red]no[/]"
+
+
+def register(app: typer.Typer) -> None:
+    app.command("doctor")(doctor)
+    app.command("clean")(clean)

@@ -1,0 +1,184 @@
+"""The switch fabric: one namespace `<prefix>-fab` holding one Linux bridge per node.
+
+Bridge `s<i>` is node i's switch; `h<i>` is its port to the node (peer `eth0` in the node's
+namespace); `l<i>-<j>` is its port to switch j (peer `l<j>-<i>`), whose egress shapes the
+direction i -> j. Switch-to-switch veths are created *down* with learning and all flooding off
+and their qdiscs in place (configuring ports before they come up is what keeps a bridge mesh
+from melting into a broadcast storm, EMULATION-NOTES section 8), then toggled per window at
+both ends. Forwarding is only the static FDB from `controller`; no STP (its 2 s+ forward delay
+cannot follow 5 s windows).
+
+Every step is one batched call per tool: `ip -batch`, `bridge -batch`, `tc -batch`, `nft -f`.
+"""
+
+from __future__ import annotations
+
+import subprocess
+import time
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
+
+from . import kernel
+from .controller import Forwarding
+from .hosts import HostSpec
+from .naming import Naming
+from .shaping import Shaper
+
+LinkKey = tuple[int, int]  # (i, j) with i < j: an undirected switch-to-switch link
+
+PORT_FLAGS = "learning off flood off mcast_flood off bcast_flood off"
+
+
+@dataclass(frozen=True)
+class SwitchPorts:
+    """The names a runner needs to capture, mirror or filter at one node's switch."""
+
+    node: str
+    bridge: str
+    host_port: str
+    link_ports: dict[str, str]  # neighbour node -> port towards it (links created so far)
+
+    @property
+    def all_ports(self) -> list[str]:
+        return [self.host_port, *self.link_ports.values()]
+
+
+def key(i: int, j: int) -> LinkKey:
+    if i == j:
+        raise ValueError("a link needs two different switches")
+    return (i, j) if i < j else (j, i)
+
+
+class Fabric:
+    def __init__(self, naming: Naming, hosts: Sequence[HostSpec], shaper: Shaper) -> None:
+        self.naming = naming
+        self.ns = naming.fabric_ns
+        self.hosts = sorted(hosts, key=lambda h: h.index)
+        self.by_name = {h.name: h for h in self.hosts}
+        self.shaper = shaper
+        self.created: set[LinkKey] = set()
+        self.up: set[LinkKey] = set()
+        self.fdb: dict[tuple[int, str], str] = {}  # (switch index, dst MAC) -> port
+
+    # setup -------------------------------------------------------------------------------
+    def setup(self, precreate: Iterable[LinkKey] = ()) -> dict[str, float]:
+        """Bridges, host links and the given switch links (down). Node namespaces must exist."""
+        t0 = time.perf_counter()
+        ip, br = [], []
+        for h in self.hosts:
+            s, hp = Naming.bridge(h.index), Naming.host_port(h.index)
+            ip += [f"link add {s} type bridge stp_state 0 mcast_snooping 0",
+                   f"link add {hp} type veth peer name {Naming.HOST_IF} address {h.mac} netns {h.ns}",
+                   f"link set {hp} master {s}"]
+            br += [f"link set dev {hp} {PORT_FLAGS}",
+                   f"fdb replace {h.mac} dev {hp} master static"]
+        links = sorted(set(precreate) - self.created)
+        ip += self._link_add_lines(links)
+        kernel.run_batch("ip", self.ns, ip)
+        t1 = time.perf_counter()
+        br += self._link_flag_lines(links)
+        kernel.run_batches([kernel.Batch("bridge", self.ns, br), *self.shaper.init_batches(self._ports(links))])
+        self.created |= set(links)
+        t2 = time.perf_counter()
+        up = [f"link set {Naming.bridge(h.index)} up" for h in self.hosts]
+        up += [f"link set {Naming.host_port(h.index)} up" for h in self.hosts]
+        kernel.run_batch("ip", self.ns, up)
+        return {"create_s": t1 - t0, "configure_s": t2 - t1, "up_s": time.perf_counter() - t2}
+
+    @staticmethod
+    def _ports(links: Iterable[LinkKey]) -> list[str]:
+        return [p for i, j in links for p in (Naming.link_port(i, j), Naming.link_port(j, i))]
+
+    @staticmethod
+    def _link_add_lines(links: Iterable[LinkKey]) -> list[str]:
+        lines = []
+        for i, j in links:
+            a, b = Naming.link_port(i, j), Naming.link_port(j, i)
+            lines += [f"link add {a} type veth peer name {b}",
+                      f"link set {a} master {Naming.bridge(i)}", f"link set {b} master {Naming.bridge(j)}"]
+        return lines
+
+    def _link_flag_lines(self, links: Iterable[LinkKey]) -> list[str]:
+        return [f"link set dev {p} {PORT_FLAGS}" for p in self._ports(links)]
+
+    def ensure_links(self, links: Iterable[LinkKey]) -> int:
+        """Create (down, configured, shaped) any link not created yet: 'created on first use'."""
+        new = sorted(set(links) - self.created)
+        if new:
+            kernel.run_batch("ip", self.ns, self._link_add_lines(new))
+            kernel.run_batches([kernel.Batch("bridge", self.ns, self._link_flag_lines(new)),
+                                *self.shaper.init_batches(self._ports(new))])
+            self.created |= set(new)
+        return len(new)
+
+    # per window ----------------------------------------------------------------------------
+    def toggle_lines(self, active: set[LinkKey]) -> tuple[list[str], list[str]]:
+        """`ip -batch` lines taking links down and up (both ends) so that exactly `active` is up."""
+        down = sorted(self.up - active)
+        up = sorted(active - self.up)
+        return [f"link set {p} down" for p in self._ports(down)], [f"link set {p} up" for p in self._ports(up)]
+
+    def set_links(self, active: set[LinkKey]) -> tuple[int, int]:
+        """Bring exactly `active` up (both ends) and everything else down, in one batch."""
+        down, up = self.toggle_lines(active)
+        kernel.run_batch("ip", self.ns, down + up)
+        self.up = set(active)
+        return len(up) // 2, len(down) // 2
+
+    def desired_fdb(self, fwd: Forwarding) -> dict[tuple[int, str], str]:
+        want: dict[tuple[int, str], str] = {}
+        for sw_name, table in fwd.next_hop.items():
+            i = self.by_name[sw_name].index
+            for dst, nh in table.items():
+                want[(i, self.by_name[dst].mac)] = Naming.link_port(i, self.by_name[nh].index)
+        return want
+
+    def fdb_lines(self, want: dict[tuple[int, str], str]) -> list[str]:
+        """Replace changed static FDB entries; delete those whose destination became unreachable
+        (with flooding off, a frame without an entry is dropped: no path, no traffic)."""
+        lines = [f"fdb del {mac} dev {port} master" for (i, mac), port in sorted(self.fdb.items())
+                 if (i, mac) not in want]
+        lines += [f"fdb replace {mac} dev {port} master static" for (i, mac), port in sorted(want.items())
+                  if self.fdb.get((i, mac)) != port]
+        return lines
+
+    def apply_forwarding(self, fwd: Forwarding) -> int:
+        want = self.desired_fdb(fwd)
+        lines = self.fdb_lines(want)
+        kernel.run_batch("bridge", self.ns, lines)
+        self.fdb = want
+        return len(lines)
+
+    # hooks for traffic, attacks and capture --------------------------------------------------
+    def switch(self, node: str) -> SwitchPorts:
+        i = self.by_name[node].index
+        names = {h.index: h.name for h in self.hosts}
+        ports = {names[j if i == a else a]: Naming.link_port(i, j if i == a else a)
+                 for a, j in sorted(self.created) if i in (a, j)}
+        return SwitchPorts(node, Naming.bridge(i), Naming.host_port(i), ports)
+
+    def nft(self, ruleset: str) -> None:
+        """Apply an nft ruleset (one transaction) in the fabric namespace, e.g. a bridge blackhole table."""
+        kernel.run(["ip", "netns", "exec", self.ns, "nft", "-f", "-"], input_text=ruleset)
+
+    def nft_delete_table(self, name: str, family: str = "bridge") -> None:
+        """Remove a table added with `nft` (absent is fine: removal is idempotent)."""
+        kernel.run(["ip", "netns", "exec", self.ns, "nft", "-f", "-"],
+                   input_text=f"table {family} {name}\ndelete table {family} {name}\n")
+
+    def mirror(self, from_port: str, to_port: str, direction: str = "ingress") -> None:
+        """Copy every IPv4 frame entering (or leaving) `from_port` to `to_port` (act_mirred)."""
+        kernel.run_batch("tc", self.ns, [
+            f"qdisc replace dev {from_port} clsact",
+            f"filter add dev {from_port} {direction} protocol ip prio 1 u32 match u32 0 0 "
+            f"action mirred egress mirror dev {to_port}"])
+
+    def unmirror(self, port: str) -> None:
+        kernel.run(["tc", "-n", self.ns, "qdisc", "del", "dev", port, "clsact"], check=False)
+
+    def argv(self, argv: Sequence[str], timeout_s: float | None = None) -> list[str]:
+        inner = ["ip", "netns", "exec", self.ns, *argv]
+        return kernel.timed(inner, timeout_s) if timeout_s is not None else inner
+
+    def popen(self, argv: Sequence[str], timeout_s: float | None = None, **kw) -> subprocess.Popen:
+        return subprocess.Popen(self.argv(argv, timeout_s), **kw)

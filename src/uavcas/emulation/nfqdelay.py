@@ -1,0 +1,327 @@
+"""Userspace per-port delay stage: a pure-Python NFQUEUE client holding verdicts.
+
+This kernel has no netem (nor fq/etf for EDT), so propagation delay is added in userspace:
+`iptables -A FORWARD -m physdev --physdev-out l+ -j NFQUEUE --queue-bypass` in the fabric
+namespace sends every bridged IPv4 frame leaving a switch-to-switch port here; the daemon reads
+only metadata (copy mode META: no payload), looks the delay up by the *physical out port*
+(NFQA_IFINDEX_PHYSOUTDEV, i.e. the link direction) and accepts the packet when it is due.
+
+What made it accurate (EMULATION-NOTES section 2): a timerfd armed at *absolute* CLOCK_MONOTONIC
+deadlines (Python's epoll timeout is millisecond-granular), PR_SET_TIMERSLACK 1 ns, verdicts
+for all due packets sent in one netlink write, and nice -15 so that wake-ups are not queued
+behind CPU-bound work on the shared cores. Fail-open: if the queue overflows the kernel
+accepts instead of dropping, and `--queue-bypass` passes packets undelayed if the daemon dies.
+
+Control: a UNIX stream socket; one JSON request per connection, one JSON reply:
+  {"op": "set", "delays_us": {"l0-1": 5000, ...}}  -> {"ok": true, "table": {...}}
+  {"op": "get"}                                     -> {"ok": true, "table": ..., "stats": ...}
+  {"op": "stop"}
+Run: python -m uavcas.emulation.nfqdelay --queue 0 --ctl PATH  (inside the fabric namespace)
+"""
+
+from __future__ import annotations
+
+import argparse
+import ctypes
+import errno
+import gc
+import heapq
+import json
+import os
+import select
+import signal
+import socket
+import struct
+import time
+
+NETLINK_NETFILTER = 12
+NFNL_SUBSYS_QUEUE = 3
+NFQNL_MSG_PACKET, NFQNL_MSG_VERDICT, NFQNL_MSG_CONFIG = 0, 1, 2
+NFQA_PACKET_HDR, NFQA_VERDICT_HDR, NFQA_IFINDEX_PHYSOUTDEV = 1, 2, 8
+NFQA_CFG_CMD, NFQA_CFG_PARAMS, NFQA_CFG_QUEUE_MAXLEN, NFQA_CFG_MASK, NFQA_CFG_FLAGS = 1, 2, 3, 4, 5
+NFQNL_CFG_CMD_BIND = 1
+NFQNL_COPY_META = 1
+NFQA_CFG_F_FAIL_OPEN = 1
+NF_ACCEPT = 1
+NLM_F_REQUEST, NLM_F_ACK = 1, 4
+NLMSG_ERROR = 2
+CLOCK_MONOTONIC, TFD_TIMER_ABSTIME = 1, 1
+TFD_NONBLOCK, TFD_CLOEXEC = 0o4000, 0o2000000
+PR_SET_TIMERSLACK = 29
+LAG_BUCKETS_US = (25, 50, 100, 200, 500, 1000, 2000, 5000, 10000, 10**9)
+
+
+class _Timespec(ctypes.Structure):
+    _fields_ = [("tv_sec", ctypes.c_long), ("tv_nsec", ctypes.c_long)]
+
+
+class _Itimerspec(ctypes.Structure):
+    _fields_ = [("it_interval", _Timespec), ("it_value", _Timespec)]
+
+
+_libc = ctypes.CDLL(None, use_errno=True)
+
+
+def _attr(kind: int, payload: bytes) -> bytes:
+    length = 4 + len(payload)
+    return struct.pack("=HH", length, kind) + payload + b"\0" * ((4 - length % 4) % 4)
+
+
+def _msg(msg_type: int, flags: int, queue: int, attrs: bytes, seq: int = 0) -> bytes:
+    body = struct.pack("=BB", socket.AF_UNSPEC, 0) + struct.pack("!H", queue) + attrs
+    return struct.pack("=IHHII", 16 + len(body), (NFNL_SUBSYS_QUEUE << 8) | msg_type, flags, seq, 0) + body
+
+
+def verdict_msg(queue: int, packet_id: int) -> bytes:
+    return _msg(NFQNL_MSG_VERDICT, NLM_F_REQUEST, queue, _attr(NFQA_VERDICT_HDR, struct.pack("!II", NF_ACCEPT, packet_id)))
+
+
+class DelayDaemon:
+    def __init__(self, queue: int, ctl_path: str, maxlen: int = 8192) -> None:
+        self.queue = queue
+        self.delay_ns: dict[int, int] = {}  # physoutdev ifindex -> delay
+        self.table_us: dict[str, int] = {}  # port name -> delay, as applied
+        self.heap: list[tuple[int, int]] = []  # (due_ns, packet_id)
+        self.packets = 0
+        self.unknown_port = 0
+        self.overflows = 0
+        self.lag_hist = [0] * len(LAG_BUCKETS_US)
+        self.max_lag_us = 0.0
+        self.nl = socket.socket(socket.AF_NETLINK, socket.SOCK_RAW, NETLINK_NETFILTER)
+        self.nl.setsockopt(socket.SOL_SOCKET, 33, 8 << 20)  # SO_RCVBUFFORCE: absorb bursts
+        self.nl.bind((0, 0))
+        self._configure(maxlen)
+        self.nl.setblocking(False)
+        self.tfd = _libc.timerfd_create(CLOCK_MONOTONIC, TFD_NONBLOCK | TFD_CLOEXEC)
+        if self.tfd < 0:
+            raise OSError(ctypes.get_errno(), "timerfd_create")
+        if os.path.exists(ctl_path):
+            os.unlink(ctl_path)
+        self.ctl = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+        self.ctl.bind(ctl_path)
+        self.ctl.listen(16)
+        self.ctl.setblocking(False)
+        self.running = True
+
+    def _request(self, msg: bytes) -> None:
+        self.nl.send(msg)
+        reply = self.nl.recv(65536)
+        _, kind = struct.unpack_from("=IH", reply)
+        if kind == NLMSG_ERROR:
+            (code,) = struct.unpack_from("=i", reply, 16)
+            if code != 0:
+                raise OSError(-code, f"nfqueue config: {os.strerror(-code)}")
+
+    def _configure(self, maxlen: int) -> None:
+        cfg = NLM_F_REQUEST | NLM_F_ACK
+        self._request(_msg(NFQNL_MSG_CONFIG, cfg, self.queue,
+                           _attr(NFQA_CFG_CMD, struct.pack("!BxH", NFQNL_CFG_CMD_BIND, socket.AF_INET))))
+        self._request(_msg(NFQNL_MSG_CONFIG, cfg, self.queue,
+                           _attr(NFQA_CFG_PARAMS, struct.pack("!IB", 0, NFQNL_COPY_META))
+                           + _attr(NFQA_CFG_QUEUE_MAXLEN, struct.pack("!I", maxlen))
+                           + _attr(NFQA_CFG_MASK, struct.pack("!I", NFQA_CFG_F_FAIL_OPEN))
+                           + _attr(NFQA_CFG_FLAGS, struct.pack("!I", NFQA_CFG_F_FAIL_OPEN))))
+
+    # packets -----------------------------------------------------------------------------
+    def _on_packets(self, out: list[bytes]) -> None:
+        for _ in range(512):
+            try:
+                data = self.nl.recv(65536)
+            except BlockingIOError:
+                return
+            except OSError as e:
+                if e.errno == errno.ENOBUFS:  # the kernel could not deliver: it failed open
+                    self.overflows += 1
+                    continue
+                raise
+            now = time.monotonic_ns()
+            off = 0
+            while off + 16 <= len(data):
+                length, kind = struct.unpack_from("=IH", data, off)
+                if length < 16:
+                    break
+                if kind == (NFNL_SUBSYS_QUEUE << 8) | NFQNL_MSG_PACKET:
+                    self._on_packet(data, off + 20, off + length, now, out)
+                off += (length + 3) & ~3
+
+    def _on_packet(self, data: bytes, pos: int, end: int, now: int, out: list[bytes]) -> None:
+        pid = None
+        ifindex = 0
+        while pos + 4 <= end:
+            alen, akind = struct.unpack_from("=HH", data, pos)
+            if alen < 4:
+                break
+            akind &= 0x3FFF
+            if akind == NFQA_PACKET_HDR:
+                (pid,) = struct.unpack_from("!I", data, pos + 4)
+            elif akind == NFQA_IFINDEX_PHYSOUTDEV:
+                (ifindex,) = struct.unpack_from("!I", data, pos + 4)
+            pos += (alen + 3) & ~3
+        if pid is None:
+            return
+        self.packets += 1
+        delay = self.delay_ns.get(ifindex)
+        if delay is None:
+            self.unknown_port += 1
+            delay = 0
+        if delay <= 0:
+            out.append(verdict_msg(self.queue, pid))
+        else:
+            heapq.heappush(self.heap, (now + delay, pid))
+
+    def _release_due(self, out: list[bytes]) -> None:
+        now = time.monotonic_ns()
+        heap = self.heap
+        while heap and heap[0][0] <= now + 20_000:  # 20 us early is closer than a wake-up later
+            due, pid = heapq.heappop(heap)
+            out.append(verdict_msg(self.queue, pid))
+            lag_us = max(0.0, (now - due) / 1000)
+            self.max_lag_us = max(self.max_lag_us, lag_us)
+            for k, edge in enumerate(LAG_BUCKETS_US):
+                if lag_us <= edge:
+                    self.lag_hist[k] += 1
+                    break
+
+    def _arm(self) -> None:
+        spec = _Itimerspec()
+        if self.heap:
+            due = self.heap[0][0]
+            spec.it_value.tv_sec, spec.it_value.tv_nsec = divmod(due, 1_000_000_000)
+            if spec.it_value.tv_sec == 0 and spec.it_value.tv_nsec == 0:
+                spec.it_value.tv_nsec = 1
+        _libc.timerfd_settime(self.tfd, TFD_TIMER_ABSTIME, ctypes.byref(spec), None)
+
+    def _flush(self, out: list[bytes]) -> None:
+        if out:
+            buf = b"".join(out)
+            # one write per ~64 KB: the kernel walks every message in the buffer
+            for i in range(0, len(buf), 60_000):
+                chunk = buf[i:i + 60_000]
+                # messages are fixed-size, so chunk boundaries fall on message boundaries
+                try:
+                    self.nl.send(chunk)
+                except BlockingIOError:
+                    select.select([], [self.nl], [], 0.01)
+                    self.nl.send(chunk)
+            out.clear()
+
+    # control -----------------------------------------------------------------------------
+    def _on_ctl(self) -> None:
+        try:
+            conn, _ = self.ctl.accept()
+        except BlockingIOError:
+            return
+        with conn:
+            conn.settimeout(2.0)
+            raw = b""
+            while not raw.endswith(b"\n"):
+                chunk = conn.recv(65536)
+                if not chunk:
+                    break
+                raw += chunk
+            try:
+                reply = self._handle(json.loads(raw or b"{}"))
+            except (ValueError, OSError, KeyError) as e:
+                reply = {"ok": False, "error": str(e)}
+            conn.sendall(json.dumps(reply).encode() + b"\n")
+
+    def _handle(self, req: dict) -> dict:
+        op = req.get("op")
+        if op == "set":
+            table = {str(k): int(v) for k, v in req["delays_us"].items()}
+            delay_ns = dict(self.delay_ns)
+            for name, us in table.items():
+                delay_ns[socket.if_nametoindex(name)] = us * 1000
+            self.delay_ns = delay_ns
+            self.table_us.update(table)
+            return {"ok": True, "table": self.table_us}
+        if op == "get":
+            return {"ok": True, "table": self.table_us, "stats": self.stats()}
+        if op == "stop":
+            self.running = False
+            return {"ok": True}
+        return {"ok": False, "error": f"unknown op {op!r}"}
+
+    def stats(self) -> dict:
+        return {"packets": self.packets, "queued": len(self.heap), "overflows": self.overflows,
+                "unknown_port": self.unknown_port, "max_lag_us": round(self.max_lag_us, 1),
+                "lag_hist_us": dict(zip(map(str, LAG_BUCKETS_US), self.lag_hist))}
+
+    def serve(self) -> None:
+        ep = select.epoll()
+        ep.register(self.nl.fileno(), select.EPOLLIN)
+        ep.register(self.tfd, select.EPOLLIN)
+        ep.register(self.ctl.fileno(), select.EPOLLIN)
+        out: list[bytes] = []
+        while self.running:
+            try:
+                events = ep.poll(1.0)
+            except InterruptedError:
+                continue
+            for fd, _ in events:
+                if fd == self.nl.fileno():
+                    self._on_packets(out)
+                elif fd == self.tfd:
+                    try:
+                        os.read(self.tfd, 8)
+                    except BlockingIOError:
+                        pass
+                elif fd == self.ctl.fileno():
+                    self._on_ctl()
+            self._release_due(out)
+            self._flush(out)
+            self._arm()
+
+
+def request(ctl_path: str, req: dict, timeout_s: float = 2.0) -> dict:
+    """Send one control request to a running daemon and return its reply."""
+    with socket.socket(socket.AF_UNIX, socket.SOCK_STREAM) as s:
+        s.settimeout(timeout_s)
+        s.connect(ctl_path)
+        s.sendall(json.dumps(req).encode() + b"\n")
+        raw = b""
+        while not raw.endswith(b"\n"):
+            chunk = s.recv(65536)
+            if not chunk:
+                break
+            raw += chunk
+    reply = json.loads(raw)
+    if not reply.get("ok"):
+        raise RuntimeError(f"delay daemon: {reply.get('error')}")
+    return reply
+
+
+def main(argv: list[str] | None = None) -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--queue", type=int, default=0)
+    ap.add_argument("--ctl", required=True)
+    ap.add_argument("--nice", type=int, default=-15)
+    args = ap.parse_args(argv)
+    _libc.prctl(PR_SET_TIMERSLACK, 1, 0, 0, 0)
+    # Measured here: with two CPU hogs on the 2 cores a timerfd wake-up is 3 ms late at p99 at
+    # nice 0, 64 us at nice -15 (SCHED_FIFO: 91 us, and a runaway RT task could starve the
+    # machine, so plain CFS weight it is).
+    try:
+        os.setpriority(os.PRIO_PROCESS, 0, args.nice)
+    except OSError:
+        pass
+    gc.freeze()  # fewer, shorter collector pauses: they show up as delay outliers
+    daemon = DelayDaemon(args.queue, args.ctl)
+
+    def _stop(*_: object) -> None:
+        raise SystemExit(0)  # breaks out of epoll at once (a flag would wait for the next wake-up)
+
+    signal.signal(signal.SIGTERM, _stop)
+    signal.signal(signal.SIGINT, _stop)
+    print("ready", flush=True)
+    try:
+        daemon.serve()
+    finally:
+        try:
+            os.unlink(args.ctl)
+        except OSError:
+            pass
+
+
+if __name__ == "__main__":
+    main()

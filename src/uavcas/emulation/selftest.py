@@ -1,0 +1,258 @@
+"""Self-measurement on a two-hop test path (used by `uavcas doctor` and the tests).
+
+Topology: uav0 - uav1 - uav2 (line), so traffic uav0 -> uav2 crosses two shaped switch links.
+Measured end to end with small Python endpoints started inside the namespaces:
+* TCP goodput (bulk transfer, slow start discarded) vs the configured rate x 1448/1514
+  (HTB counts Ethernet frames of 1514 B carrying 1448 B of TCP payload with timestamps);
+* one-way delay of UDP probes (all namespaces share CLOCK_MONOTONIC, so send and receive
+  timestamps are directly comparable) vs the sum of the hops' delays;
+* UDP loss vs 1 - prod(1 - loss_hop), judged against the binomial 99 % interval.
+
+Endpoints: python -m uavcas.emulation.selftest {tcp-sink,tcp-source,udp-sink,udp-source} ...
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import socket
+import statistics
+import struct
+import subprocess
+import sys
+import time
+from dataclasses import dataclass
+
+TCP_PAYLOAD_FRACTION = 1448 / 1514
+PORT = 5999
+
+
+@dataclass(frozen=True)
+class Check:
+    name: str
+    unit: str
+    configured: float
+    expected: float
+    measured: float
+    low: float
+    high: float
+
+    @property
+    def ok(self) -> bool:
+        return self.low <= self.measured <= self.high
+
+
+@dataclass(frozen=True)
+class HopConfig:
+    rate_mbps: float
+    delay_ms: float
+    loss: float
+
+
+# endpoints (run inside namespaces) -----------------------------------------------------------
+def tcp_sink(port: int, seconds: float) -> dict:
+    srv = socket.socket()
+    srv.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+    srv.bind(("0.0.0.0", port))
+    srv.listen(1)
+    srv.settimeout(seconds + 5)
+    print("ready", flush=True)
+    conn, _ = srv.accept()
+    conn.settimeout(seconds + 5)
+    samples = []
+    total = 0
+    buf = bytearray(65536)
+    while True:
+        n = conn.recv_into(buf)
+        if not n:
+            break
+        total += n
+        samples.append((time.monotonic(), total))
+    if len(samples) < 2:
+        return {"bytes": total, "goodput_mbps": 0.0}
+    t0 = samples[0][0] + min(0.5, (samples[-1][0] - samples[0][0]) / 3)  # skip slow start
+    first = next(s for s in samples if s[0] >= t0)
+    last = samples[-1]
+    secs = last[0] - first[0]
+    return {"bytes": total, "seconds": secs, "goodput_mbps": (last[1] - first[1]) * 8 / secs / 1e6 if secs else 0.0}
+
+
+def tcp_source(dst: str, port: int, seconds: float) -> dict:
+    s = socket.create_connection((dst, port), timeout=5)
+    chunk = b"\0" * 65536
+    end = time.monotonic() + seconds
+    sent = 0
+    while time.monotonic() < end:
+        sent += s.send(chunk)
+    s.close()
+    return {"sent": sent}
+
+
+def udp_sink(port: int, count: int, seconds: float) -> dict:
+    s = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    s.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4 << 20)
+    s.bind(("0.0.0.0", port))
+    print("ready", flush=True)
+    seen = set()
+    delays = []
+    deadline = time.monotonic() + seconds
+    while len(seen) < count:
+        left = deadline - time.monotonic()
+        if left <= 0:
+            break
+        s.settimeout(left)
+        try:
+            data = s.recv(2048)
+        except socket.timeout:
+            break
+        now = time.monotonic_ns()
+        seq, sent_ns = struct.unpack_from("!QQ", data)
+        if seq == 2**64 - 1:  # end marker: collect the still-delayed probes briefly, then stop
+            _drain_until(s, seen, delays, 0.3)
+            break
+        if seq not in seen:
+            seen.add(seq)
+            delays.append((now - sent_ns) / 1e6)
+    delays.sort()
+    return {"received": len(seen), "delays_ms": _summary(delays)}
+
+
+def _drain_until(s: socket.socket, seen: set, delays: list, seconds: float) -> None:
+    """After the end marker, late (delayed) probes may still arrive: collect them briefly."""
+    end = time.monotonic() + seconds
+    while time.monotonic() < end:
+        s.settimeout(max(0.001, end - time.monotonic()))
+        try:
+            data = s.recv(2048)
+        except socket.timeout:
+            return
+        now = time.monotonic_ns()
+        seq, sent_ns = struct.unpack_from("!QQ", data)
+        if seq != 2**64 - 1 and seq not in seen:
+            seen.add(seq)
+            delays.append((now - sent_ns) / 1e6)
+
+
+def _summary(xs: list[float]) -> dict:
+    if not xs:
+        return {}
+    return {"median": statistics.median(xs), "p99": xs[min(len(xs) - 1, int(len(xs) * 0.99))],
+            "min": xs[0], "max": xs[-1], "mean": statistics.fmean(xs)}
+
+
+def udp_source(dst: str, port: int, count: int, pps: float, size: int) -> dict:
+    """Paced sender: every millisecond it sends the probes that are due (no busy spin, so it
+    leaves the CPU to the stage under test on a 2-core machine)."""
+    s = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    s.setsockopt(socket.SOL_SOCKET, socket.SO_SNDBUF, 4 << 20)
+    pad = b"\0" * max(0, size - 16)
+    start = time.monotonic()
+    seq = 0
+    while seq < count:
+        due_now = min(count, int((time.monotonic() - start) * pps) + 1)
+        while seq < due_now:
+            try:
+                s.sendto(struct.pack("!QQ", seq, time.monotonic_ns()) + pad, (dst, port))
+            except BlockingIOError:
+                break
+            seq += 1
+        time.sleep(0.001)
+    elapsed = time.monotonic() - start
+    time.sleep(0.05)
+    for _ in range(3):
+        s.sendto(struct.pack("!QQ", 2**64 - 1, 0), (dst, port))
+    return {"sent": count, "seconds": elapsed, "offered_pps": count / elapsed if elapsed else 0.0}
+
+
+# orchestration (from the parent, through an Emulation) -----------------------------------------
+def _endpoint(emu, node: str, args: list[str], timeout_s: float) -> subprocess.Popen:
+    return emu.popen(node, [sys.executable, "-m", "uavcas.emulation.selftest", *args], timeout_s=timeout_s,
+                     stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+
+
+def _wait_ready(p: subprocess.Popen) -> None:
+    line = p.stdout.readline()
+    if line.strip() != "ready":
+        raise RuntimeError(f"selftest endpoint failed: {p.stderr.read()[-500:]}")
+
+
+def _result(p: subprocess.Popen, timeout_s: float) -> dict:
+    out, err = p.communicate(timeout=timeout_s)
+    lines = [ln for ln in out.splitlines() if ln.startswith("{")]
+    if p.returncode != 0 or not lines:
+        raise RuntimeError(f"selftest endpoint rc {p.returncode}: {err[-500:]}")
+    return json.loads(lines[-1])
+
+
+def measure_goodput(emu, src: str, dst: str, seconds: float = 2.5) -> float:
+    sink = _endpoint(emu, dst, ["tcp-sink", "--port", str(PORT), "--seconds", str(seconds)], seconds + 15)
+    _wait_ready(sink)
+    source = _endpoint(emu, src, ["tcp-source", "--dst", emu.ip(dst), "--port", str(PORT), "--seconds",
+                                  str(seconds)], seconds + 15)
+    _result(source, seconds + 15)
+    return _result(sink, seconds + 15)["goodput_mbps"]
+
+
+def measure_udp(emu, src: str, dst: str, count: int, pps: float, size: int = 200) -> dict:
+    secs = count / pps + 5
+    sink = _endpoint(emu, dst, ["udp-sink", "--port", str(PORT + 1), "--count", str(count),
+                                "--seconds", str(secs)], secs + 10)
+    _wait_ready(sink)
+    source = _endpoint(emu, src, ["udp-source", "--dst", emu.ip(dst), "--port", str(PORT + 1), "--count",
+                                  str(count), "--pps", str(pps), "--size", str(size)], secs + 10)
+    sent = _result(source, secs + 10)
+    got = _result(sink, secs + 10)
+    return {**got, **sent, "loss": 1 - got["received"] / count}
+
+
+def binomial_interval(n: int, p: float, confidence: float = 0.99) -> tuple[float, float]:
+    """Range of the observed loss *fraction* that a correct shaper yields with this confidence."""
+    from scipy.stats import binom
+
+    lo, hi = binom.interval(confidence, n, p)
+    return lo / n, hi / n
+
+
+def goodput_check(measured: float, rate_mbps: float, tol: float = 0.10) -> Check:
+    expected = rate_mbps * TCP_PAYLOAD_FRACTION
+    return Check("TCP goodput", "Mbit/s", rate_mbps, expected, measured, expected * (1 - tol), expected * (1 + tol))
+
+
+def delay_check(measured_ms: float, hops: list[HopConfig]) -> Check:
+    expected = sum(h.delay_ms for h in hops)
+    tol = max(1.0, 0.10 * expected)
+    return Check("one-way delay (median)", "ms", expected, expected, measured_ms, expected - tol, expected + tol)
+
+
+def loss_check(measured: float, n: int, hops: list[HopConfig]) -> Check:
+    keep = 1.0
+    for h in hops:
+        keep *= 1 - h.loss
+    expected = 1 - keep
+    lo, hi = binomial_interval(n, expected)
+    return Check(f"loss ({n} probes)", "%", expected * 100, expected * 100, measured * 100, lo * 100, hi * 100)
+
+
+def main(argv: list[str] | None = None) -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("mode", choices=["tcp-sink", "tcp-source", "udp-sink", "udp-source"])
+    ap.add_argument("--dst")
+    ap.add_argument("--port", type=int, default=PORT)
+    ap.add_argument("--seconds", type=float, default=2.0)
+    ap.add_argument("--count", type=int, default=1000)
+    ap.add_argument("--pps", type=float, default=1000)
+    ap.add_argument("--size", type=int, default=200)
+    a = ap.parse_args(argv)
+    if a.mode == "tcp-sink":
+        res = tcp_sink(a.port, a.seconds)
+    elif a.mode == "tcp-source":
+        res = tcp_source(a.dst, a.port, a.seconds)
+    elif a.mode == "udp-sink":
+        res = udp_sink(a.port, a.count, a.seconds)
+    else:
+        res = udp_source(a.dst, a.port, a.count, a.pps, a.size)
+    print(json.dumps(res), flush=True)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,21 @@
+"""A run that a test kills with SIGKILL: sets up, starts a process in a node, waits forever."""
+
+from __future__ import annotations
+
+import sys
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).parent))
+from plans import link, nodes, plan, window  # noqa: E402
+
+from uavcas.emulation import Emulation  # noqa: E402
+
+prefix = sys.argv[1]
+p = plan(nodes(3), [window(0, [link("uav0", "uav1", 10, 2, 0.01), link("uav1", "uav2", 10, 2, 0.01)])])
+emu = Emulation(p, prefix=prefix, cpu_cap=0.5)
+emu.__enter__()
+emu.apply_window(0)
+child = emu.popen("uav1", ["sleep", "300"])
+print(f"ready {child.pid}", flush=True)
+time.sleep(300)

@@ -1,0 +1,195 @@
+"""Emulation pieces that need no root: names, controller, exact shaper requests, host config."""
+
+from __future__ import annotations
+
+import itertools
+import random
+import struct
+from pathlib import Path
+
+import pytest
+
+from uavcas.emulation import cleanup, naming
+from uavcas.emulation.controller import compute, shortest_path, adjacency
+from uavcas.emulation.hosts import host_lines, HostSpec, node_argv, subnet_prefixlen
+from uavcas.emulation.naming import Naming
+from uavcas.emulation.nfqdelay import verdict_msg
+from uavcas.emulation.selftest import binomial_interval, loss_check, HopConfig
+from uavcas.emulation.shaping import (FallbackShaper, NetemShaper, Shape, nft_loss_lines, nft_port_init_lines,
+                                      nft_table_ruleset,
+                                      parse_tc_rate,
+                                      queue_limit_pkts)
+
+
+# names ---------------------------------------------------------------------------------------
+def test_names_fit_ifnamsiz_and_carry_prefix():
+    n = Naming("uc1a2b3c")
+    assert n.fabric_ns == "uc1a2b3c-fab" and n.node_ns("uav7") == "uc1a2b3c-uav7"
+    assert max(len(Naming.link_port(i, j)) for i, j in [(0, 1), (9999, 9998)]) <= naming.IFNAMSIZ
+    assert Naming.link_port(3, 7) == "l3-7" and Naming.bridge(3) == "s3" and Naming.host_port(3) == "h3"
+
+
+@pytest.mark.parametrize("bad", ["", "A1", "1ab", "a", "ab-c", "abcdefghijklm"])
+def test_bad_prefix_rejected(bad):
+    with pytest.raises(ValueError):
+        Naming(bad)
+
+
+def test_fabric_is_not_a_node_name():
+    with pytest.raises(ValueError):
+        Naming("uc1").node_ns("fab")
+
+
+# controller -------------------------------------------------------------------------------------
+NODES = ["uav0", "uav1", "uav2", "uav3", "bs0"]
+
+
+def test_bfs_is_deterministic_and_prefers_plan_order():
+    # square uav0-uav1-uav3 / uav0-uav2-uav3: two equal paths; the lower-index neighbour wins
+    links = [("uav0", "uav1"), ("uav0", "uav2"), ("uav1", "uav3"), ("uav2", "uav3")]
+    fwd = compute(NODES, links)
+    assert fwd.path("uav0", "uav3") == ["uav0", "uav1", "uav3"]
+    assert fwd.path("uav3", "uav0") == ["uav3", "uav1", "uav0"]
+    assert compute(NODES, list(reversed(links))).next_hop == fwd.next_hop
+    assert fwd.path("uav0", "bs0") is None and "bs0" not in fwd.next_hop["uav0"]
+
+
+def test_routes_are_honoured_both_ways():
+    links = [("uav0", "uav1"), ("uav0", "uav2"), ("uav1", "uav3"), ("uav2", "uav3")]
+    fwd = compute(NODES, links, routes=[["uav0", "uav2", "uav3"]])
+    assert fwd.path("uav0", "uav3") == ["uav0", "uav2", "uav3"]
+    assert fwd.path("uav3", "uav0") == ["uav3", "uav2", "uav0"]
+    assert not fwd.rejected
+
+
+def test_wormhole_forces_victim_bs_through_attacker():
+    links = [("uav0", "bs0"), ("uav0", "uav1"), ("uav1", "bs0"), ("uav2", "bs0")]
+    plain = compute(NODES, links)
+    assert plain.path("uav0", "bs0") == ["uav0", "bs0"]
+    fwd = compute(NODES, links, wormholes=[("uav0", "uav1", "bs0")])
+    assert fwd.path("uav0", "bs0") == ["uav0", "uav1", "bs0"]
+    assert fwd.path("bs0", "uav0") == ["bs0", "uav1", "uav0"]
+    assert fwd.path("uav2", "bs0") == ["uav2", "bs0"]  # other traffic unchanged
+
+
+def test_impossible_override_is_rejected_not_looped():
+    links = [("uav0", "bs0")]
+    fwd = compute(NODES, links, wormholes=[("uav0", "uav1", "bs0")], routes=[["uav0", "uav3", "bs0"]])
+    assert fwd.path("uav0", "bs0") == ["uav0", "bs0"]
+    assert len(fwd.rejected) == 4
+
+
+@pytest.mark.parametrize("seed", range(20))
+def test_random_windows_loop_free_and_shortest(seed):
+    rng = random.Random(seed)
+    nodes = [f"n{i}" for i in range(9)]
+    links = [(a, b) for a, b in itertools.combinations(nodes, 2) if rng.random() < 0.3]
+    routes = [[rng.choice(nodes) for _ in range(3)] for _ in range(3)]
+    worm = [tuple(rng.sample(nodes, 3))]
+    fwd = compute(nodes, links, routes=routes, wormholes=worm)
+    adj = adjacency(nodes, links)
+    for s, d in itertools.permutations(nodes, 2):
+        p = fwd.path(s, d)
+        sp = shortest_path(adj, s, d)
+        assert (p is None) == (sp is None)  # reachable exactly when connected: no loops, no holes
+        if p:
+            assert all(b in adj[a] for a, b in zip(p, p[1:])) and len(set(p)) == len(p)
+    if not routes and not worm:
+        assert all(len(fwd.path(s, d) or []) == len(shortest_path(adj, s, d) or []) for s, d in
+                   itertools.permutations(nodes, 2))
+
+
+# shaping requests ---------------------------------------------------------------------------------
+def _shape(port="l0-1", rate=10.0, delay=5.0, loss=0.01):
+    return Shape("uav0", "uav1", port, rate, delay, loss)
+
+
+def test_netem_shaper_exact_requests(tmp_path: Path):
+    sh = NetemShaper("x-fab", tmp_path)
+    assert sh.init_lines(["l0-1"]) == [
+        "qdisc add dev l0-1 root handle 1: htb default 1",
+        "class add dev l0-1 parent 1: classid 1:1 htb rate 1000000000bit ceil 1000000000bit quantum 1514",
+        "qdisc add dev l0-1 parent 1:1 handle 10: netem delay 0us loss 0% limit 2000"]
+    assert sh.change_lines([_shape()]) == [
+        "class change dev l0-1 parent 1: classid 1:1 htb rate 10000000bit ceil 10000000bit quantum 1514",
+        "qdisc change dev l0-1 parent 1:1 handle 10: netem delay 5000us loss 1% limit 47"]
+    sh.current["l0-1"] = _shape()
+    assert sh.change_lines([_shape()]) == []  # unchanged: no request at all
+    assert sh.change_lines([_shape(delay=2.5, loss=0.125)]) == [
+        "qdisc change dev l0-1 parent 1:1 handle 10: netem delay 2500us loss 12.5% limit 45"]
+
+
+def test_fallback_tc_requests_change_in_place(tmp_path: Path):
+    sh = FallbackShaper("x-fab", tmp_path)
+    assert sh.init_lines(["l1-0"])[-1] == "qdisc add dev l1-0 parent 1:1 handle 10: pfifo limit 2000"
+    assert sh.tc_lines([_shape()]) == [
+        "class change dev l0-1 parent 1: classid 1:1 htb rate 10000000bit ceil 10000000bit quantum 1514",
+        "qdisc change dev l0-1 parent 1:1 handle 10: pfifo limit 42"]
+    sh.current["l0-1"] = _shape()
+    assert sh.tc_lines([_shape(delay=1.0)]) == []  # delay only: the daemon, not tc
+    assert not any("del" in line for line in sh.tc_lines([_shape(rate=54.0)]))
+
+
+def test_nft_loss_rewrites_only_the_given_port_chains():
+    table = nft_table_ruleset()
+    assert "oifname vmap @ports" in table and "type filter hook forward" in table
+    assert nft_port_init_lines(["l0-1", "l1-0"]) == [
+        "add chain bridge uavcas_shape p_l0_1", "add chain bridge uavcas_shape p_l1_0",
+        'add element bridge uavcas_shape ports { "l0-1" : jump p_l0_1, "l1-0" : jump p_l1_0 }']
+    assert nft_loss_lines({"l0-1": 0.05, "l1-0": 0.0, "l3-1": 1.0}) == [
+        "flush chain bridge uavcas_shape p_l0_1",
+        "add rule bridge uavcas_shape p_l0_1 numgen random mod 1000000 < 50000 counter drop",
+        "flush chain bridge uavcas_shape p_l1_0",
+        "flush chain bridge uavcas_shape p_l3_1",
+        "add rule bridge uavcas_shape p_l3_1 numgen random mod 1000000 < 1000000 counter drop"]
+
+
+def test_tc_rate_parsing_and_queue():
+    assert parse_tc_rate("9600Kbit") == pytest.approx(9.6)
+    assert parse_tc_rate("54Mbit") == 54 and parse_tc_rate("800bit") == pytest.approx(0.0008)
+    assert queue_limit_pkts(0.1) == 16 and queue_limit_pkts(10) == 42
+
+
+# hosts ---------------------------------------------------------------------------------------------
+def test_host_lines_static_arp_and_subnet():
+    specs = [HostSpec(f"uav{i}", i, f"10.77.0.{i + 1}", f"02:00:00:00:00:{i:02x}", f"p-uav{i}") for i in range(3)]
+    assert subnet_prefixlen([s.ip for s in specs]) == 24
+    assert subnet_prefixlen(["10.77.0.1", "10.77.1.1"]) == 23
+    lines = host_lines(specs[0], specs, 24)
+    assert lines[0] == "link set lo up" and lines[-1] == "link set eth0 up"
+    assert "neigh replace 10.77.0.2 lladdr 02:00:00:00:00:01 dev eth0 nud permanent" in lines
+    assert not any("10.77.0.1 " in ln for ln in lines if ln.startswith("neigh"))
+
+
+def test_node_argv_joins_cgroup_before_netns():
+    argv = node_argv("p-uav0", ["sleep", "1"], Path("/cg/uav0/cgroup.procs"), timeout_s=5)
+    assert argv[:4] == ["sh", "-c", 'echo $$ > "$0" && exec "$@"', "/cg/uav0/cgroup.procs"]
+    assert argv[4:] == ["timeout", "-k", "1", "5", "ip", "netns", "exec", "p-uav0", "sleep", "1"]
+
+
+# nfqueue wire format and statistics ------------------------------------------------------------------
+def test_verdict_message_layout():
+    msg = verdict_msg(3, 0x01020304)
+    length, kind, flags = struct.unpack_from("=IHH", msg)
+    assert length == len(msg) == 32 and kind == 0x301 and flags == 1
+    assert msg[18:20] == b"\x00\x03"  # res_id is the queue number, big-endian
+    assert msg[-8:] == struct.pack("!II", 1, 0x01020304)  # NF_ACCEPT, packet id
+
+
+def test_loss_tolerance_is_binomial_99():
+    lo, hi = binomial_interval(3000, 0.0494)
+    assert lo < 0.0494 < hi and hi - lo < 0.025
+    c = loss_check(0.05, 3000, [HopConfig(10, 1, 0.02), HopConfig(10, 1, 0.03)])
+    assert c.expected == pytest.approx(4.94) and c.ok
+
+
+# registry --------------------------------------------------------------------------------------------
+def test_registry_lock_marks_live(tmp_path, monkeypatch):
+    monkeypatch.setattr(naming, "RUN_ROOT", tmp_path)
+    monkeypatch.setattr(cleanup, "RUN_ROOT", tmp_path)
+    lock = cleanup.RunLock(cleanup.RunRecord("uczz01", 1, ["uczz01-fab"]))
+    assert cleanup.is_live("uczz01") and cleanup.registered_prefixes() == ["uczz01"]
+    with pytest.raises(RuntimeError):
+        cleanup.RunLock(cleanup.RunRecord("uczz01", 1, []))
+    lock.release()
+    assert not cleanup.is_live("uczz01") and cleanup.registered_prefixes() == []
