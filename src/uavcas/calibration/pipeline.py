@@ -1,0 +1,107 @@
+"""Run calibration layers on a data folder and write their outputs (JSON, markdown, PNG).
+
+Dependencies between layers are computed, not read from earlier runs: link and fidelity use the
+path-loss profile fitted here (layer 1 is cheap), fidelity uses the link replay. Only the layers
+asked for are *written*. With `write_profile`, a `TwinProfile` with the fitted path-loss and
+mobility profiles (the built-in ones for a layer that did not run) is saved by name.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from uavcas.twin.profile import DEFAULT_PROFILE, TwinProfile, save_profile
+
+from . import figures, report
+from .layer1_pathloss import Layer1Result, layer1_json, run_layer1
+from .layer2_mobility import MISSIONS, Layer2Result, layer2_json, run_layer2
+from .layer3_link import Layer3Result, layer3_json, run_layer3
+from .layer4_fidelity import layer4_json, run_layer4
+from .loaders import load_afar, load_maeng, load_multibw, load_pattern
+
+LAYERS = ("pathloss", "mobility", "link", "fidelity")
+
+
+@dataclass
+class RunOutput:
+    results: dict = field(default_factory=dict)  # layer -> JSON dict
+    files: list[Path] = field(default_factory=list)
+    profile_path: Path | None = None
+    runtime_s: float = 0.0
+
+
+def build_profile(name: str, l1: Layer1Result | None, l2: Layer2Result | None, data: Path, seed: int) -> TwinProfile:
+    parts = []
+    update: dict = {"name": name}
+    if l1 is not None:
+        update["pathloss"] = l1.profile.model_copy(update={"name": f"{name}-pathloss"})
+        parts.append("path loss (layer 1)")
+    if l2 is not None:
+        update["mobility"] = l2.profile.model_copy(update={"name": f"{name}-mobility"})
+        parts.append("mobility (layer 2)")
+    update["source"] = f"uavcas calibrate on {data} (seed {seed}): fitted {' and '.join(parts) or 'nothing'}; other parts built in"
+    return DEFAULT_PROFILE.model_copy(update=update)
+
+
+def parse_assignment(text: str | None) -> dict[int, str] | None:
+    """'301=spiral,309=spiral,328=grid' -> {301: 'spiral', ...}; None -> the paper's."""
+    if not text:
+        return None
+    out = {}
+    for item in text.split(","):
+        team, _, kind = item.partition("=")
+        if not team.strip().isdigit() or kind.strip() not in MISSIONS:
+            raise ValueError(f"bad mission assignment {item!r}: expected TEAM=<{'|'.join(MISSIONS)}>")
+        out[int(team)] = kind.strip()
+    return out
+
+
+def run(layers: tuple[str, ...], data: Path, out: Path, seed: int = 0, write_profile: str | None = None,
+        log=print, assignment: dict[int, str] | None = None) -> RunOutput:
+    t0 = time.monotonic()
+    res = RunOutput()
+    need1 = any(x in layers for x in ("pathloss", "link", "fidelity"))
+    need3 = any(x in layers for x in ("link", "fidelity"))
+    l1 = l2 = None
+    l3: Layer3Result | None = None
+    afar = load_afar(data) if (need3 or "mobility" in layers) else None
+    if need1:
+        l1 = run_layer1(load_maeng(data), load_multibw(data), load_pattern(data), seed=seed)
+        log(f"layer 1 fitted ({time.monotonic() - t0:.1f} s)")
+    if "pathloss" in layers:
+        j = layer1_json(l1)
+        res.results["pathloss"] = j
+        res.files += [report.write_json(out / "pathloss.json", j), report.write_md(out / "pathloss.md", report.pathloss_md(j)),
+                      figures.pathloss_figure(l1, out / "pathloss_vs_distance.png", seed),
+                      figures.crossval_figure(l1, out / "pathloss_crossval.png")]
+    if "mobility" in layers:
+        l2 = run_layer2(afar, seed=seed, assignment=assignment)
+        j = layer2_json(l2)
+        res.results["mobility"] = j
+        res.files += [report.write_json(out / "mobility.json", j), report.write_md(out / "mobility.md", report.mobility_md(j))]
+        res.files += figures.mobility_figures(l2, out, seed)
+        log(f"layer 2 done ({time.monotonic() - t0:.1f} s)")
+    if need3:
+        l3 = run_layer3(afar, l1.profile, seed=seed)
+        log(f"layer 3 replayed ({time.monotonic() - t0:.1f} s)")
+    if "link" in layers:
+        j = layer3_json(l3)
+        res.results["link"] = j
+        res.files += [report.write_json(out / "link.json", j), report.write_md(out / "link.md", report.link_md(j)),
+                      figures.link_figure(l3, out / "link_representative_flight.png")]
+    if "fidelity" in layers:
+        l4 = run_layer4(l1.groups, l1.crossval_groups, l3, l1.profile, seed=seed)
+        j = layer4_json(l4)
+        res.results["fidelity"] = j
+        res.files += [report.write_json(out / "fidelity.json", j), report.write_md(out / "fidelity.md", report.fidelity_md(j)),
+                      figures.fidelity_figure(l4, out / "fidelity_rss_pdf.png")]
+        log(f"layer 4 done ({time.monotonic() - t0:.1f} s)")
+    if write_profile:
+        prof = build_profile(write_profile, l1 if "pathloss" in layers or "link" in layers or "fidelity" in layers else None,
+                             l2, data, seed)
+        res.profile_path = save_profile(prof, write_profile)
+    res.runtime_s = time.monotonic() - t0
+    res.files.append(report.write_md(out / "summary.md", report.summary_md(res.results, res.runtime_s)))
+    return res
