@@ -267,3 +267,14 @@ def test_hooks_blackhole_table_and_mirror():
         out, _ = cap.communicate(timeout=10)
         assert out.count("ICMP echo request") == 3
         emu.fabric.unmirror(sw.link_ports["uav0"])
+
+
+def test_a_dead_link_drops_everything_and_reads_back_as_loss_one():
+    # The channel gives loss 1.0 to links far out of range (e.g. 3GPP NLOS at 10 dBm).
+    p = plan(nodes(3), [window(0, [link("uav0", "uav1", 20, 1.0, 1.0), link("uav1", "uav2", 20, 1.0, 0.0)])])
+    with Emulation(p, prefix=new_prefix()) as emu:
+        rep = emu.apply_window(0)
+        applied = {(r.src, r.dst): r.applied_loss for r in rep.records}
+        assert applied[("uav0", "uav1")] == 1.0 and applied[("uav1", "uav0")] == 1.0
+        assert applied[("uav1", "uav2")] == 0.0
+        assert not reachable(emu, "uav0", "uav1") and reachable(emu, "uav1", "uav2")

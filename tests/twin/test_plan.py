@@ -131,3 +131,17 @@ def test_cli_plan_writes_json_and_figures(tmp_path):
 def test_cli_plan_refuses_bad_config(tmp_path):
     r = _cli("plan", "dos=1000-6-2-image-nowhere-adaptive-random-30-95", "--out", str(tmp_path / "p.json"))
     assert r.returncode == 2 and "field 'pathloss'" in r.stderr and not (tmp_path / "p.json").exists()
+
+
+def test_wormhole_attacker_is_off_the_victims_initial_route():
+    from uavcas.topology.routing import nearest_neighbour_topology, route
+
+    for seed in range(20):
+        p = plan("wormhole-8-2-image-logdist-adaptive-random-30-95", seed=seed)
+        (atk,) = p.attacks
+        names = [nd.name for nd in p.nodes]
+        is_bs = np.array([nd.kind == "bs" for nd in p.nodes])
+        pos = np.array([p.windows[0].positions[nm] for nm in names])
+        v = names.index(atk.victims[0])
+        hops = route(nearest_neighbour_topology(pos, is_bs), len(names), v, 8 + v % 2, is_bs)
+        assert names.index(atk.attackers[0]) not in hops  # the detour adds a hop

@@ -143,7 +143,9 @@ def nft_loss_lines(loss_by_port: dict[str, float], table: str = NFT_TABLE) -> li
     for port, loss in sorted(loss_by_port.items()):
         thr = min(LOSS_SCALE, round(loss * LOSS_SCALE))
         lines.append(f"flush chain bridge {table} {nft_chain(port)}")
-        if thr > 0:
+        if thr >= LOSS_SCALE:  # `numgen mod N < N` is refused by nft; a dead link drops everything
+            lines.append(f"add rule bridge {table} {nft_chain(port)} counter drop")
+        elif thr > 0:
             lines.append(f"add rule bridge {table} {nft_chain(port)} numgen random mod {LOSS_SCALE} < {thr} counter drop")
     return lines
 
@@ -365,10 +367,14 @@ def read_nft_losses(fabric_ns: str, table: str = NFT_TABLE) -> dict[str, float]:
         rule = item.get("rule")
         if not rule or not rule["chain"].startswith("p_"):
             continue
-        for expr in rule["expr"]:
-            match = expr.get("match") if isinstance(expr, dict) else None
-            if match and isinstance(match.get("left"), dict) and "numgen" in match["left"]:
-                losses[rule["chain"][2:].replace("_", "-")] = match["right"] / match["left"]["numgen"]["mod"]
+        port = rule["chain"][2:].replace("_", "-")
+        matches = [e["match"] for e in rule["expr"] if isinstance(e, dict) and "match" in e]
+        has_drop = any(isinstance(e, dict) and "drop" in e for e in rule["expr"])
+        for match in matches:
+            if isinstance(match.get("left"), dict) and "numgen" in match["left"]:
+                losses[port] = match["right"] / match["left"]["numgen"]["mod"]
+        if has_drop and not matches:  # an unconditional drop: the loss-1.0 rule
+            losses[port] = 1.0
     return losses
 
 

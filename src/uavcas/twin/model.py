@@ -67,6 +67,8 @@ class Window(_Frozen):
     positions: dict[str, tuple[float, float, float]]  # metres, x/y in the area, z altitude
     links: list[Link]
     routes: list[Route]  # benign traffic paths (UAV i <-> BS i mod n_bs) and attack paths
+    # Detours of wormholes active during any part of this window; links and routes include them.
+    # The runner switches a detour on and off at the attack's own start_s/stop_s.
     wormholes: list["WormholeOverride"] = Field(default_factory=list)
 
 

@@ -107,15 +107,15 @@ def plan(
     all_pairs = np.c_[iu, ju]
     pair_index = {(int(a), int(b)): k for k, (a, b) in enumerate(all_pairs)}
 
-    # Topology of window 0 decides the blackhole relay; the schedule needs it before the windows.
+    # Routes of window 0 pick the blackhole relay and an off-path wormhole attacker.
     pos0 = np.vstack([uav_tracks[0], bs_pos])
     topo0 = nearest_neighbour_topology(pos0, is_bs)
-    first_hop = {
-        names[u]: names[route(topo0, n, u, n_uav + u % scenario.n_bs, is_bs)[1]]
+    routes0 = {
+        names[u]: [names[h] for h in route(topo0, n, u, n_uav + u % scenario.n_bs, is_bs)]
         for u in range(n_uav)
     }
     attacks = schedule_attacks(
-        scenario, names[:n_uav], windows * window_s, _rng(seed, _ATTACK_STREAM), first_hop
+        scenario, names[:n_uav], windows * window_s, _rng(seed, _ATTACK_STREAM), routes0
     )
 
     out_windows = []

@@ -8,7 +8,9 @@ Rules (paper, section 'Attack Implementation', and what its code should have don
 - an attack lasts 10-20 s (clipped to the run) and starts at a seeded offset, so attacks do not
   always begin at t = 0;
 - blackhole: the drop rule runs on the victim's switch (as in the paper); its 'attacker' is the
-  compromised relay credited with it, the victim's first hop towards its BS when that is a UAV.
+  compromised relay credited with it, the victim's first hop towards its BS when that is a UAV;
+- wormhole: the attacker is drawn among UAVs off the victim's route at t = 0 where possible, so
+  the detour really adds a hop instead of re-labelling a path the traffic took anyway.
 """
 
 from __future__ import annotations
@@ -35,9 +37,9 @@ def schedule_attacks(
     uav_names: list[str],
     duration_s: float,
     rng: np.random.Generator,
-    first_hop: dict[str, str] | None = None,
+    routes0: dict[str, list[str]] | None = None,
 ) -> list[Attack]:
-    """Draw the schedule. `first_hop` maps a UAV to its first hop at the attack start (blackhole)."""
+    """Draw the schedule. `routes0` maps a UAV to its route towards its BS at t = 0."""
     if not scenario.attacks:
         return []
     n = len(uav_names)
@@ -63,8 +65,14 @@ def schedule_attacks(
         if spec.family == "ddos":
             hi = max(2, min(4, (n - 1) // 3))
             attackers = take(int(rng.integers(2, hi + 1)))
+        elif spec.family == "wormhole":
+            on_path = set((routes0 or {}).get(victim, ()))
+            off = [u for u in pool if u not in used and u not in on_path]
+            attackers = [off[0]] if off else take(1)
+            used.update(attackers)
         elif spec.family == "blackhole":
-            relay = (first_hop or {}).get(victim)
+            route = (routes0 or {}).get(victim, [])
+            relay = route[1] if len(route) > 1 else None
             if relay in pool and relay not in used:
                 used.add(relay)
                 attackers = [relay]

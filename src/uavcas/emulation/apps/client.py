@@ -1,0 +1,101 @@
+"""The base stations' HTTP clients: BS `i mod n_bs` fetches UAV i's images continuously.
+
+One bash loop per UAV runs in its BS's namespace: curl an image (a seeded sequence over the
+image set), log one line, think for a seeded pause, repeat until the time budget is spent.
+A new TCP connection per image, as a ground station pulling frames would, so every fetch is
+its own flow. Bounded three ways: the loop's own deadline (bash `SECONDS`), curl's
+`--max-time`, and the `timeout` the core wraps around the whole script.
+
+Log line (tab separated): epoch start, HTTP code (000 = no answer), bytes, seconds, image.
+"""
+
+from __future__ import annotations
+
+import shlex
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+THINK_MEAN_S = 0.5  # mean pause between fetches: ~1.5 images/s per UAV, a few Mbit/s in total
+CONNECT_TIMEOUT_S = 2.0
+MAX_TIME_S = 8.0
+SEQUENCE_LEN = 256  # cycled; long enough that the order does not visibly repeat in a run
+
+
+@dataclass(frozen=True)
+class ClientSpec:
+    bs: str
+    uav: str
+    uav_ip: str
+    images: tuple[str, ...]
+    duration_s: float
+    log_path: Path
+    seed: int
+    think_mean_s: float = THINK_MEAN_S
+    port: int = 80
+
+
+@dataclass(frozen=True)
+class Fetch:
+    t_unix: float
+    code: int
+    size_bytes: int
+    seconds: float
+    image: str
+
+    @property
+    def ok(self) -> bool:
+        return 200 <= self.code < 300
+
+
+def assignments(uavs: list[str], bss: list[str]) -> list[tuple[str, str]]:
+    """(bs, uav) pairs: UAV i is served by BS i mod n_bs (names in plan order)."""
+    if not bss:
+        return []
+    return [(bss[i % len(bss)], u) for i, u in enumerate(uavs)]
+
+
+def render_script(spec: ClientSpec) -> str:
+    rng = np.random.Generator(np.random.PCG64(np.random.SeedSequence([spec.seed, 0xC11E])))
+    order = [spec.images[int(k)] for k in rng.integers(0, len(spec.images), SEQUENCE_LEN)]
+    # Exponential think times, clipped: a bursty but bounded request process.
+    thinks = np.clip(rng.exponential(spec.think_mean_s, SEQUENCE_LEN), 0.05, 4 * spec.think_mean_s)
+    url = f"http://{spec.uav_ip}:{spec.port}/"
+    fmt = r"%{http_code}\t%{size_download}\t%{time_total}"
+    return f"""#!/bin/bash
+# uavcas: {spec.bs} fetching images from {spec.uav} (generated)
+imgs=({' '.join(shlex.quote(i) for i in order)})
+thinks=({' '.join(f'{t:.3f}' for t in thinks)})
+log={shlex.quote(str(spec.log_path))}
+end=$((SECONDS + {int(np.ceil(spec.duration_s))}))
+i=0
+while (( SECONDS < end )); do
+  img=${{imgs[i % {SEQUENCE_LEN}]}}
+  t=$EPOCHREALTIME
+  r=$(curl -s -o /dev/null --connect-timeout {CONNECT_TIMEOUT_S:g} --max-time {MAX_TIME_S:g} -w '{fmt}' "{url}$img")
+  printf '%s\\t%s\\t%s\\n' "$t" "$r" "$img" >> "$log"
+  sleep "${{thinks[i % {SEQUENCE_LEN}]}}"
+  i=$((i + 1))
+done
+"""
+
+
+def write_script(spec: ClientSpec, path: Path) -> Path:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(render_script(spec))
+    path.chmod(0o755)
+    return path
+
+
+def parse_log(text: str) -> list[Fetch]:
+    out = []
+    for line in text.splitlines():
+        parts = line.split("\t")
+        if len(parts) != 5:
+            continue
+        try:
+            out.append(Fetch(float(parts[0]), int(parts[1]), int(float(parts[2])), float(parts[3]), parts[4]))
+        except ValueError:
+            continue
+    return out

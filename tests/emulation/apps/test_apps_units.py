@@ -1,0 +1,138 @@
+"""Unit tests of the apps (no root): payloads, configs, scripts, parsers, the replay logic."""
+
+from __future__ import annotations
+
+import random
+import subprocess
+
+import pytest
+from scapy.layers.inet import IP, TCP, UDP
+from scapy.layers.l2 import Ether
+
+from uavcas.emulation.apps import capture, client, flood, hooks, images, nginx, replayer, telemetry
+
+
+def test_images_are_seeded_jpeg_sized(tmp_path):
+    a = images.generate(tmp_path / "a", seed=3, count=12)
+    b = images.generate(tmp_path / "b", seed=3, count=12)
+    assert [(i.name, i.size_bytes) for i in a] == [(i.name, i.size_bytes) for i in b]
+    assert (tmp_path / "a" / "img000.jpg").read_bytes() == (tmp_path / "b" / "img000.jpg").read_bytes()
+    sizes = [i.size_bytes for i in a]
+    assert all(20 * 1024 <= s <= 400 * 1024 for s in sizes) and max(sizes) > 2 * min(sizes)
+    data = (tmp_path / "a" / "img003.jpg").read_bytes()
+    assert data[:2] == b"\xff\xd8" and data[-2:] == b"\xff\xd9" and b"JFIF" in data[:20]
+    assert len(data) == a[3].size_bytes
+    assert images.image_sizes(4, 12) != images.image_sizes(3, 12)
+
+
+def test_nginx_conf_has_no_systemd_defaults(tmp_path):
+    site = nginx.NginxSite("uav0", "10.9.0.1", tmp_path / "img", tmp_path / "w")
+    conf = nginx.render_conf(site)
+    for needle in ("daemon off;", "user root;", f"pid {tmp_path / 'w' / 'nginx.pid'}", "listen 10.9.0.1:80",
+                   "client_body_temp_path", f"root {tmp_path / 'img'}"):
+        assert needle in conf
+    assert "/var/" not in conf
+    argv = nginx.argv(site)
+    assert argv[:1] == ["nginx"] and "-e" in argv and str(site.conf_path) in argv
+
+
+def test_client_assignment_and_script(tmp_path):
+    assert client.assignments(["uav0", "uav1", "uav2"], ["bs0", "bs1"]) == [
+        ("bs0", "uav0"), ("bs1", "uav1"), ("bs0", "uav2")]
+    spec = client.ClientSpec("bs0", "uav2", "10.9.0.3", ("img000.jpg", "img001.jpg"), 12.0,
+                             tmp_path / "log.tsv", seed=1)
+    text = client.render_script(spec)
+    assert text == client.render_script(spec)  # seeded
+    assert "http://10.9.0.3:80/" in text and "--max-time" in text and "SECONDS + 12" in text
+    path = client.write_script(spec, tmp_path / "c.sh")
+    assert subprocess.run(["bash", "-n", str(path)]).returncode == 0
+
+
+def test_client_log_parse():
+    text = "1700000000.5\t200\t1234\t0.05\timg001.jpg\n1700000001.0\t000\t0\t2.0\timg002.jpg\ngarbage\n"
+    f = client.parse_log(text)
+    assert [x.ok for x in f] == [True, False] and f[0].size_bytes == 1234 and f[1].image == "img002.jpg"
+
+
+def test_flood_calibration_math_and_ruleset():
+    assert flood.hping_interval_us(1000, 170) == 830
+    assert flood.hping_interval_us(1e6, 500) == 1  # never below 1 us
+    assert flood.overhead_from(900, 908.0) == pytest.approx(1e6 / 908 - 900)
+    rs = flood.counter_ruleset("uavcas_f_dos_0", "10.9.0.2", 80)
+    assert "hook output" in rs and "ip daddr 10.9.0.2 tcp dport 80" in rs and "(syn | ack) == syn" in rs
+    js = '{"nftables": [{"metainfo": {}}, {"counter": {"family": "ip", "name": "syn", "packets": 42, "bytes": 1}}]}'
+    assert flood.parse_counter(js) == 42
+    assert flood.table_name("ddos-1") == "uavcas_f_ddos_1"
+
+
+def test_capture_stats_parse():
+    err = "tcpdump: listening on s0\n1234 packets captured\n1240 packets received by filter\n6 packets dropped by kernel\n"
+    assert capture.parse_stats(err) == {"captured": 1234, "received by filter": 1240, "dropped by kernel": 6}
+    argv = capture.argv("s3", capture.Path("/x/s-uav3.pcap"))
+    assert "-p" not in argv and "-U" in argv and argv[argv.index("-Z") + 1] == "root"
+    assert capture.point_name("uav3") == "s-uav3"
+
+
+def test_blackhole_ruleset_drops_ipv4_both_ways_and_never_arp():
+    rs = hooks.blackhole_ruleset("uavcas_bh_blackhole_0", ["h2", "l2-*"], "10.9.0.3")
+    assert 'iifname { "h2", "l2-*" }' in rs
+    assert "ip saddr 10.9.0.3 counter drop" in rs and "ip daddr 10.9.0.3 counter drop" in rs
+    assert "arp" not in rs and "priority -20" in rs
+    lines = hooks.mirror_lines("h2", "h1")
+    assert any("ingress" in x and "mirror dev h1" in x for x in lines)
+    assert any("egress" in x and "mirror dev h1" in x for x in lines)
+
+
+def _frame(src="10.9.0.3", dst="10.9.0.9", ttl=64, seq=1000, ip_id=7, payload=b"x" * 100) -> bytes:
+    return bytes(Ether(src="02:00:00:00:00:03", dst="02:00:00:00:00:09") / IP(src=src, dst=dst, ttl=ttl, id=ip_id)
+                 / TCP(sport=80, dport=40000, seq=seq, flags="PA") / payload)
+
+
+def test_replay_parse_and_mutate_seq_modes():
+    s = replayer.parse(_frame())
+    assert (s.src, s.dst, s.proto, s.sport, s.dport, s.ip_id, s.ttl, s.seq) == (
+        "10.9.0.3", "10.9.0.9", 6, 80, 40000, 7, 64, 1000)
+    rng = random.Random(1)
+    out, seq = replayer.mutate(_frame(), 3, "inc", 5, rng)
+    p = Ether(out)
+    assert p[IP].ttl == 59 and p[TCP].seq == 1003 == seq and p[IP].id == 7
+    assert IP(bytes(p[IP])).chksum == Ether(bytes(p))[IP].chksum  # valid checksum after rebuild
+    rebuilt = Ether(out)
+    del rebuilt[IP].chksum
+    del rebuilt[TCP].chksum
+    assert Ether(bytes(rebuilt))[TCP].chksum == p[TCP].chksum
+    assert replayer.mutate(_frame(), 3, "zero", 5, rng)[1] == 1000
+    assert replayer.new_seq(0xFFFFFFFF, 2, "inc", rng) == 1
+    seqs = {replayer.mutate(_frame(), 1, "rand", 3, rng)[1] for _ in range(5)}
+    assert len(seqs) == 5
+    udp = bytes(Ether() / IP(src="10.9.0.3", dst="10.9.0.1", ttl=64) / UDP(sport=1, dport=2) / b"hi")
+    out, seq = replayer.mutate(udp, 1, "inc", 5, rng)
+    assert seq is None and Ether(out)[IP].ttl == 59
+
+
+def test_replayer_buffers_victim_traffic_paces_and_never_replays_itself():
+    r = replayer.Replayer("10.9.0.3", "10.9.0.5", buffer_pkts=3, delay_ms=200, rate_pps=10, ttl_dec=5,
+                          seq_mode="inc")
+    assert not r.observe(0.0, _frame(src="10.9.0.7", dst="10.9.0.8"))  # not the victim's
+    assert not r.observe(0.0, _frame(src="10.9.0.5", dst="10.9.0.3"))  # the attacker's own
+    assert not r.observe(0.0, _frame(), outgoing=True)  # what we sent ourselves
+    for k in range(5):
+        assert r.observe(0.01 * k, _frame(ip_id=k, seq=1000 + k)) == (k < 3)
+    assert len(r.buffer) == 3 and r.stats["buffer_full"] == 2  # a full buffer admits nothing new
+    assert not r.due(0.1)  # not before the delay
+    assert r.due(0.25)
+    out, rec = r.next_injection(0.25)
+    assert rec["ip_id"] == 0 and rec["ttl"] == 59 and rec["seq"] == 1000 + 1 and rec["orig_seq"] == 1000
+    assert not r.due(0.26)  # paced: next one 100 ms later
+    assert r.due(0.36)
+    assert r.observe(0.3, _frame(ip_id=10, seq=2000))  # a slot was freed
+    assert not r.observe(0.3, out)  # our injection coming back through the mirror
+    assert not r.observe(0.3, _frame(ttl=59, ip_id=99))  # a TTL only our injections carry
+    assert r.stats["own_ignored"] == 2
+    _, rec2 = r.next_injection(0.36)
+    assert rec2["seq"] == 1001 + 2  # k counts injections
+
+
+def test_telemetry_frames_look_like_mavlink2():
+    f = telemetry.frame(5, 3, 33, 28)
+    assert f[0] == 0xFD and f[1] == 28 and f[4] == 5 and f[5] == 3 and len(f) == 10 + 28 + 2

@@ -1,0 +1,99 @@
+"""Runner, attack executor and `uavcas run` CLI without root: schedule, routing of wormholes, errors."""
+
+from __future__ import annotations
+
+import os
+import sys
+from pathlib import Path
+
+import pytest
+from typer.testing import CliRunner
+
+sys.path.insert(0, str(Path(__file__).parent / "apps"))
+from runplans import attack, link, make_plan, nodes  # noqa: E402
+
+from uavcas.cli import app  # noqa: E402
+from uavcas.cli import run as run_cli  # noqa: E402
+from uavcas.emulation.attacks import AttackExecutor  # noqa: E402
+from uavcas.emulation.runner import prepare_out_dir, schedule  # noqa: E402
+
+CONFIG = "dos=1000-5-2-image-logdist-adaptive-random-30-95"
+
+
+def _plan():
+    ns = nodes(3)
+    links = [link("uav0", "bs0"), link("uav1", "bs0"), link("uav0", "uav1")]  # triangle
+    return make_plan(ns, links, [attack("dos", ["uav1"], "uav0", 2.0, 6.0),
+                                 attack("wormhole", ["uav1"], "uav0", 4.0, 8.0, k=1)],
+                     n_windows=2, window_s=4.0, routes=[["uav0", "uav1", "bs0"], ["uav1", "bs0"]],
+                     wormholes=[("uav0", "uav1", "bs0")])
+
+
+def test_schedule_orders_stop_window_start_calibrate():
+    ev = [(e.t_s, e.kind) for e in schedule(_plan())]
+    assert ev == [(2.0, "start"), (3.0, "calibrate"), (4.0, "window"), (4.0, "start"), (5.0, "calibrate"), (6.0, "stop"),
+                  (8.0, "stop"), (8.0, "end")]
+
+
+class _FakeEmu:
+    fabric_ns = "x-fab"
+
+
+def test_wormhole_detour_only_while_active(tmp_path):
+    p = _plan()
+    ex = AttackExecutor(_FakeEmu(), p, tmp_path, p.duration_s)
+    w = p.windows[0]
+    # idle: the victim's own path, avoiding the attacker (the plan routes it through uav1)
+    assert ex.routes_for(w) == [["uav0", "bs0"], ["uav1", "bs0"]] and ex.wormholes_for(w) == []
+    ex.active["wormhole-1"] = p.attacks[1]
+    assert ex.routes_for(w) == [["uav0", "uav1", "bs0"], ["uav1", "bs0"]]
+    assert ex.wormholes_for(w) == [("uav0", "uav1", "bs0")]
+    # a window without the plan's override still gets one (victim's BS = uav index mod n_bs)
+    w2 = w.model_copy(update={"wormholes": []})
+    assert ex.wormholes_for(w2) == [("uav0", "uav1", "bs0")]
+    assert ex.blackhole_ports("uav1") == ["h1", "l1-*"]
+
+
+def test_prepare_out_dir_replaces_only_run_files(tmp_path):
+    out = tmp_path / "r"
+    (out / "pcap").mkdir(parents=True)
+    (out / "pcap" / "s-uav0.pcap").write_bytes(b"old")
+    (out / "run.json").write_text("{}")
+    (out / "notes.txt").write_text("mine")
+    prepare_out_dir(out)
+    assert not (out / "run.json").exists() and list((out / "pcap").iterdir()) == []
+    assert (out / "notes.txt").read_text() == "mine"
+
+
+def test_cli_bad_config_is_one_line_exit_2(tmp_path):
+    r = CliRunner().invoke(app, ["run", "dos=abc-5-2-image-logdist-adaptive-random-30-95", "--out", str(tmp_path / "r")])
+    assert r.exit_code == 2 and "error" in r.output and not (tmp_path / "r").exists()
+
+
+def test_cli_not_root_exit_2_before_anything(tmp_path, monkeypatch):
+    monkeypatch.setattr(os, "geteuid", lambda: 1000)
+    r = CliRunner().invoke(app, ["run", CONFIG, "--windows", "1", "--out", str(tmp_path / "r")])
+    assert r.exit_code == 2 and "root" in r.output and not (tmp_path / "r").exists()
+
+
+def test_cli_missing_tool_exit_2(tmp_path, monkeypatch):
+    monkeypatch.setattr(os, "geteuid", lambda: 0)
+    real = run_cli.shutil.which
+    monkeypatch.setattr(run_cli.shutil, "which", lambda t: None if t == "hping3" else real(t) or f"/bin/{t}")
+    r = CliRunner().invoke(app, ["run", CONFIG, "--windows", "1", "--out", str(tmp_path / "r")])
+    assert r.exit_code == 2 and "hping3" in r.output and not (tmp_path / "r").exists()
+
+
+def test_cli_refuses_foreign_out_dir(tmp_path, monkeypatch):
+    monkeypatch.setattr(os, "geteuid", lambda: 0)
+    monkeypatch.setattr(run_cli.shutil, "which", lambda t: f"/bin/{t}")
+    (tmp_path / "r").mkdir()
+    (tmp_path / "r" / "thesis.tex").write_text("x")
+    r = CliRunner().invoke(app, ["run", CONFIG, "--windows", "1", "--out", str(tmp_path / "r")])
+    assert r.exit_code == 2 and "not empty" in r.output
+
+
+@pytest.mark.parametrize("bad", [["--prefix", "UPPER"], ["--windows", "0"]])
+def test_cli_bad_options_exit_2(tmp_path, bad):
+    r = CliRunner().invoke(app, ["run", CONFIG, "--out", str(tmp_path / "r"), *bad])
+    assert r.exit_code == 2
