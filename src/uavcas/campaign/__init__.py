@@ -1,1 +1,15 @@
-"""campaign"""
+"""Campaigns: a manifest of scenarios -> runs (local pool or Dask) -> one resumable dataset."""
+
+from .layout import CampaignDir, CampaignError, read_manifest
+from .run import CampaignResult, run_campaign
+from .task import RunOutcome, execute_entry
+
+__all__ = [
+    "CampaignDir",
+    "CampaignError",
+    "CampaignResult",
+    "RunOutcome",
+    "execute_entry",
+    "read_manifest",
+    "run_campaign",
+]

@@ -6,8 +6,15 @@ import typer
 
 from uavcas import __version__
 
+from . import analyze as _analyze
+from . import calibrate as _calibrate
+from . import bench as _bench
 from . import campaign as _campaign
+from . import emulate as _emulate
+from . import flows as _flows
 from . import plan as _plan
+from . import report as _report
+from . import run as _run
 
 app = typer.Typer(
     name="uavcas",
@@ -17,7 +24,7 @@ app = typer.Typer(
     pretty_exceptions_enable=False,
 )
 
-for _module in (_plan, _campaign):
+for _module in (_plan, _campaign, _flows, _emulate, _analyze, _bench, _report, _run, _calibrate):
     _module.register(app)
 
 

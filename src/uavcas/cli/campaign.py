@@ -6,6 +6,7 @@ import json
 from pathlib import Path
 
 import typer
+from rich.table import Table
 
 from uavcas.scenario import PRESETS, manifest, parse_shard
 
@@ -31,6 +32,68 @@ def manifest_cmd(
     entries = manifest(preset, seed=seed, shard=sh)
     atomic_write_text(out, "".join(json.dumps(e.to_dict(), sort_keys=True) + "\n" for e in entries))
     console.print(f"wrote {len(entries)} scenarios of preset [bold]{preset}[/] to {out}")
+
+
+@campaign_app.command("run")
+def run_cmd(
+    out: Path = typer.Option(..., "--out", help="Dataset directory (created; re-running resumes it)."),
+    preset: str = typer.Option(None, "--preset", help=f"One of: {', '.join(PRESETS)} (default quick)."),
+    manifest_file: Path = typer.Option(None, "--manifest", help="A manifest JSONL instead of a preset."),
+    seed: int = typer.Option(0, "--seed", help="Campaign seed (with --preset)."),
+    shard: str = typer.Option(None, "--shard", help="K/N: run only the K-th of N slices."),
+    jobs: int = typer.Option(1, "--jobs", min=1, help="Scenarios emulated at once on this host."),
+    scheduler: str = typer.Option(None, "--scheduler", help="Dask scheduler, e.g. tcp://HOST:8786."),
+    profile: str = typer.Option(None, "--profile", help="Twin profile name or JSON path."),
+    retries: int = typer.Option(2, "--retries", min=0, help="Extra tries for a failed run."),
+    report: bool = typer.Option(True, "--report/--no-report", help="Write DATASET_DIR/report/index.html at the end."),
+) -> None:
+    """Plan, emulate, extract and label every scenario; append each run's shard to the dataset."""
+    from uavcas.campaign import CampaignError, read_manifest, run_campaign
+    from uavcas.dataset.schema import CLASSES
+
+    if preset is not None and manifest_file is not None:
+        raise fail("give --preset or --manifest, not both")
+    try:
+        sh = parse_shard(shard) if shard is not None else None
+        if manifest_file is not None:
+            entries = read_manifest(manifest_file)
+            if sh is not None:
+                k, n = sh
+                entries = [e for i, e in enumerate(entries) if i * n // len(entries) == k]
+        else:
+            preset = preset or "quick"
+            if preset not in PRESETS:
+                raise fail(f"--preset: unknown preset {preset!r} (known: {', '.join(PRESETS)})")
+            entries = manifest(preset, seed=seed, shard=sh)
+        if profile is not None:
+            from uavcas.twin.profile import load_profile
+
+            load_profile(profile)
+        result = run_campaign(entries, out, jobs=jobs, scheduler=scheduler, profile=profile, retries=retries)
+    except (CampaignError, ValueError) as e:
+        raise fail(str(e).splitlines()[0]) from None
+    except KeyboardInterrupt:
+        raise fail("interrupted; the dataset holds the finished runs, re-run the command to resume", 130) from None
+    card = result.card
+    table = Table(title=f"dataset {out}")
+    table.add_column("class")
+    table.add_column("flows", justify="right")
+    for c in CLASSES:
+        n = card.get("class_counts", {}).get(c, 0)
+        if n:
+            table.add_row(c, str(n))
+    console.print(table)
+    console.print(
+        f"runs: {len(result.done)} done now, {len(result.skipped)} already done, {len(result.failed)} failed; "
+        f"flows: {card.get('n_flows', 0)}; wall time {result.wall_s:.0f} s"
+    )
+    console.print(f"dataset: {Path(out).resolve()}/flows.parquet")
+    if report and card:
+        from uavcas.report.dataset_report import write_report
+
+        console.print(f"report: {write_report(out, Path(out) / 'report').resolve()}")
+    if result.failed:
+        raise fail(f"{len(result.failed)} run(s) failed: " + "; ".join(f"{o.index}: {o.error}" for o in result.failed[:3]), 1)
 
 
 def register(app: typer.Typer) -> None:

@@ -1,0 +1,62 @@
+"""Cross-dataset binary table (paper table tab:baseline_f1): Benign-vs-DoS weighted F1 of the
+baselines on our dataset and on the external samples, one column per dataset.
+
+    .venv/bin/python benchmarks/ids_cross_dataset.py [DATASET_DIR] [--epochs 50] [--models all]
+        [--external ../shared/data/ids-samples/cicids2017-improved-rnd2500 ...] [--out table.csv]
+
+Without DATASET_DIR a 20k-flow synthetic uavcas dataset stands in for ours. External samples go
+through `uavcas.ids.external` (the dataset package's loaders); they have no runs, so their split
+is a stratified flow-level one (stated in each protocol's notes).
+"""
+
+from __future__ import annotations
+
+import argparse
+import tempfile
+from pathlib import Path
+
+SHARED = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "ids-samples"
+DEFAULT_EXTERNAL = [SHARED / "cicids2017-improved-rnd2500", SHARED / "unsw-nb15-testing-head4528"]
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("dataset", nargs="?", type=Path)
+    ap.add_argument("--external", type=Path, nargs="*", default=[p for p in DEFAULT_EXTERNAL if p.is_dir()])
+    ap.add_argument("--models", default="all")
+    ap.add_argument("--epochs", type=int, default=50)
+    ap.add_argument("--scaler", default="standard")
+    ap.add_argument("--threads", type=int, default=0)
+    ap.add_argument("--out", type=Path, default=None)
+    args = ap.parse_args()
+
+    import pandas as pd
+
+    from uavcas.analysis.synthetic import make_flows, write_dataset
+    from uavcas.ids.external import load_any
+    from uavcas.ids.models import MODELS
+    from uavcas.ids.protocols import BenchConfig, run_protocol
+
+    ours = args.dataset or write_dataset(Path(tempfile.mkdtemp()) / "uavcas-synthetic", make_flows(20_000, flows_per_run=50))
+    models = MODELS if args.models == "all" else tuple(args.models.split(","))
+    cfg = BenchConfig(models=models, scaler=args.scaler, epochs=args.epochs, n_threads=args.threads or None)
+    cols = {}
+    for path in [*args.external, ours]:
+        res = run_protocol(load_any(path), "binary", cfg)
+        df = pd.DataFrame(res.rows)
+        w = df[(df["metric"] == "f1_weighted") & (df["class"] == "")].set_index("model")["value"]
+        cols[Path(path).name] = w * 100
+        print(f"{Path(path).name}: split {res.splits}" + "".join(f"; {n}" for n in res.notes), flush=True)
+    table = pd.DataFrame(cols)
+    table.index.name = "model"
+    print("\nBinary Benign-vs-DoS weighted F1 (%)\n")
+    print(table.round(2).to_string())
+    if args.out:
+        from uavcas.atomic import atomic_write_text
+
+        atomic_write_text(args.out, table.to_csv())
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

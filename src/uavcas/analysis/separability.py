@@ -1,0 +1,102 @@
+"""Separability: per-class mean/std of key flow features, t-SNE embedding, distribution figures."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from uavcas.dataset import schema
+
+from .diversity import class_order
+from .figures import plt, save_png
+
+# (column, display name, scale): IAT shown in ms like the paper's table tab:separability_stats
+KEY_FEATURES: tuple[tuple[str, str, float], ...] = (
+    ("Flow IAT Mean", "iat_ms", 1e3),
+    ("Flow Packets/s", "pkt_rate_pps", 1.0),
+    ("Packet Length Mean", "pkt_size_b", 1.0),
+    ("Flow Duration", "duration_s", 1.0),
+)
+
+
+def separability_stats(df: pd.DataFrame) -> pd.DataFrame:
+    """One row per class: n and mean/std of IAT (ms), packet rate, packet size, duration."""
+    missing = [c for c, _, _ in KEY_FEATURES if c not in df.columns]
+    if missing or "label" not in df.columns:
+        raise ValueError(f"missing columns for separability: {missing + (['label'] if 'label' not in df.columns else [])}")
+    rows = []
+    for c in class_order(df["label"].unique()):
+        sub = df[df["label"] == c]
+        row: dict[str, object] = {"class": c, "n_flows": len(sub)}
+        for col, name, scale in KEY_FEATURES:
+            v = sub[col].to_numpy(dtype=float) * scale
+            row[f"{name}_mean"] = float(np.nanmean(v))
+            row[f"{name}_std"] = float(np.nanstd(v, ddof=1)) if len(v) > 1 else 0.0
+        rows.append(row)
+    return pd.DataFrame(rows)
+
+
+def _signed_log(x: np.ndarray) -> np.ndarray:
+    # why: rates and durations span many decades; t-SNE on raw values sees only the floods
+    return np.sign(x) * np.log1p(np.abs(x))
+
+
+def tsne_embedding(df: pd.DataFrame, n_samples: int = 2000, seed: int = 0) -> pd.DataFrame:
+    """2-D t-SNE of the 47 features (signed log, standardised) on a seeded subsample."""
+    from sklearn.manifold import TSNE
+    from sklearn.preprocessing import StandardScaler
+
+    sub = df.sample(n=min(n_samples, len(df)), random_state=seed) if len(df) > n_samples else df
+    if len(sub) < 5:
+        raise ValueError(f"t-SNE needs at least 5 flows, got {len(sub)}")
+    x = _signed_log(np.nan_to_num(sub[list(schema.FEATURES)].to_numpy(dtype=float)))
+    x = StandardScaler().fit_transform(x)
+    perplexity = float(min(30, max(2, (len(sub) - 1) // 3)))
+    emb = TSNE(n_components=2, perplexity=perplexity, init="pca", random_state=seed).fit_transform(x)
+    return pd.DataFrame({"x": emb[:, 0], "y": emb[:, 1], "label": sub["label"].to_numpy()})
+
+
+def _colors(classes: list[str]) -> dict[str, object]:
+    cmap = plt.get_cmap("tab20")
+    return {c: cmap(i % 20) for i, c in enumerate(classes)}
+
+
+def tsne_figure(emb: pd.DataFrame, path: str | Path) -> Path:
+    classes = class_order(emb["label"].unique())
+    col = _colors(classes)
+    fig, ax = plt.subplots(figsize=(7, 6))
+    for c in classes:
+        m = emb["label"] == c
+        ax.scatter(emb.loc[m, "x"], emb.loc[m, "y"], s=4, alpha=0.6, color=col[c], label=c)
+    ax.set_title("t-SNE of flow features")
+    ax.set_xticks([])
+    ax.set_yticks([])
+    ax.legend(markerscale=3, fontsize=7, loc="center left", bbox_to_anchor=(1, 0.5))
+    return save_png(fig, path)
+
+
+def distributions_figure(df: pd.DataFrame, path: str | Path) -> Path:
+    """Per-class histograms (log x, shared log bins per panel) of the four key features."""
+    classes = class_order(df["label"].unique())
+    col = _colors(classes)
+    fig, axes = plt.subplots(2, 2, figsize=(11, 8))
+    for ax, (feature, name, scale) in zip(axes.ravel(), KEY_FEATURES):
+        v = df[feature].to_numpy(dtype=float) * scale
+        pos = v[np.isfinite(v) & (v > 0)]
+        if pos.size == 0:
+            ax.set_title(f"{name}: no positive values")
+            continue
+        edges = np.geomspace(pos.min(), pos.max() * (1 + 1e-9), 40)
+        for c in classes:
+            x = v[(df["label"] == c).to_numpy()]
+            x = x[np.isfinite(x) & (x > 0)]
+            if x.size:
+                # fraction of the class's flows per log bin (density=True would favour narrow bins)
+                ax.hist(x, bins=edges, weights=np.full(x.size, 1.0 / x.size), histtype="step", color=col[c], label=c)
+        ax.set_xscale("log")
+        ax.set_ylabel("fraction of flows")
+        ax.set_title(f"{name} (flows with value > 0)")
+    axes[0, 0].legend(fontsize=6, ncol=2)
+    return save_png(fig, path)

@@ -1,0 +1,116 @@
+"""On-disk layout of a campaign inside its dataset directory, and what "done" means.
+
+    DATASET_DIR/campaign.jsonl        the manifest being worked on (written once, then checked)
+    DATASET_DIR/runs/<index>/         one run: plan.json, run.json, attacks.jsonl, shaping.jsonl,
+                                      pcap/ (local runs), outcome.json
+    DATASET_DIR/runs/<index>/DONE     written last, by rename: the run and its shard are complete
+    DATASET_DIR/shards/<index>.parquet the run's flows (see uavcas.dataset.store)
+    DATASET_DIR/flows.parquet, dataset.json   rebuilt from the shards of DONE runs only
+
+A run without DONE is unfinished, whatever else it left: on resume its directory and shard are
+deleted and it is done again, so a killed campaign never leaves duplicate or partial rows.
+"""
+
+from __future__ import annotations
+
+import json
+import shutil
+from dataclasses import dataclass
+from pathlib import Path
+
+from uavcas.atomic import atomic_write_text
+from uavcas.scenario import ManifestEntry
+
+
+class CampaignError(ValueError):
+    """A campaign that cannot proceed; one-line message."""
+
+
+@dataclass(frozen=True)
+class CampaignDir:
+    root: Path
+
+    @property
+    def manifest_path(self) -> Path:
+        return self.root / "campaign.jsonl"
+
+    def run_dir(self, index: int) -> Path:
+        return self.root / "runs" / str(index)
+
+    def shard_path(self, index: int) -> Path:
+        return self.root / "shards" / f"{index}.parquet"
+
+    def is_done(self, index: int) -> bool:
+        return (self.run_dir(index) / "DONE").is_file()
+
+    def mark_done(self, index: int, summary: dict) -> None:
+        atomic_write_text(self.run_dir(index) / "DONE", json.dumps(summary, sort_keys=True) + "\n")
+
+    def reset(self, index: int) -> None:
+        """Forget an unfinished run: its directory and its shard."""
+        shutil.rmtree(self.run_dir(index), ignore_errors=True)
+        self.shard_path(index).unlink(missing_ok=True)
+
+    def prune_orphan_shards(self) -> list[Path]:
+        """Shards whose run is not DONE (killed between shard and marker) are removed."""
+        removed = []
+        for shard in sorted((self.root / "shards").glob("*.parquet")):
+            stem = shard.stem
+            if not (stem.isdigit() and self.is_done(int(stem))):
+                shard.unlink()
+                removed.append(shard)
+        return removed
+
+    def bind_manifest(self, entries: list[ManifestEntry]) -> None:
+        """Record the manifest; a different manifest in the same directory is refused.
+
+        Resuming relies on index -> (config, seed) being the same as the first time.
+        """
+        text = "".join(json.dumps(e.to_dict(), sort_keys=True) + "\n" for e in entries)
+        if self.manifest_path.exists():
+            old = {json.loads(line)["index"]: json.loads(line) for line in self.manifest_path.read_text().splitlines() if line}
+            for e in entries:
+                prev = old.get(e.index)
+                if prev is not None and prev != e.to_dict():
+                    raise CampaignError(
+                        f"{self.root} already holds a campaign whose run {e.index} is "
+                        f"{prev['config']} seed {prev['seed']}, not {e.config} seed {e.seed}; use another --out"
+                    )
+            merged = {**old, **{e.index: e.to_dict() for e in entries}}
+            text = "".join(json.dumps(merged[k], sort_keys=True) + "\n" for k in sorted(merged))
+        atomic_write_text(self.manifest_path, text)
+
+
+def read_manifest(path: Path) -> list[ManifestEntry]:
+    """A manifest file written by `uavcas campaign manifest` (or by hand, same fields)."""
+    from uavcas.scenario import parse
+
+    entries = []
+    try:
+        lines = Path(path).read_text().splitlines()
+    except OSError as e:
+        raise CampaignError(f"{path}: cannot read manifest ({e.strerror})") from None
+    for no, line in enumerate(lines, 1):
+        if not line.strip():
+            continue
+        try:
+            d = json.loads(line)
+            parse(d["config"])
+            entries.append(
+                ManifestEntry(
+                    index=int(d["index"]),
+                    position=int(d.get("position", no - 1)),
+                    config=d["config"],
+                    seed=int(d["seed"]),
+                    windows=int(d.get("windows", 12)),
+                    window_s=float(d.get("window_s", 5.0)),
+                )
+            )
+        except (json.JSONDecodeError, KeyError, TypeError, ValueError) as e:
+            msg = str(e).splitlines()[0] if str(e) else type(e).__name__
+            raise CampaignError(f"{path}:{no}: bad manifest line ({msg})") from None
+    if len({e.index for e in entries}) != len(entries):
+        raise CampaignError(f"{path}: duplicate index in manifest")
+    if not entries:
+        raise CampaignError(f"{path}: empty manifest")
+    return entries

@@ -1,0 +1,116 @@
+"""`run_campaign`: every scenario of a manifest -> one dataset, resumable, local or on Dask."""
+
+from __future__ import annotations
+
+import json
+import os
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from rich.console import Console
+from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
+
+from uavcas.atomic import atomic_write_bytes, atomic_write_text
+from uavcas.scenario import ManifestEntry
+
+from .executor import run_dask, run_local
+from .layout import CampaignDir, CampaignError
+from .task import RunOutcome, outcome_summary
+
+DEFAULT_RETRIES = 2
+
+
+@dataclass
+class CampaignResult:
+    out_dir: Path
+    done: list[int] = field(default_factory=list)  # finished in this invocation
+    skipped: list[int] = field(default_factory=list)  # already DONE before
+    failed: list[RunOutcome] = field(default_factory=list)
+    card: dict = field(default_factory=dict)
+    wall_s: float = 0.0
+
+
+def _commit(cdir: CampaignDir, out: RunOutcome) -> None:
+    """Make a finished run durable: its files (Dask), its shard, then the DONE marker."""
+    run_dir = cdir.run_dir(out.index)
+    run_dir.mkdir(parents=True, exist_ok=True)
+    for name, data in out.files.items():
+        atomic_write_bytes(run_dir / name, data)
+    atomic_write_bytes(cdir.shard_path(out.index), out.shard)
+    atomic_write_text(run_dir / "outcome.json", json.dumps(outcome_summary(out), indent=1, sort_keys=True) + "\n")
+    cdir.mark_done(out.index, {"index": out.index, "n_flows": out.n_flows, "host": out.host})
+
+
+def preflight_local() -> None:
+    if os.geteuid() != 0:
+        raise CampaignError(
+            "campaign runs emulate on network namespaces and need root "
+            "(or pass --scheduler to run on a Dask cluster of root workers)"
+        )
+
+
+def run_campaign(
+    entries: list[ManifestEntry],
+    out_dir: str | Path,
+    jobs: int = 1,
+    scheduler: str | None = None,
+    profile: str | None = None,
+    retries: int = DEFAULT_RETRIES,
+    console: Console | None = None,
+) -> CampaignResult:
+    from uavcas.dataset.store import rebuild
+
+    console = console or Console(stderr=True)
+    if jobs < 1:
+        raise CampaignError(f"--jobs must be >= 1, got {jobs}")
+    if scheduler is None:
+        preflight_local()
+    cdir = CampaignDir(Path(out_dir))
+    cdir.root.mkdir(parents=True, exist_ok=True)
+    cdir.bind_manifest(entries)
+    cdir.prune_orphan_shards()
+    result = CampaignResult(out_dir=cdir.root)
+    todo = []
+    for e in entries:
+        if cdir.is_done(e.index):
+            result.skipped.append(e.index)
+        else:
+            todo.append(e)
+    t0 = time.monotonic()
+
+    def on_retry(out: RunOutcome, attempt: int) -> None:
+        console.print(f"[yellow]run {out.index} failed (try {attempt}/{retries + 1}): {out.error}; retrying[/]")
+
+    columns = (
+        TextColumn("[bold]campaign[/]"), BarColumn(), MofNCompleteColumn(),
+        TextColumn("{task.fields[status]}"), TimeElapsedColumn(), TextColumn("ETA"), TimeRemainingColumn(),
+    )
+    try:
+        with Progress(*columns, console=console, transient=False) as progress:
+            task = progress.add_task("runs", total=len(entries), completed=len(result.skipped), status="")
+
+            def status() -> str:
+                return f"done {len(result.done) + len(result.skipped)} failed {len(result.failed)}"
+
+            progress.update(task, status=status())
+            outcomes = (
+                run_dask(todo, scheduler, profile, retries, on_retry)
+                if scheduler
+                else run_local(todo, cdir, jobs, profile, retries, on_retry)
+            )
+            for out in outcomes:
+                if out.ok:
+                    _commit(cdir, out)
+                    result.done.append(out.index)
+                else:
+                    result.failed.append(out)
+                    console.print(f"[red]run {out.index} failed after {retries + 1} tries: {out.error}[/]")
+                progress.update(task, advance=1, status=status())
+    finally:
+        # Whatever happened (Ctrl-C included), the dataset reflects exactly the DONE runs.
+        cdir.prune_orphan_shards()
+        if any((cdir.root / "shards").glob("*.parquet")):
+            result.card = rebuild(cdir.root)
+        result.wall_s = round(time.monotonic() - t0, 1)
+    return result

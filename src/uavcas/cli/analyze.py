@@ -1,0 +1,116 @@
+"""`uavcas analyze diversity|axes|separability DATASET --out DIR`: dataset measurements."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import typer
+
+from .common import atomic_write_text, console, fail
+
+analyze_app = typer.Typer(help="Measure a dataset: diversity, per-axis diversity, separability.", no_args_is_help=True)
+
+
+VIEW_HELP = "Flow view to use when the dataset holds several (5tuple | hostpair)."
+
+
+def _load(path: Path, view: str | None = None):
+    from uavcas.ids.external import load_any
+
+    try:
+        return load_any(path, view=view)
+    except (FileNotFoundError, ValueError, KeyError, OSError) as e:
+        raise fail(f"{path}: {e}") from None
+
+
+def _json(path: Path, payload: dict) -> None:
+    atomic_write_text(path, json.dumps(payload, indent=2, default=str, allow_nan=True))
+
+
+@analyze_app.command("diversity")
+def diversity_cmd(
+    dataset: Path = typer.Argument(..., help="Dataset directory (flows.parquet) or external sample."),
+    out: Path = typer.Option(..., "--out", help="Output directory."),
+    reference: list[Path] = typer.Option([], "--reference", help="Other datasets to tabulate beside it (repeatable)."),
+    bins: int = typer.Option(50, "--bins", min=1, help="Log-spaced IAT bins (plus the zero bin)."),
+    boot: int = typer.Option(200, "--boot", min=0, help="Bootstrap resamples (flows) for the CIs."),
+    seed: int = typer.Option(0, "--seed"),
+    view: str = typer.Option(None, "--view", help=VIEW_HELP),
+    pairwise: bool = typer.Option(False, "--pairwise", help="Also average over random flow pairs."),
+    legacy: bool = typer.Option(True, "--legacy/--no-legacy", help="Also the authors' unbounded legacy metric."),
+) -> None:
+    """Hellinger and JSD (base 2, bounded) of each class's IATs vs Benign, with CIs and baseline."""
+    import pandas as pd
+
+    from uavcas.analysis.diversity import DiversityOptions, diversity_table
+
+    opt = DiversityOptions(n_bins=bins, n_boot=boot, seed=seed, pairwise=pairwise, legacy=legacy)
+    tables, payload = [], {"options": vars(opt), "bins": {}, "info": {}}
+    for path in [dataset, *reference]:
+        name = path.name if path.name != "flows.parquet" else path.parent.name
+        try:
+            res = diversity_table(_load(path, view), dataset=name, opt=opt)
+        except ValueError as e:
+            raise fail(f"{path}: {e}") from None
+        tables.append(res.table)
+        payload["bins"].update(res.bins)
+        payload["info"].update(res.info)
+    table = pd.concat(tables, ignore_index=True)
+    atomic_write_text(out / "diversity.csv", table.to_csv(index=False))
+    payload["table"] = json.loads(table.to_json(orient="records"))
+    _json(out / "diversity.json", payload)
+    typer.echo(table[["dataset", "class", "hellinger", "jsd", "baseline_hellinger", "legacy_hellinger"]].to_string(index=False))
+    console.print(f"wrote {out / 'diversity.csv'} and diversity.json")
+
+
+@analyze_app.command("axes")
+def axes_cmd(
+    dataset: Path = typer.Argument(..., help="Dataset directory (flows.parquet)."),
+    out: Path = typer.Option(..., "--out", help="Output directory."),
+    bins: int = typer.Option(50, "--bins", min=1),
+    boot: int = typer.Option(200, "--boot", min=0),
+    seed: int = typer.Option(0, "--seed"),
+    view: str = typer.Option(None, "--view", help=VIEW_HELP),
+) -> None:
+    """Internal diversity per configuration axis on benign flows (extreme values), with baseline."""
+    from uavcas.analysis.axes import axis_diversity
+
+    try:
+        table, edges = axis_diversity(_load(dataset, view), n_bins=bins, n_boot=boot, seed=seed)
+    except ValueError as e:
+        raise fail(f"{dataset}: {e}") from None
+    if table.empty:
+        raise fail(f"{dataset}: no configuration axis has two values among benign flows")
+    atomic_write_text(out / "axes.csv", table.to_csv(index=False))
+    _json(out / "axes.json", {"bins": edges, "table": json.loads(table.to_json(orient="records"))})
+    typer.echo(table[["axis", "low", "high", "hellinger", "jsd", "baseline_hellinger", "baseline_jsd"]].to_string(index=False))
+
+
+@analyze_app.command("separability")
+def separability_cmd(
+    dataset: Path = typer.Argument(..., help="Dataset directory (flows.parquet) or external sample."),
+    out: Path = typer.Option(..., "--out", help="Output directory."),
+    tsne_samples: int = typer.Option(2000, "--tsne-samples", min=5, help="Flows in the t-SNE subsample."),
+    seed: int = typer.Option(0, "--seed"),
+    view: str = typer.Option(None, "--view", help=VIEW_HELP),
+) -> None:
+    """Per-class mean/std of IAT, packet rate, packet size, duration; t-SNE and distribution figures."""
+    from uavcas.analysis.separability import distributions_figure, separability_stats, tsne_embedding, tsne_figure
+
+    df = _load(dataset, view)
+    try:
+        stats = separability_stats(df)
+        emb = tsne_embedding(df, n_samples=tsne_samples, seed=seed)
+    except ValueError as e:
+        raise fail(f"{dataset}: {e}") from None
+    atomic_write_text(out / "separability.csv", stats.to_csv(index=False))
+    atomic_write_text(out / "tsne.csv", emb.to_csv(index=False))
+    tsne_figure(emb, out / "tsne.png")
+    distributions_figure(df, out / "distributions.png")
+    typer.echo(stats.to_string(index=False))
+    console.print(f"wrote separability.csv, tsne.png, distributions.png to {out}")
+
+
+def register(app: typer.Typer) -> None:
+    app.add_typer(analyze_app, name="analyze")

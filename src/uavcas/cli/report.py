@@ -1,0 +1,28 @@
+"""`uavcas report DATASET_DIR --out DIR`: an HTML page with the dataset card and figures."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import typer
+
+from .common import console, fail
+
+
+def report_cmd(
+    dataset: Path = typer.Argument(..., help="Dataset directory (flows.parquet + dataset.json)."),
+    out: Path = typer.Option(..., "--out", help="Directory for index.html and the PNG figures."),
+) -> None:
+    """Write a self-contained HTML report of a dataset."""
+    from uavcas.dataset.store import DatasetError
+    from uavcas.report.dataset_report import ReportError, write_report
+
+    try:
+        index = write_report(dataset, out)
+    except (DatasetError, ReportError) as e:
+        raise fail(str(e)) from None
+    console.print(f"report written to {index}")
+
+
+def register(app: typer.Typer) -> None:
+    app.command("report")(report_cmd)

@@ -1,0 +1,41 @@
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pyarrow as pa
+
+from uavcas.analysis.iat import flow_iats, iats_of_sequences
+
+
+def test_zero_and_negative_iats_are_counted_not_dropped():
+    r = iats_of_sequences(pd.Series([np.array([0.0, 0.0, 1.0, 0.5]), np.array([5.0]), np.array([0.0, 2.0])]))
+    assert r.n_negative == 1 and r.n_flows_no_iat == 1
+    assert r.n_zero == 2  # one real zero + the clipped negative
+    assert np.allclose(r.pooled, [0.0, 1.0, 0.0, 2.0])
+
+
+def test_arrow_backed_lists_match_object_lists_and_limit():
+    seqs = [[0.0, 0.1, 0.3, 0.6], [0.0, 1.0], [], [0.0, 0.5, 0.7]]
+    obj = iats_of_sequences(pd.Series([np.array(s) for s in seqs]), limit=2)
+    arrow = pd.Series(pd.arrays.ArrowExtensionArray(pa.array(seqs, type=pa.list_(pa.float64()))))
+    arr = iats_of_sequences(arrow, limit=2)
+    assert np.allclose(obj.pooled, arr.pooled) and np.allclose(arr.pooled, [0.1, 0.2, 1.0, 0.5, 0.2])
+    assert arr.n_flows_no_iat == 1
+
+
+def test_fallback_to_mean_iat_feature_is_recorded():
+    r = flow_iats(pd.DataFrame({"Flow IAT Mean": [0.1, np.nan, 0.3], "label": ["a", "b", "c"]}))
+    assert r.source == "Flow IAT Mean" and r.n_flows_no_iat == 1 and len(r.per_flow) == 2
+
+
+def test_mixed_flow_views_need_a_choice():
+    import pytest
+
+    from uavcas.analysis.io import select_view
+
+    df = pd.DataFrame({"view": ["5tuple", "hostpair", "5tuple"], "x": [1, 2, 3]})
+    with pytest.raises(ValueError, match="--view"):
+        select_view(df)
+    assert select_view(df, "5tuple")["x"].tolist() == [1, 3]
+    with pytest.raises(ValueError, match="not in this dataset"):
+        select_view(df, "other")

@@ -1,0 +1,77 @@
+"""Estimator contract of every baseline: fit/predict/predict_proba, classes_, Pipeline, clone,
+same seed -> same model."""
+
+from __future__ import annotations
+
+import importlib.util
+import sys
+
+import numpy as np
+import pytest
+from sklearn.base import clone
+from sklearn.pipeline import make_pipeline
+from sklearn.preprocessing import StandardScaler
+
+from uavcas.ids.models import DEEP, MODELS, make_model
+from uavcas.ids.torch_estimator import DL_MISSING, TorchClassifier, import_torch
+
+
+HAS_TORCH = importlib.util.find_spec("torch") is not None
+NEEDS_TORCH = pytest.mark.skipif(not HAS_TORCH, reason="PyTorch not installed (pip install '.[dl]')")
+ALL = [pytest.param(m, marks=NEEDS_TORCH) if m in DEEP else m for m in MODELS]
+DEEP_P = [pytest.param(m, marks=NEEDS_TORCH) for m in DEEP]
+
+
+def _data(n=240, seed=0):
+    rng = np.random.default_rng(seed)
+    z = rng.normal(size=(n, 47))
+    y = np.array(["Benign", "DoS", "Replay"])[(z[:, 0] > 0).astype(int) + (z[:, 1] > 0.5)]
+    x = (z * np.geomspace(1, 1e4, 47)).astype(np.float32)  # raw flow-like scales
+    return x, y
+
+
+def _model(name, seed=0):
+    return make_model(name, random_state=seed, epochs=2, n_threads=1)
+
+
+@pytest.mark.parametrize("name", ALL)
+def test_contract(name):
+    x, y = _data()
+    est = _model(name)
+    assert est.fit(x[:200], y[:200]) is est
+    assert list(est.classes_) == ["Benign", "DoS", "Replay"]
+    p = est.predict_proba(x[200:])
+    assert p.shape == (40, 3) and np.allclose(p.sum(1), 1, atol=1e-5)
+    pred = est.predict(x[200:])
+    assert pred.shape == (40,) and set(pred) <= set(est.classes_)
+    c = clone(est)
+    assert not hasattr(c, "classes_") and c.get_params() == est.get_params()
+
+
+@pytest.mark.parametrize("name", ALL)
+def test_pipeline_with_scaler_and_reproducible(name):
+    x, y = _data(seed=1)
+    p1 = make_pipeline(StandardScaler(), _model(name, seed=5)).fit(x, y).predict_proba(x)
+    p2 = make_pipeline(StandardScaler(), _model(name, seed=5)).fit(x, y).predict_proba(x)
+    np.testing.assert_allclose(p1, p2, rtol=0, atol=1e-6)
+
+
+@pytest.mark.parametrize("name", DEEP_P)
+def test_deep_early_stopping_uses_given_validation(name):
+    x, y = _data(seed=2)
+    est = TorchClassifier(arch=name, epochs=3, patience=1, n_threads=1).fit(x[:200], y[:200], X_val=x[200:], y_val=y[200:])
+    assert 1 <= est.n_epochs_ <= 3 and all("val_loss" in h for h in est.history_)
+
+
+def test_clear_error_without_torch(monkeypatch):
+    monkeypatch.setitem(sys.modules, "torch", None)  # import torch -> ImportError
+    with pytest.raises(ImportError, match="uavcas\\[dl\\]"):
+        import_torch()
+    assert "torch==2.13.0" in DL_MISSING
+
+
+def test_unknown_model_and_arch():
+    with pytest.raises(ValueError, match="unknown model"):
+        make_model("xgboost")
+    with pytest.raises(ValueError, match="unknown architecture"):
+        TorchClassifier(arch="transformer").fit(*_data())
