@@ -8,6 +8,9 @@ from pathlib import Path
 
 import pytest
 
+# Synthetic-dataset fixtures shared by tests/analysis and tests/ids.
+pytest_plugins = ["synthetic_fixtures"]
+
 REPO = Path(__file__).resolve().parents[1]
 SHARED_DATA = Path(os.environ.get("UAVCAS_SHARED_DATA", REPO.parent / "shared" / "data"))
 

@@ -228,20 +228,24 @@ def test_done_when_dos_run_via_cli(tmp_path):
     assert_nothing_left(info["prefix"])
 
 
+def wait_registered(pid: int, timeout_s: float = 30.0) -> str:
+    """The prefix under which the run with this PID registered itself in /run/uavcas."""
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        for p in Path("/run/uavcas").glob("uc*"):
+            if (p / "run.json").exists() and json.loads((p / "run.json").read_text())["pid"] == pid:
+                return p.name
+        time.sleep(0.2)
+    raise AssertionError("the run never registered")
+
+
 @pytest.mark.parametrize("sig, code", [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
 def test_interrupted_run_leaves_nothing(tmp_path, sig, code):
     out = tmp_path / "r"
     proc = subprocess.Popen([UAVCAS, "run", "replay=50,200,10,5,inc+dos=1000-4-1-image-logdist-adaptive-random-30-95",
                              "--windows", "3", "--out", str(out)], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                             text=True, start_new_session=True)
-    deadline = time.monotonic() + 30
-    prefix = None
-    while time.monotonic() < deadline and prefix is None:
-        time.sleep(0.2)
-        prefix = next((p.name for p in Path("/run/uavcas").glob("uc*")
-                       if (p / "run.json").exists() and json.loads((p / "run.json").read_text())["pid"] == proc.pid),
-                      None)
-    assert prefix, "the run never registered"
+    prefix = wait_registered(proc.pid)
     time.sleep(4)
     os.kill(proc.pid, sig)
     proc.communicate(timeout=60)
@@ -256,14 +260,7 @@ def test_kill_9_then_uavcas_clean_leaves_nothing(tmp_path):
     proc = subprocess.Popen([UAVCAS, "run", "ddos=1000-4-1-image-logdist-adaptive-random-30-95", "--windows", "3",
                              "--out", str(out)], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
                             start_new_session=True)
-    deadline = time.monotonic() + 30
-    prefix = None
-    while time.monotonic() < deadline and prefix is None:
-        time.sleep(0.2)
-        prefix = next((p.name for p in Path("/run/uavcas").glob("uc*")
-                       if (p / "run.json").exists() and json.loads((p / "run.json").read_text())["pid"] == proc.pid),
-                      None)
-    assert prefix, "the run never registered"
+    prefix = wait_registered(proc.pid)
     time.sleep(4)
     os.kill(proc.pid, signal.SIGKILL)
     proc.wait(10)

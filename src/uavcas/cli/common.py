@@ -15,3 +15,17 @@ def fail(message: str, code: int = 2) -> "typer.Exit":
     """Print a one-line error to stderr and return the Exit to raise."""
     err_console.print(f"[bold red]error:[/] {message}", highlight=False, soft_wrap=True)
     return typer.Exit(code)
+
+
+def plan_or_fail(config: str, seed: int, windows: int, window_s: float, profile: str | None):
+    """The plan of a scenario, or a one-line error naming the bad field / profile (exit 2)."""
+    from uavcas.scenario import ScenarioError
+    from uavcas.twin import plan as make_plan
+    from uavcas.twin.profile import ProfileError
+
+    try:
+        return make_plan(config, seed=seed, windows=windows, window_s=window_s, profile=profile)
+    except ScenarioError as e:
+        raise fail(str(e)) from None
+    except ProfileError as e:
+        raise fail(f"--profile: {e}") from None

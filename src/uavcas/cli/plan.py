@@ -8,9 +8,8 @@ from pathlib import Path
 import typer
 from rich.table import Table
 
-from uavcas.scenario import ScenarioError
 
-from .common import atomic_write_text, console, fail
+from .common import atomic_write_text, console, plan_or_fail
 
 
 def plan_cmd(
@@ -23,15 +22,7 @@ def plan_cmd(
     figure: Path = typer.Option(None, "--figure", help="Directory for one topology PNG per window."),
 ) -> None:
     """Plan a scenario: positions, links and their rate/delay/loss per window, attack schedule."""
-    from uavcas.twin import plan as make_plan
-    from uavcas.twin.profile import ProfileError
-
-    try:
-        p = make_plan(config, seed=seed, windows=windows, window_s=window_s, profile=profile)
-    except ScenarioError as e:
-        raise fail(str(e)) from None
-    except ProfileError as e:
-        raise fail(f"--profile: {e}") from None
+    p = plan_or_fail(config, seed, windows, window_s, profile)
     print_summary(p)
     if out is not None:
         atomic_write_text(out, p.to_json())

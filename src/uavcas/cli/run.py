@@ -16,9 +16,8 @@ from pathlib import Path
 import typer
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
-from uavcas.scenario import ScenarioError
 
-from .common import console, fail
+from .common import console, fail, plan_or_fail
 
 BASE_TOOLS = ("ip", "tc", "bridge", "nft", "iptables", "tcpdump", "nginx", "curl", "timeout", "bash")
 RUN_FILES = ("plan.json", "run.json", "attacks.jsonl", "shaping.jsonl")
@@ -56,15 +55,7 @@ def run_cmd(
     think_s: float = typer.Option(0.5, "--think-s", min=0.0, help="Mean pause between a BS's image fetches."),
 ) -> None:
     """Realise a scenario's plan on real Linux stacks, attack it, capture every switch."""
-    from uavcas.twin import plan as make_plan
-    from uavcas.twin.profile import ProfileError
-
-    try:
-        p = make_plan(config, seed=seed, windows=windows, window_s=window_s, profile=profile)
-    except ScenarioError as e:
-        raise fail(str(e)) from None
-    except ProfileError as e:
-        raise fail(f"--profile: {e}") from None
+    p = plan_or_fail(config, seed, windows, window_s, profile)
     if prefix is not None:
         from uavcas.emulation.naming import check_prefix
 

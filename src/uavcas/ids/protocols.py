@@ -117,32 +117,11 @@ def _class_order(labels) -> list[str]:
     return [c for c in schema.CLASSES if c in present] + sorted(present - set(schema.CLASSES))
 
 
-def run_binary(df: pd.DataFrame, cfg: BenchConfig) -> ProtocolResult:
-    """Benign vs DoS (DoS classes of other datasets: 'DoS ...'); weighted and macro F1, AUROC."""
-    res = ProtocolResult("binary")
-    sub = df[(df["label"] == schema.BENIGN) | df["label"].map(is_dos)]
-    y = np.where(sub["label"] == schema.BENIGN, schema.BENIGN, "DoS")
-    if len(np.unique(y)) < 2:
-        raise ValueError("binary protocol needs Benign and DoS flows")
-    x, g = feature_matrix(sub), _groups(sub, res.notes)
-    sp = grouped_split(y, g, seed=cfg.seed)
-    res.splits = {"train": len(sp.train), "val": len(sp.val), "test": len(sp.test)}
-    for name in cfg.models:
-        (p,), classes = _fit_predict(res, name, cfg, x[sp.train], y[sp.train], x[sp.val], y[sp.val], [x[sp.test]])
-        pred = classes[p.argmax(1)]
-        m = DISPLAY[name]
-        _overall(res, m, y[sp.test], pred)
-        pos = list(classes).index("DoS") if "DoS" in classes else None
-        res.add(m, "auroc", _auroc(y[sp.test] == "DoS", p[:, pos]) if pos is not None else np.nan)
-        _per_class_f1(res, m, y[sp.test], pred, [schema.BENIGN, "DoS"])
-    return res
+def _grouped_fits(res: ProtocolResult, df: pd.DataFrame, y: np.ndarray, cfg: BenchConfig):
+    """70/10/20 split grouped by run; per model yield (name, y_test, proba, classes, pred).
 
-
-def run_multiclass(df: pd.DataFrame, cfg: BenchConfig) -> ProtocolResult:
-    """All classes (15 on a full uavcas dataset): per-class F1, macro/weighted F1, confusion."""
-    res = ProtocolResult("multiclass")
-    y = df["label"].astype(str).to_numpy()
-    labels = _class_order(y)
+    Overall weighted/macro F1 are recorded here; the protocol adds its own metrics.
+    """
     x, g = feature_matrix(df), _groups(df, res.notes)
     sp = grouped_split(y, g, seed=cfg.seed)
     res.splits = {"train": len(sp.train), "val": len(sp.val), "test": len(sp.test)}
@@ -151,8 +130,31 @@ def run_multiclass(df: pd.DataFrame, cfg: BenchConfig) -> ProtocolResult:
         pred = classes[p.argmax(1)]
         m = DISPLAY[name]
         _overall(res, m, y[sp.test], pred)
-        _per_class_f1(res, m, y[sp.test], pred, labels)
-        res.confusion[m] = (labels, confusion_matrix(y[sp.test], pred, labels=labels))
+        yield m, y[sp.test], p, classes, pred
+
+
+def run_binary(df: pd.DataFrame, cfg: BenchConfig) -> ProtocolResult:
+    """Benign vs DoS (DoS classes of other datasets: 'DoS ...'); weighted and macro F1, AUROC."""
+    res = ProtocolResult("binary")
+    sub = df[(df["label"] == schema.BENIGN) | df["label"].map(is_dos)]
+    y = np.where(sub["label"] == schema.BENIGN, schema.BENIGN, "DoS")
+    if len(np.unique(y)) < 2:
+        raise ValueError("binary protocol needs Benign and DoS flows")
+    for m, y_test, p, classes, pred in _grouped_fits(res, sub, y, cfg):
+        pos = list(classes).index("DoS") if "DoS" in classes else None
+        res.add(m, "auroc", _auroc(y_test == "DoS", p[:, pos]) if pos is not None else np.nan)
+        _per_class_f1(res, m, y_test, pred, [schema.BENIGN, "DoS"])
+    return res
+
+
+def run_multiclass(df: pd.DataFrame, cfg: BenchConfig) -> ProtocolResult:
+    """All classes (15 on a full uavcas dataset): per-class F1, macro/weighted F1, confusion."""
+    res = ProtocolResult("multiclass")
+    y = df["label"].astype(str).to_numpy()
+    labels = _class_order(y)
+    for m, y_test, _p, _classes, pred in _grouped_fits(res, df, y, cfg):
+        _per_class_f1(res, m, y_test, pred, labels)
+        res.confusion[m] = (labels, confusion_matrix(y_test, pred, labels=labels))
     return res
 
 
