@@ -96,3 +96,13 @@ def test_flows_command_formats(synth_run_dir, tmp_path):
     assert t.exit_code == 0 and "10.10.0.2" in t.output
     assert _run("flows", pcap, "--format", "xml").exit_code == 2
     assert _run("flows", tmp_path / "missing.pcap").exit_code == 2
+
+
+def test_extract_run_id_override_names_shard_rows_and_card(synth_run_dir, tmp_path):
+    from uavcas.dataset.store import extract_run
+
+    ds = tmp_path / "ds"
+    info = extract_run(synth_run_dir, ds, run_id="17")
+    assert info.run_id == "17" and (ds / "shards" / "17.parquet").exists()
+    assert set(read_flows(ds / "flows.parquet").run_id) == {"17"}
+    assert json.loads((ds / "dataset.json").read_text())["runs"][0]["run_id"] == "17"

@@ -42,6 +42,17 @@ def reach_matrix(emu: Emulation, names: list[str]) -> dict[tuple[str, str], bool
         return dict(zip(pairs, ex.map(lambda p: reachable(emu, *p), pairs)))
 
 
+def start_crashrun(prefix: str) -> tuple[subprocess.Popen, int]:
+    """A run (crashrun.py) under `prefix`, set up and holding a child process; returns (run, child pid)."""
+    proc = subprocess.Popen([sys.executable, str(Path(__file__).parent / "crashrun.py"), prefix],
+                            stdout=subprocess.PIPE, text=True)
+    line = proc.stdout.readline().split()
+    if not (line and line[0] == "ready"):
+        proc.kill()
+        raise AssertionError(f"crashrun did not get ready: {line}")
+    return proc, int(line[1])
+
+
 def twice(fn):
     """Measure; if the figure is off, measure once more (shared, loaded cores)."""
     try:
@@ -155,12 +166,8 @@ def test_sigkill_then_clean_removes_exactly_that_run():
     other = Emulation(plan(nodes(2), [window(0, [link("uav0", "uav1")])]), prefix=bystander)
     with other:
         other.apply_window(0)
-        proc = subprocess.Popen([sys.executable, str(Path(__file__).parent / "crashrun.py"), prefix],
-                                stdout=subprocess.PIPE, text=True)
+        proc, child = start_crashrun(prefix)
         try:
-            line = proc.stdout.readline().split()
-            assert line and line[0] == "ready", line
-            child = int(line[1])
             naming = Naming(prefix)
             daemon_pids = kernel.netns_pids(naming.fabric_ns)
             assert daemon_pids and Path(f"/proc/{child}").exists()
@@ -231,12 +238,8 @@ def _rtt_ms(emu: Emulation, src: str, dst: str) -> float:
 
 def test_sigterm_tears_down_without_clean():
     prefix = new_prefix()
-    proc = subprocess.Popen([sys.executable, str(Path(__file__).parent / "crashrun.py"), prefix],
-                            stdout=subprocess.PIPE, text=True)
+    proc, child = start_crashrun(prefix)
     try:
-        line = proc.stdout.readline().split()
-        assert line and line[0] == "ready", line
-        child = int(line[1])
         proc.send_signal(signal.SIGTERM)
         assert proc.wait(15) != 0
     finally:

@@ -8,7 +8,6 @@ plain value (bytes and dicts), so it crosses a Dask connection unchanged.
 
 from __future__ import annotations
 
-import io
 import json
 import os
 import shutil
@@ -19,9 +18,6 @@ import tempfile
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
-
-import pyarrow as pa
-import pyarrow.parquet as pq
 
 from uavcas.scenario import ManifestEntry
 
@@ -46,23 +42,6 @@ class RunOutcome:
 def _tail(text: str, n: int = 400) -> str:
     lines = [ln for ln in text.strip().splitlines() if ln.strip()]
     return (lines[-1] if lines else "")[-n:]
-
-
-def _relabel_run_id(shard: Path, run_id: str) -> bytes:
-    from uavcas.dataset.parquet import META_KEY
-
-    table = pq.read_table(shard)
-    meta = dict(table.schema.metadata or {})
-    if META_KEY in meta:  # the shard's card entry names the campaign's run id too
-        card = json.loads(meta[META_KEY])
-        card["run_id"] = run_id
-        meta[META_KEY] = json.dumps(card, sort_keys=True).encode()
-    i = table.schema.get_field_index("run_id")
-    table = table.set_column(i, table.schema.field(i), pa.array([run_id] * table.num_rows, pa.string()))
-    table = table.replace_schema_metadata(meta)
-    buf = io.BytesIO()
-    pq.write_table(table, buf, compression="zstd")
-    return buf.getvalue()
 
 
 def execute_entry(
@@ -100,8 +79,8 @@ def execute_entry(
             out.error = f"uavcas run exited {proc.returncode}: {_tail(proc.stderr) or _tail(proc.stdout)}"
             return out
         with tempfile.TemporaryDirectory(prefix="uavcas-extract-") as ds:
-            info = extract_run(base, Path(ds), view=view, labels=labels)
-            out.shard = _relabel_run_id(Path(ds) / "shards" / f"{info.run_id}.parquet", str(entry.index))
+            info = extract_run(base, Path(ds), view=view, labels=labels, run_id=str(entry.index))
+            out.shard = (Path(ds) / "shards" / f"{info.run_id}.parquet").read_bytes()
             out.n_flows, out.class_counts = info.n_flows, dict(info.class_counts)
         if return_files:
             out.files = {n: (base / n).read_bytes() for n in RUN_FILES if (base / n).exists()}

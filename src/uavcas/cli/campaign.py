@@ -8,7 +8,7 @@ from pathlib import Path
 import typer
 from rich.table import Table
 
-from uavcas.scenario import PRESETS, manifest, parse_shard
+from uavcas.scenario import PRESETS, manifest, parse_shard, select_shard
 
 from .common import atomic_write_text, console, fail
 
@@ -58,8 +58,7 @@ def run_cmd(
         if manifest_file is not None:
             entries = read_manifest(manifest_file)
             if sh is not None:
-                k, n = sh
-                entries = [e for i, e in enumerate(entries) if i * n // len(entries) == k]
+                entries = select_shard(entries, sh)
         else:
             preset = preset or "quick"
             if preset not in PRESETS:

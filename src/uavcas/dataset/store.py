@@ -93,8 +93,12 @@ def extract_run(
     labels: str = "ours",
     min_packets: int | None = None,
     allow_truncated: bool = False,
+    run_id: str | None = None,
 ) -> ShardInfo:
-    """Flows + labels of one run -> its shard; then flows.parquet and dataset.json are rebuilt."""
+    """Flows + labels of one run -> its shard; then flows.parquet and dataset.json are rebuilt.
+
+    `run_id` overrides the run's own id (a campaign names runs by manifest index).
+    """
     run_dir, out_dir = Path(run_dir), Path(out_dir)
     plan, run_json, pcaps = load_run(run_dir)
     cfg = FlowConfig(view=view, min_packets=min_packets)  # type: ignore[arg-type]
@@ -102,7 +106,7 @@ def extract_run(
     t0 = run_json.get("t0_unix")
     log = read_attack_log(run_dir / "attacks.jsonl", plan, None if t0 is None else float(t0))
     df = label_flows(ex.packets, ex.flows, ex.frame, log, mode=labels)  # type: ignore[arg-type]
-    run_id = _run_id(run_dir, run_json)
+    run_id = _run_id(run_dir, {"run_id": run_id} if run_id else run_json)
     df["run_id"], df["config"], df["seed"], df["view"] = run_id, plan.config, plan.seed, view
     for k, v in Scenario.parse(plan.config).axes().items():
         df[k] = v

@@ -213,12 +213,7 @@ class DelayDaemon:
             return
         with conn:
             conn.settimeout(2.0)
-            raw = b""
-            while not raw.endswith(b"\n"):
-                chunk = conn.recv(65536)
-                if not chunk:
-                    break
-                raw += chunk
+            raw = _recv_line(conn)
             try:
                 reply = self._handle(json.loads(raw or b"{}"))
             except (ValueError, OSError, KeyError) as e:
@@ -273,18 +268,24 @@ class DelayDaemon:
             self._arm()
 
 
+def _recv_line(sock: socket.socket) -> bytes:
+    """One newline-terminated message of the control protocol (or what came before EOF)."""
+    raw = b""
+    while not raw.endswith(b"\n"):
+        chunk = sock.recv(65536)
+        if not chunk:
+            break
+        raw += chunk
+    return raw
+
+
 def request(ctl_path: str, req: dict, timeout_s: float = 2.0) -> dict:
     """Send one control request to a running daemon and return its reply."""
     with socket.socket(socket.AF_UNIX, socket.SOCK_STREAM) as s:
         s.settimeout(timeout_s)
         s.connect(ctl_path)
         s.sendall(json.dumps(req).encode() + b"\n")
-        raw = b""
-        while not raw.endswith(b"\n"):
-            chunk = s.recv(65536)
-            if not chunk:
-                break
-            raw += chunk
+        raw = _recv_line(s)
     reply = json.loads(raw)
     if not reply.get("ok"):
         raise RuntimeError(f"delay daemon: {reply.get('error')}")

@@ -88,6 +88,9 @@ def tcp_source(dst: str, port: int, seconds: float) -> dict:
     return {"sent": sent}
 
 
+_END_MARKER = 2**64 - 1  # sequence number of the probe stream's last datagram
+
+
 def udp_sink(port: int, count: int, seconds: float) -> dict:
     s = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
     s.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4 << 20)
@@ -96,41 +99,27 @@ def udp_sink(port: int, count: int, seconds: float) -> dict:
     seen = set()
     delays = []
     deadline = time.monotonic() + seconds
+    draining = False
     while len(seen) < count:
         left = deadline - time.monotonic()
         if left <= 0:
             break
-        s.settimeout(left)
+        s.settimeout(max(0.001, left))
         try:
             data = s.recv(2048)
         except socket.timeout:
             break
         now = time.monotonic_ns()
         seq, sent_ns = struct.unpack_from("!QQ", data)
-        if seq == 2**64 - 1:  # end marker: collect the still-delayed probes briefly, then stop
-            _drain_until(s, seen, delays, 0.3)
-            break
+        if seq == _END_MARKER:
+            if not draining:  # probes still held by the delay stage get 0.3 s more, then stop
+                draining, deadline = True, time.monotonic() + 0.3
+            continue
         if seq not in seen:
             seen.add(seq)
             delays.append((now - sent_ns) / 1e6)
     delays.sort()
     return {"received": len(seen), "delays_ms": _summary(delays)}
-
-
-def _drain_until(s: socket.socket, seen: set, delays: list, seconds: float) -> None:
-    """After the end marker, late (delayed) probes may still arrive: collect them briefly."""
-    end = time.monotonic() + seconds
-    while time.monotonic() < end:
-        s.settimeout(max(0.001, end - time.monotonic()))
-        try:
-            data = s.recv(2048)
-        except socket.timeout:
-            return
-        now = time.monotonic_ns()
-        seq, sent_ns = struct.unpack_from("!QQ", data)
-        if seq != 2**64 - 1 and seq not in seen:
-            seen.add(seq)
-            delays.append((now - sent_ns) / 1e6)
 
 
 def _summary(xs: list[float]) -> dict:
@@ -160,7 +149,7 @@ def udp_source(dst: str, port: int, count: int, pps: float, size: int) -> dict:
     elapsed = time.monotonic() - start
     time.sleep(0.05)
     for _ in range(3):
-        s.sendto(struct.pack("!QQ", 2**64 - 1, 0), (dst, port))
+        s.sendto(struct.pack("!QQ", _END_MARKER, 0), (dst, port))
     return {"sent": count, "seconds": elapsed, "offered_pps": count / elapsed if elapsed else 0.0}
 
 

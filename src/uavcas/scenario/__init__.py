@@ -1,6 +1,6 @@
 """Scenario strings (the paper's 9 fields) and campaign presets."""
 
-from .campaign import PRESETS, ManifestEntry, manifest, parse_shard, run_seed
+from .campaign import PRESETS, ManifestEntry, manifest, parse_shard, run_seed, select_shard
 from .codec import Blackhole, Flood, Replay, Scenario, ScenarioError, Wormhole, parse
 
 __all__ = [
@@ -16,4 +16,5 @@ __all__ = [
     "parse",
     "parse_shard",
     "run_seed",
+    "select_shard",
 ]

@@ -137,11 +137,14 @@ def manifest(
         )
         for pos, idx in enumerate(order)
     ]
-    if shard is not None:
-        k, n = shard
-        bounds = np.linspace(0, len(entries), n + 1).round().astype(int)
-        entries = entries[bounds[k] : bounds[k + 1]]
-    return entries
+    return select_shard(entries, shard) if shard is not None else entries
+
+
+def select_shard(entries: list[ManifestEntry], shard: tuple[int, int]) -> list[ManifestEntry]:
+    """The K-th of N contiguous, near-equal slices of `entries` (in their given order)."""
+    k, n = shard
+    bounds = np.linspace(0, len(entries), n + 1).round().astype(int)
+    return entries[bounds[k] : bounds[k + 1]]
 
 
 __all__ = [
@@ -155,4 +158,5 @@ __all__ = [
     "parse_shard",
     "permutation",
     "run_seed",
+    "select_shard",
 ]
