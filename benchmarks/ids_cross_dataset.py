@@ -5,7 +5,7 @@ baselines on our dataset and on the external samples, one column per dataset.
         [--external ../shared/data/ids-samples/cicids2017-improved-rnd2500 ...] [--out table.csv]
 
 Without DATASET_DIR a 20k-flow synthetic uavcas dataset stands in for ours. External samples go
-through `uavcas.ids.external` (the dataset package's loaders); they have no runs, so their split
+through `uavcas.dataset.read.load_any` (the one dataset reader); they have no runs, so their split
 is a stratified flow-level one (stated in each protocol's notes).
 """
 
@@ -33,7 +33,7 @@ def main() -> int:
     import pandas as pd
 
     from uavcas.analysis.synthetic import make_flows, write_dataset
-    from uavcas.ids.external import load_any
+    from uavcas.dataset.read import load_any
     from uavcas.ids.models import MODELS
     from uavcas.ids.protocols import BenchConfig, run_protocol
 

@@ -7,6 +7,7 @@ import json
 
 import numpy as np
 import pandas as pd
+import pytest
 from typer.testing import CliRunner
 
 from uavcas.analysis.axes import axis_diversity
@@ -65,9 +66,17 @@ def test_cli_diversity_writes_csv_and_json(synth_dir, tmp_path):
     assert edges[0] == 0 and np.all(np.diff(edges) > 0)
 
 
-def test_cli_bad_dataset_one_line_error(tmp_path):
-    r = runner.invoke(app, ["analyze", "diversity", str(tmp_path / "nope"), "--out", str(tmp_path / "o")])
-    assert r.exit_code != 0 and "error" in r.output.lower()
+@pytest.mark.parametrize("make", ["missing", "not_a_dataset"])
+def test_cli_bad_dataset_one_line_error(tmp_path, make):
+    bad = tmp_path / "in"
+    if make == "not_a_dataset":
+        bad.mkdir()
+        (bad / "notes.txt").write_text("hello\n")
+    r = runner.invoke(app, ["analyze", "diversity", str(bad), "--out", str(tmp_path / "o")])
+    lines = [ln for ln in r.output.splitlines() if ln.strip()]
+    assert r.exit_code == 2 and len(lines) == 1 and lines[0].startswith("error: "), r.output
+    assert str(bad) in lines[0] and "Traceback" not in r.output
+    assert not (tmp_path / "o").exists()  # nothing written for bad input
 
 
 def test_cli_axes_and_separability(synth_dir, tmp_path):

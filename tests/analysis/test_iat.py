@@ -26,16 +26,3 @@ def test_arrow_backed_lists_match_object_lists_and_limit():
 def test_fallback_to_mean_iat_feature_is_recorded():
     r = flow_iats(pd.DataFrame({"Flow IAT Mean": [0.1, np.nan, 0.3], "label": ["a", "b", "c"]}))
     assert r.source == "Flow IAT Mean" and r.n_flows_no_iat == 1 and len(r.per_flow) == 2
-
-
-def test_mixed_flow_views_need_a_choice():
-    import pytest
-
-    from uavcas.analysis.io import select_view
-
-    df = pd.DataFrame({"view": ["5tuple", "hostpair", "5tuple"], "x": [1, 2, 3]})
-    with pytest.raises(ValueError, match="--view"):
-        select_view(df)
-    assert select_view(df, "5tuple")["x"].tolist() == [1, 3]
-    with pytest.raises(ValueError, match="not in this dataset"):
-        select_view(df, "other")

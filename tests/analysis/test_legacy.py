@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from uavcas.analysis.divergence import compare_pooled, flow_counts, log_bins
+from uavcas.stats.divergence import compare_pooled, flow_counts, log_bins
 from uavcas.analysis.legacy import legacy_divergence
 
 

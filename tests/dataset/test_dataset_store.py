@@ -11,8 +11,8 @@ from typer.testing import CliRunner
 
 from uavcas.cli import app
 from uavcas.dataset.parquet import COLUMNS, arrow_schema, read_flows
-from uavcas.dataset.schema import CLASSES, FEATURES, METADATA_COLUMNS, SEQUENCE_COLUMNS
 from uavcas.dataset.uavcas_csv import read_uavcas_csv
+from uavcas.schema import CLASSES, FEATURES, METADATA_COLUMNS, SEQUENCE_COLUMNS
 
 runner = CliRunner()
 

@@ -108,11 +108,11 @@ def test_blackhole_drops_data_keeps_arp_and_ends(tmp_path):
         assert not tcp_ok(emu, "bs0", "uav0", 8080)
         assert tcp_ok(emu, "uav1", "bs0", 8080)  # others unaffected
         rec = ex.stop(p.attacks[0])
-        assert rec["dropped_frames"] >= 2
+        assert rec.dropped_frames >= 2
         assert tcp_ok(emu, "uav0", "bs0", 8080) and tcp_ok(emu, "bs0", "uav0", 8080)
         for s in servers:
             s.close()
-    assert [r["event"] for r in ex.records] == ["start", "stop"]
+    assert [r.event for r in ex.records] == ["start", "stop"]
 
 
 def test_wormhole_adds_the_attacker_hop_to_the_victims_rtt(tmp_path):
@@ -126,7 +126,7 @@ def test_wormhole_adds_the_attacker_hop_to_the_victims_rtt(tmp_path):
         emu.apply_links(w.links, ex.routes_for(w), ex.wormholes_for(w), window_index=0)
         before = ping_avg_ms(emu, "bs0", "uav0")
         rec = ex.start(p.attacks[0])
-        assert rec["paths"]["uav0>bs0"] == ["uav0", "uav1", "bs0"] and not rec["rejected"]
+        assert rec.paths["uav0>bs0"] == ["uav0", "uav1", "bs0"] and not rec.rejected
         during = ping_avg_ms(emu, "bs0", "uav0")
         ex.stop(p.attacks[0])
         after = ping_avg_ms(emu, "bs0", "uav0")
@@ -155,7 +155,7 @@ def test_replay_injects_with_decremented_ttl_never_replays_of_replays(tmp_path):
     assert len(found) >= 0.98 * len(inj)
     assert not [x for x in pk if x.ttl == 64 - 2 * 3]  # no replay of a replay anywhere
     assert all(x.ttl in (64, 61) for x in pk)
-    assert_nothing_left(art.run_info["prefix"])
+    assert_nothing_left(art.run_info.prefix)
 
 
 def test_ddos_from_two_attackers_at_the_nominal_rate(tmp_path):
@@ -172,8 +172,8 @@ def test_ddos_from_two_attackers_at_the_nominal_rate(tmp_path):
         fc = rc.flood_check(victim, ip, rec["victim_ips"][0], start, stop)
         assert fc.outside == 0
         assert 850 <= fc.pps <= 1150, (ip, fc.pps)
-    assert art.run_info["capture_drops"] == 0
-    assert_nothing_left(art.run_info["prefix"])
+    assert art.run_info.capture_drops == 0
+    assert_nothing_left(art.run_info.prefix)
 
 
 def test_collaborative_blackhole_plus_dos_in_one_run(tmp_path):
@@ -196,7 +196,7 @@ def test_collaborative_blackhole_plus_dos_in_one_run(tmp_path):
     http = [ln.split("\t") for ln in (art.out_dir / "logs" / "http-bs0-uav0.tsv").read_text().splitlines()]
     assert any(c == "200" and float(t) >= be for t, c, *_ in http)  # works after
     assert any(c != "200" and bs <= float(t) < be for t, c, *_ in http)  # fails inside
-    assert_nothing_left(art.run_info["prefix"])
+    assert_nothing_left(art.run_info.prefix)
 
 
 # the CLI ---------------------------------------------------------------------------------------
@@ -278,10 +278,57 @@ def test_benign_run_http_and_optional_telemetry(tmp_path):
     assert art.exit_status == 0, art.exit_reason
     assert (art.out_dir / "attacks.jsonl").read_text() == ""
     info = art.run_info
-    assert {c["uav"] for c in info["http_clients"]} == {"uav0", "uav1"}
-    assert all(c["ok"] >= 3 and c["failed"] == 0 for c in info["http_clients"])
+    assert {c["uav"] for c in info.http_clients} == {"uav0", "uav1"}
+    assert all(c["ok"] >= 3 and c["failed"] == 0 for c in info.http_clients)
     pk = rc.read_pcap(art.out_dir / "pcap" / "s-bs0.pcap")
     for u in ("uav0", "uav1"):
         n = sum(1 for x in pk if x.proto == 17 and x.dport == 14550 and x.src == p.node(u).ip)
         assert 50 <= n <= 62, (u, n)  # 10 Hz for 6 s
         assert rc.http_transfers(pk, p.node(u).ip)[1] > 50
+
+
+# the typed run directory -----------------------------------------------------------------------
+def test_every_file_of_a_real_run_reads_through_the_typed_models(tmp_path):
+    import shutil as sh
+
+    from uavcas.events import AttackRate, AttackStart, AttackStop, Inject
+    from uavcas.extract import extract
+    from uavcas.rundir import RunDir, RunDirError
+    from uavcas.twin import plan as twin_plan
+
+    # dos + replay: every record type (a blackhole on the shared victim would starve the replayer)
+    p = twin_plan("dos=1000+replay=50,200,10,5,inc-4-1-image-logdist-adaptive-random-30-95", seed=2,
+                  windows=2, window_s=4.0)
+    art = realize(p, tmp_path / "r")
+    assert art.exit_status == 0, art.exit_reason
+    rd = RunDir(art.out_dir)
+    assert rd.read_plan() == p and rd.read_plan().scenario.families == ("dos", "replay")
+    info = rd.read_info()
+    assert info == art.run_info and info.t0_unix and info.exit_status == 0
+    lines = [ln for ln in rd.attacks_jsonl.read_text().splitlines() if ln.strip()]
+    recs = rd.read_attacks()
+    assert [r.to_line() for r in recs] == [ln + "\n" for ln in lines]  # every line, byte for byte
+    assert {type(r) for r in recs} == {AttackStart, AttackStop, AttackRate, Inject}
+    assert {r.family for r in recs if isinstance(r, AttackStart)} == {"dos", "replay"}
+    assert len(rd.read_shaping()) == 2 * sum(len(w.links) for w in p.windows)
+    shard = extract(rd.root)
+    assert shard.info.n_flows > 0 and set(shard.frame["attacks"]) == {p.scenario.attacks_token}
+
+    # an unknown or a missing field fails loudly, naming it
+    bad = RunDir(tmp_path / "bad")
+    sh.copytree(rd.root, bad.root)
+    d = json.loads(rd.run_json.read_text())
+    bad.run_json.write_text(json.dumps({**d, "colour": "red"}))
+    with pytest.raises(RunDirError, match="unknown field 'colour'"):
+        bad.read_info()
+    bad.run_json.write_text(json.dumps({k: v for k, v in d.items() if k != "t0_unix"}))
+    with pytest.raises(RunDirError, match="has no field 't0_unix'"):
+        bad.read_info()
+    first = json.loads(lines[0])
+    bad.attacks_jsonl.write_text(json.dumps({**first, "colour": "red"}) + "\n")
+    with pytest.raises(RunDirError, match=r"attacks.jsonl:1: unknown field 'colour'"):
+        bad.read_attacks()
+    bad.attacks_jsonl.write_text(json.dumps({k: v for k, v in first.items() if k != "t_unix"}) + "\n")
+    with pytest.raises(RunDirError, match=r"attacks.jsonl:1: record has no 't_unix'"):
+        bad.read_attacks()
+    assert_nothing_left(info.prefix)

@@ -13,8 +13,10 @@ sys.path.insert(0, str(Path(__file__).parent / "apps"))
 from runplans import attack, link, make_plan, nodes  # noqa: E402
 
 from uavcas.cli import app  # noqa: E402
-from uavcas.cli import run as run_cli  # noqa: E402
+from uavcas.attacks.blackhole import switch_ports  # noqa: E402
+from uavcas.emulation import preflight as preflight_mod  # noqa: E402
 from uavcas.emulation.attacks import AttackExecutor  # noqa: E402
+from uavcas.emulation.naming import check_prefix  # noqa: E402
 from uavcas.emulation.runner import prepare_out_dir, schedule  # noqa: E402
 
 CONFIG = "dos=1000-5-2-image-logdist-adaptive-random-30-95"
@@ -51,7 +53,7 @@ def test_wormhole_detour_only_while_active(tmp_path):
     # a window without the plan's override still gets one (victim's BS = uav index mod n_bs)
     w2 = w.model_copy(update={"wormholes": []})
     assert ex.wormholes_for(w2) == [("uav0", "uav1", "bs0")]
-    assert ex.blackhole_ports("uav1") == ["h1", "l1-*"]
+    assert switch_ports(p.node("uav1").index) == ["h1", "l1-*"]
 
 
 def test_prepare_out_dir_replaces_only_run_files(tmp_path):
@@ -78,22 +80,36 @@ def test_cli_not_root_exit_2_before_anything(tmp_path, monkeypatch):
 
 def test_cli_missing_tool_exit_2(tmp_path, monkeypatch):
     monkeypatch.setattr(os, "geteuid", lambda: 0)
-    real = run_cli.shutil.which
-    monkeypatch.setattr(run_cli.shutil, "which", lambda t: None if t == "hping3" else real(t) or f"/bin/{t}")
+    real = preflight_mod.shutil.which
+    monkeypatch.setattr(preflight_mod.shutil, "which", lambda t: None if t == "hping3" else real(t) or f"/bin/{t}")
     r = CliRunner().invoke(app, ["run", CONFIG, "--windows", "1", "--out", str(tmp_path / "r")])
     assert r.exit_code == 2 and "hping3" in r.output and not (tmp_path / "r").exists()
 
 
 def test_cli_refuses_foreign_out_dir(tmp_path, monkeypatch):
     monkeypatch.setattr(os, "geteuid", lambda: 0)
-    monkeypatch.setattr(run_cli.shutil, "which", lambda t: f"/bin/{t}")
+    monkeypatch.setattr(preflight_mod.shutil, "which", lambda t: f"/bin/{t}")
     (tmp_path / "r").mkdir()
     (tmp_path / "r" / "thesis.tex").write_text("x")
     r = CliRunner().invoke(app, ["run", CONFIG, "--windows", "1", "--out", str(tmp_path / "r")])
     assert r.exit_code == 2 and "not empty" in r.output
 
 
-@pytest.mark.parametrize("bad", [["--prefix", "UPPER"], ["--windows", "0"]])
-def test_cli_bad_options_exit_2(tmp_path, bad):
-    r = CliRunner().invoke(app, ["run", CONFIG, "--out", str(tmp_path / "r"), *bad])
-    assert r.exit_code == 2
+def test_cli_bad_windows_exit_2(tmp_path):
+    r = CliRunner().invoke(app, ["run", CONFIG, "--out", str(tmp_path / "r"), "--windows", "0"])
+    assert r.exit_code == 2 and not (tmp_path / "r").exists()
+
+
+@pytest.mark.parametrize("bad", ["UPPER", "has space", "", "x" * 40, "-lead"])
+def test_prefix_validator_refuses(bad):
+    # The validator itself: a CLI test could pass without it (the run would fail later) and,
+    # as root, would start a real emulation.
+    with pytest.raises(ValueError):
+        check_prefix(bad)
+
+
+def test_prefix_validator_accepts_and_cli_reports_it(tmp_path, monkeypatch):
+    check_prefix("uc7")
+    monkeypatch.setattr(os, "geteuid", lambda: 1000)  # were validation skipped, preflight stops here
+    r = CliRunner().invoke(app, ["run", CONFIG, "--out", str(tmp_path / "r"), "--prefix", "UPPER"])
+    assert r.exit_code == 2 and "--prefix" in r.output and "root" not in r.output

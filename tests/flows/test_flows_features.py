@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 from pcapgen import A, B, http_session, udp, write
 
-from uavcas.dataset.schema import FEATURES
 from uavcas.flows import FlowConfig, extract_flows
+from uavcas.schema import FEATURES
 
 TIMES = np.array([0, 0.01, 0.02, 0.03, 0.05, 0.06, 0.07, 0.10, 0.11, 0.12, 0.13])
 FWD = np.array([1, 0, 1, 1, 0, 0, 0, 1, 0, 1, 0], dtype=bool)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from uavcas.dataset import schema
+from uavcas import schema
 from uavcas.ids import protocols
 from uavcas.ids.features import MetadataLeakError, check_feature_columns, feature_matrix
 from uavcas.ids.protocols import BenchConfig, run_protocol
@@ -60,18 +60,11 @@ def test_grouped_split_needs_runs():
 
 
 def test_composition_parsing():
-    assert protocols.composition("blackhole+dos=1000") == ("blackhole", "dos")
-    assert protocols.composition("replay=50,200,10,5,inc") == ("replay",)
-    assert protocols.composition("benign") == ()
+    from uavcas.vocabulary import families_of
+
+    assert families_of("blackhole+dos=1000") == ("blackhole", "dos")
+    assert families_of("dos=1000+blackhole") == ("blackhole", "dos")  # canonical order whatever the input's
+    assert families_of("replay=50,200,10,5,inc") == ("replay",)
+    assert families_of("benign") == ()
     assert protocols.is_dos("DoS") and protocols.is_dos("DoS Hulk") and not protocols.is_dos("DoS+Replay")
     assert not protocols.is_dos("DDoS")
-
-
-def test_detect_external_format(tmp_path):
-    from uavcas.ids.external import detect_format
-
-    (tmp_path / "x.csv").write_text("id,dur,spkts,dpkts,sbytes,dbytes,attack_cat,label\n1,0.1,2,2,100,100,Normal,0\n")
-    assert detect_format(tmp_path) == "unsw-nb15"
-    (tmp_path / "other.txt").write_text("hello\n")
-    with pytest.raises(ValueError, match="neither"):
-        detect_format(tmp_path / "other.txt")

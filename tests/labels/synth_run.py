@@ -14,10 +14,22 @@ Capture points: s-bs0 sees every packet to/from bs0 (except one dropped packet o
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 from scapy.layers.inet import IP, TCP
+
+from uavcas.events import AttackRate, AttackStart, AttackStop, Inject, attack_log_text
+from uavcas.rundir import RunInfo
+
+
+def run_info(**fields) -> RunInfo:
+    """A complete run.json of a finished run; `fields` override the defaults."""
+    base = dict(config="test", seed=0, windows=12, window_s=5.0, prefix="synth", t0_unix=0.0, t_end_unix=60.0,
+                wall_s=61.0, exit_status=0, exit_reason="ok", versions={}, tool_versions={}, kernel="test",
+                kernel_features=None, shaper_backend=None, timings={}, window_applies=[], schedule=[],
+                capture=[], capture_drops=0, packets_captured=0, http_clients=[], delay_daemon=None,
+                attack_errors=[], wind_down_errors=[])
+    return RunInfo(**{**base, **fields})
 from scapy.layers.l2 import Ether
 from scapy.packet import Raw
 from scapy.utils import wrpcap
@@ -107,9 +119,10 @@ def build_run(run_dir: Path, run_id: str = "run-synth") -> Path:
         r[TCP].seq = o[TCP].seq + k + 1
         r.time = T0 + 13.5 + 0.1 * k
         pkts.append(r)
-        injects.append({"event": "inject", "attack_id": "replay-0", "family": "replay", "t_unix": float(r.time),
-                        "src_ip": r[IP].src, "dst_ip": r[IP].dst, "src_port": r[TCP].sport, "dst_port": r[TCP].dport,
-                        "protocol": 6, "ip_id": r[IP].id, "ttl": r[IP].ttl, "seq": r[TCP].seq, "orig_seq": o[TCP].seq})
+        injects.append(Inject(attack_id="replay-0", family="replay", t_unix=float(r.time), src_ip=r[IP].src,
+                              dst_ip=r[IP].dst, src_port=r[TCP].sport, dst_port=r[TCP].dport, protocol=6,
+                              ip_id=r[IP].id, ttl=r[IP].ttl, seq=r[TCP].seq, orig_seq=o[TCP].seq,
+                              orig_ttl=o[IP].ttl))
     pkts.sort(key=lambda p: float(p.time))
     bs = [p for p in pkts if IPS["bs0"] in (p[IP].src, p[IP].dst)]
     bs = [p for p in bs if not (p[IP].id == 3 and p[IP].dst == IPS["uav0"])]  # one packet missed at s-bs0
@@ -124,19 +137,23 @@ def build_run(run_dir: Path, run_id: str = "run-synth") -> Path:
 
     plan = make_plan()
     (run_dir / "plan.json").write_text(plan.to_json())
+    def start(aid, fam, attacker, victim, window, **params):
+        return AttackStart(attack_id=aid, family=fam, attackers=[attacker], attacker_ips=[IPS[attacker]],
+                           victims=[victim], victim_ips=[IPS[victim]], t_unix=T0 + window[0], params=params,
+                           planned_start_s=window[0], planned_stop_s=window[1])
+
     log = [
-        {"event": "start", "attack_id": "replay-0", "family": "replay", "attackers": ["uav2"], "attacker_ips": [IPS["uav2"]],
-         "victims": ["uav3"], "victim_ips": [IPS["uav3"]], "t_unix": T0 + 10.0, "params": {}},
+        start("replay-0", "replay", "uav2", "uav3", (10.0, 20.0)),
         *injects,
-        {"event": "stop", "attack_id": "replay-0", "family": "replay", "t_unix": T0 + 20.0},
-        {"event": "start", "attack_id": "dos-0", "family": "dos", "attackers": ["uav1"], "attacker_ips": [IPS["uav1"]],
-         "victims": ["uav0"], "victim_ips": [IPS["uav0"]], "t_unix": T0 + DOS_WINDOW[0], "params": {"interval_us": 1000}},
-        {"event": "rate", "attack_id": "dos-0", "family": "dos", "attacker": "uav1", "measured_pps": 5.2, "nominal_pps": 1000, "hping_interval_us": 1000},
-        {"event": "stop", "attack_id": "dos-0", "family": "dos", "t_unix": T0 + DOS_WINDOW[1]},
-        {"event": "start", "attack_id": "blackhole-0", "family": "blackhole", "attackers": ["uav2"], "attacker_ips": [IPS["uav2"]],
-         "victims": ["uav3"], "victim_ips": [IPS["uav3"]], "t_unix": T0 + BLACKHOLE_WINDOW[0], "params": {}},
-        {"event": "stop", "attack_id": "blackhole-0", "family": "blackhole", "t_unix": T0 + BLACKHOLE_WINDOW[1]},
+        AttackStop(attack_id="replay-0", family="replay", t_unix=T0 + 20.0),
+        start("dos-0", "dos", "uav1", "uav0", DOS_WINDOW, interval_us=1000),
+        AttackRate(attack_id="dos-0", family="dos", attacker="uav1", measured_pps=5.2, nominal_pps=1000,
+                   hping_interval_us=1000, syn_count=50, seconds=9.6, restarts=0, intervals_us=[1000],
+                   victim_ip=IPS["uav0"], t_unix=T0 + DOS_WINDOW[1]),
+        AttackStop(attack_id="dos-0", family="dos", t_unix=T0 + DOS_WINDOW[1]),
+        start("blackhole-0", "blackhole", "uav2", "uav3", BLACKHOLE_WINDOW),
+        AttackStop(attack_id="blackhole-0", family="blackhole", t_unix=T0 + BLACKHOLE_WINDOW[1]),
     ]
-    (run_dir / "attacks.jsonl").write_text("".join(json.dumps(r) + "\n" for r in log))
-    (run_dir / "run.json").write_text(json.dumps({"run_id": run_id, "t0_unix": T0, "exit_status": 0}) + "\n")
+    (run_dir / "attacks.jsonl").write_text(attack_log_text(log))
+    (run_dir / "run.json").write_text(run_info(run_id=run_id, t0_unix=T0, config=CONFIG, seed=7).to_json())
     return run_dir

@@ -7,9 +7,11 @@ import json
 import pytest
 from synth_run import BLACKHOLE_WINDOW, DOS_WINDOW, IPS, N_FLOOD, T0, make_plan
 
-from uavcas.dataset.schema import LABEL_COLUMNS
+from uavcas.events import AttackStart, AttackStop, attack_log_text
 from uavcas.flows import extract_flows
 from uavcas.labels import LabelError, label_flows, read_attack_log
+from uavcas.rundir import RunDir
+from uavcas.schema import LABEL_COLUMNS
 from uavcas.twin.model import Plan
 
 
@@ -74,8 +76,20 @@ def test_plan_fallback_and_errors(tmp_path):
     bad.write_text('{"event": "start", "attack_id": "x"}\nnot json\n')
     with pytest.raises(LabelError, match=r"bad.jsonl:1: record has no 'family'"):
         read_attack_log(bad)
-    bad.write_text(json.dumps({"event": "start", "attack_id": "x", "family": "dos", "t_unix": 1, "victims": ["nobody"]}) + "\n")
-    with pytest.raises(LabelError, match="nobody"):
+    start = {"event": "start", "attack_id": "x", "family": "dos", "attackers": [], "attacker_ips": [],
+             "victims": ["nobody"], "victim_ips": [], "t_unix": 1, "params": {}, "planned_start_s": 0.0,
+             "planned_stop_s": 1.0}
+    bad.write_text(json.dumps(start) + "\n")
+    with pytest.raises(LabelError, match="nobody"):  # no IPs logged: the plan's, and it has no such node
+        read_attack_log(bad, plan, T0)
+    bad.write_text(json.dumps({**start, "colour": "red"}) + "\n")
+    with pytest.raises(LabelError, match=r"bad.jsonl:1: unknown field 'colour'"):
+        read_attack_log(bad, plan, T0)
+    bad.write_text(json.dumps({k: v for k, v in start.items() if k != "planned_stop_s"}) + "\n")
+    with pytest.raises(LabelError, match=r"bad.jsonl:1: record has no 'planned_stop_s'"):
+        read_attack_log(bad, plan, T0)
+    bad.write_text(json.dumps({**start, "family": "teleport"}) + "\n")
+    with pytest.raises(LabelError, match=r"bad.jsonl:1: bad field value 'family'"):
         read_attack_log(bad, plan, T0)
 
 
@@ -84,9 +98,13 @@ def test_wormhole_window_and_ddos(synth_run_dir, tmp_path):
 
     run = tmp_path / "run"
     shutil.copytree(synth_run_dir, run)
-    lines = (run / "attacks.jsonl").read_text().replace('"family": "dos"', '"family": "ddos"')
-    lines += json.dumps({"event": "start", "attack_id": "wormhole-0", "family": "wormhole", "attacker_ips": [IPS["uav2"]], "victim_ips": [IPS["uav0"]], "t_unix": T0 + 0.5}) + "\n"
-    lines += json.dumps({"event": "stop", "attack_id": "wormhole-0", "family": "wormhole", "t_unix": T0 + 3.0}) + "\n"
+    recs = [r.model_copy(update={"family": "ddos"}) if r.family == "dos" else r for r in RunDir(run).read_attacks()]
+    recs += [AttackStart(attack_id="wormhole-0", family="wormhole", attackers=["uav2"], attacker_ips=[IPS["uav2"]],
+                         victims=["uav0"], victim_ips=[IPS["uav0"]], t_unix=T0 + 0.5, params={},
+                         planned_start_s=0.5, planned_stop_s=3.0),
+             AttackStop(attack_id="wormhole-0", family="wormhole", t_unix=T0 + 3.0)]
+    lines = attack_log_text(recs)
+    assert lines.count('"family":"ddos"') == 3
     (run / "attacks.jsonl").write_text(lines)
     df = _labelled(run)
     worm = df[df.label_wormhole]

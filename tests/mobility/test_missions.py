@@ -228,19 +228,6 @@ def test_hover_transit_shared_waypoints_are_visited():
         assert np.min(np.linalg.norm(p - np.array(w), axis=1)) < 1e-6
 
 
-def test_missions_are_fast_enough_for_a_plan():
-    import time
-
-    t = np.linspace(0.0, 60.0, 13)
-    for kind in MISSION_KINDS:
-        best = np.inf
-        for seed in range(3):
-            t0 = time.perf_counter()
-            make_mission(kind, 100, seed).positions(t)
-            best = min(best, time.perf_counter() - t0)
-        assert best < 0.05, f"{kind}: {best * 1e3:.1f} ms for 100 UAVs x 13 window times"
-
-
 def test_gauss_markov_params_validation():
     with pytest.raises(ValueError):
         GaussMarkovParams(alpha=1.0)

@@ -51,9 +51,24 @@ def test_bridge_joins_a_far_cluster_to_its_nearest_bs():
     assert dict(zip(topo.edges, topo.reasons)) == {(0, 1): "nearest", (0, 3): "bridge", (2, 3): "backhaul"}
 
 
-def test_routing_is_deterministic_and_input_order_free_of_hash_effects():
-    pos, is_bs = _swarm(3, 20, 2)
-    assert nearest_neighbour_topology(pos, is_bs) == nearest_neighbour_topology(pos.copy(), is_bs.copy())
+def _links(topo, names) -> dict[tuple[int, int], str]:
+    """Links keyed by node identity (`names[i]` is node i's original index), not position in the input."""
+    return {tuple(sorted((int(names[i]), int(names[j])))): r for (i, j), r in zip(topo.edges, topo.reasons)}
+
+
+@settings(max_examples=50, deadline=None)
+@given(st.integers(0, 10**6), st.integers(1, 30), st.integers(1, 4), st.randoms(use_true_random=False))
+def test_routing_is_deterministic_regardless_of_input_order(seed, n_uav, n_bs, rnd):
+    pos, is_bs = _swarm(seed, n_uav, n_bs)
+    topo = nearest_neighbour_topology(pos, is_bs)
+    assert topo == nearest_neighbour_topology(pos.copy(), is_bs.copy())
+    # the same swarm listed in another order (BSs interleaved with UAVs) gives the same links
+    perm = np.arange(len(pos))
+    rnd.shuffle(perm)
+    if np.array_equal(perm, np.arange(len(pos))):  # a shuffle may leave the order as it was
+        perm = perm[::-1].copy()
+    shuffled = nearest_neighbour_topology(pos[perm], is_bs[perm])
+    assert _links(shuffled, perm) == _links(topo, np.arange(len(pos)))
 
 
 def test_wormhole_detours_victim_bs_traffic_through_the_attacker():

@@ -1,2 +1,3 @@
-"""Dataset analysis: bounded IAT divergences (and the authors' legacy variant), diversity tables,
-internal diversity per configuration axis, separability statistics and figures."""
+"""Dataset analysis: IAT diversity tables (bounded divergences from `uavcas.stats`, and the
+authors' legacy variant), internal diversity per configuration axis, separability statistics and
+figures."""

@@ -6,9 +6,9 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from uavcas.dataset import schema
+from uavcas import schema
+from uavcas.stats.divergence import DEFAULT_BINS, compare_pooled, flow_counts, log_bins
 
-from .divergence import DEFAULT_BINS, compare_pooled, flow_counts, log_bins
 from .diversity import split_by_run
 from .iat import flow_iats
 

@@ -7,9 +7,9 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from uavcas.dataset import schema
+from uavcas import schema
+from uavcas.stats.divergence import DEFAULT_BINS, compare_pairwise, compare_pooled, flow_counts, log_bins
 
-from .divergence import DEFAULT_BINS, compare_pairwise, compare_pooled, flow_counts, log_bins
 from .iat import FlowIATs, flow_iats, iat_source
 from .legacy import legacy_divergence
 

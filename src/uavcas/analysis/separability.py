@@ -7,10 +7,10 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from uavcas.dataset import schema
+from uavcas import schema
+from uavcas.report.figure import plt, save_png
 
 from .diversity import class_order
-from .figures import plt, save_png
 
 # (column, display name, scale): IAT shown in ms like the paper's table tab:separability_stats
 KEY_FEATURES: tuple[tuple[str, str, float], ...] = (

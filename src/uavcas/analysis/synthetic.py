@@ -8,20 +8,22 @@ attack runs, flows of its attack class. The structure is chosen so expected outc
 - Blackhole: benign-like, fewer backward packets and longer gaps (retransmissions);
 - Replay: benign-like plus duplicated packets (near-zero IATs).
 Benign IATs depend on the axes (swarm size, TX power, mission, path loss) so internal diversity
-per axis is non-zero. Features are computed from the sequences (simplified CICFlowMeter rules;
-the real extractor lives in `uavcas.flows`).
+per axis is non-zero. Each flow's packets go through the real extractor (`uavcas.flows`), so the features are
+exactly those of captured flows.
 """
 
 from __future__ import annotations
 
+import ipaddress
 import json
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
+from uavcas import schema
 from uavcas.atomic import atomic_write_text
-from uavcas.dataset import schema
+from uavcas.scenario.codec import Scenario, attacks_of
 
 SINGLE_TOKENS = {
     "benign": "benign",
@@ -37,6 +39,7 @@ COMPOSITIONS: tuple[tuple[str, ...], ...] = (
 ) + schema.PAIRS
 _AGGRESSIVE_REPLAY = "replay=100,100,20,3,rand"
 FLOODS = {"dos", "ddos"}
+_SERVER_IP, _SERVER_PORT = "10.0.0.100", 80
 FLAG = {"FIN": 0x01, "SYN": 0x02, "RST": 0x04, "PSH": 0x08, "ACK": 0x10, "URG": 0x20, "ECE": 0x40, "CWE": 0x80}
 
 
@@ -67,6 +70,7 @@ def _flood(rng, pps: float) -> tuple[np.ndarray, ...]:
     mean = 1.0 / pps * rng.lognormal(0, 0.4)
     t = np.concatenate([[0.0], np.cumsum(rng.exponential(mean, n - 1))])
     d = (rng.random(n) < 0.05).astype(np.int8)  # a few RST answers
+    d[0] = 0  # the attacker's SYN opens the flow
     size = np.where(d == 0, rng.integers(54, 75, n), 54)
     flags = np.where(d == 0, FLAG["SYN"], FLAG["RST"] | FLAG["ACK"]).astype(np.int16)
     return t, size, d, flags
@@ -112,14 +116,69 @@ def _benign_mean_iat(n_uav: int, tx_dbm: int, mission: str, pathloss: str) -> fl
     return 1.6 * f
 
 
+def _packet_table(seqs, src_ips: list[int], src_ports: list[int], dst_ip: int, dst_port: int):
+    """The packets of the flows `seqs` as a uavcas.flows packet table (TCP over IPv4, one capture
+    point), so the synthetic features come from the real extractor."""
+    from uavcas.flows.packets import COLUMNS, PacketTable
+
+    n = np.array([len(s[0]) for s in seqs], dtype=np.int64)
+    fid = np.repeat(np.arange(len(seqs)), n)
+    back = np.concatenate([s[2] for s in seqs]).astype(bool)
+    src = np.asarray(src_ips, dtype=np.uint64)[fid]
+    sport = np.asarray(src_ports, dtype=np.uint16)[fid]
+    mapped = np.uint64(0xFFFF00000000)  # IPv4-mapped, as the decoder stores IPv4
+    size = np.concatenate([s[1] for s in seqs]).astype(np.uint32)
+    total = int(n.sum())
+    cols = {
+        "ts_s": np.concatenate([s[0] for s in seqs]).astype(np.float64),
+        "frame_len": size,
+        "cap_len": size,
+        "ip_version": np.full(total, 4, np.uint8),
+        "src_hi": np.zeros(total, np.uint64),
+        "src_lo": np.where(back, np.uint64(dst_ip), src) | mapped,
+        "dst_hi": np.zeros(total, np.uint64),
+        "dst_lo": np.where(back, src, np.uint64(dst_ip)) | mapped,
+        "sport": np.where(back, np.uint16(dst_port), sport).astype(np.uint16),
+        "dport": np.where(back, sport, np.uint16(dst_port)).astype(np.uint16),
+        "proto": np.full(total, 6, np.uint8),
+        "tcp_flags": np.concatenate([s[3] for s in seqs]).astype(np.uint16),
+        "ttl": np.full(total, 64, np.uint8),
+        "ip_id": np.zeros(total, np.uint32),
+        "tcp_seq": np.zeros(total, np.uint32),
+        "ip_hdr_len": np.full(total, 20, np.uint16),
+        "l4_hdr_len": np.full(total, 20, np.uint16),
+        "frame_index": np.arange(total, dtype=np.int64),
+        "point": np.zeros(total, np.int16),
+    }
+    assert tuple(cols) == COLUMNS
+    return PacketTable(cols, ("s-synthetic",))
+
+
+def _flow_table(seqs, src_ips: list[int], src_ports: list[int], sequences: bool) -> pd.DataFrame:
+    """Identity, counts, sequences and the 47 features of `seqs`, computed by uavcas.flows."""
+    from uavcas.flows.assemble import FlowConfig, assemble
+    from uavcas.flows.features import flow_frame
+
+    dst_ip = int(ipaddress.IPv4Address(_SERVER_IP))
+    table = _packet_table(seqs, src_ips, src_ports, dst_ip, _SERVER_PORT)
+    flows = assemble(table, FlowConfig(view="5tuple", dedup=False))
+    if flows.n_flows != len(seqs):  # every flow has its own key by construction
+        raise AssertionError(f"{len(seqs)} synthetic flows assembled into {flows.n_flows}")
+    df = flow_frame(table, flows, sequences=sequences)
+    # Flows come out in key order; put them back in generation order.
+    key = pd.Series(np.arange(len(seqs)), index=pd.MultiIndex.from_arrays(
+        [[str(ipaddress.IPv4Address(a)) for a in src_ips], src_ports]))
+    pos = key.loc[list(zip(df["src_ip"], df["src_port"].astype(int)))].to_numpy()
+    return df.iloc[np.argsort(pos)].drop(columns=["flow_id", "capture_point"]).reset_index(drop=True)
+
+
 def make_flows(n_flows: int = 3000, flows_per_run: int = 60, seed: int = 0, sequences: bool = True) -> pd.DataFrame:
     """A flow table in the dataset schema (all 15 classes when there are >= 16 runs)."""
-    from ._synthetic_features import features_from_sequences
-
     rng = np.random.default_rng(seed)
     n_runs = max(16, int(np.ceil(n_flows / flows_per_run)))
     per_run = np.full(n_runs, n_flows // n_runs) + (np.arange(n_runs) < n_flows % n_runs)
-    rows, seqs = [], []
+    rows, seqs, src_ips, src_ports = [], [], [], []
+    base_ip = int(ipaddress.IPv4Address("10.1.0.0"))
     for r in range(n_runs):
         comp = r % len(COMPOSITIONS)  # every composition present, cycling
         axes = dict(
@@ -128,36 +187,30 @@ def make_flows(n_flows: int = 3000, flows_per_run: int = 60, seed: int = 0, sequ
             mission=str(rng.choice(["spiral", "grid", "hover_transit", "random"])),
             tx_dbm=int(rng.choice([10, 30])), noise_dbm=-95.0,
         )
-        config = "-".join(str(axes[k]) for k in schema.AXIS_COLUMNS[:-1]) + "-95"
+        config = Scenario(
+            attacks=attacks_of(axes["attacks"]), noise=95,
+            **{k: axes[k] for k in ("n_uav", "n_bs", "payload", "pathloss", "modulation", "mission", "tx_dbm")},
+        ).to_string()
         mean_iat = _benign_mean_iat(axes["n_uav"], axes["tx_dbm"], axes["mission"], axes["pathloss"])
         fams = COMPOSITIONS[comp]
         for i in range(int(per_run[r])):
             f = fams if (fams and rng.random() < 0.5) else ()
             seqs.append(flow_sequence(rng, f, mean_iat))
+            src_ips.append(base_ip + len(rows))  # one address per flow: every flow its own key
+            src_ports.append(int(rng.integers(1024, 65535)))
             row = dict(
                 axes, run_id=f"run{r:05d}", config=config, seed=seed + r, view="5tuple",
-                flow_id=len(rows), src_ip=f"10.0.{r % 250}.{i % 250 + 1}",
-                src_port=int(rng.integers(1024, 65535)), dst_ip="10.0.0.100", dst_port=80,
-                protocol=6, capture_point=f"s-uav{i % axes['n_uav']}",
+                flow_id=len(rows), capture_point=f"s-uav{i % axes['n_uav']}",
                 label=schema.class_name(f), label_source="synthetic",
             )
             for fam in schema.FAMILIES:
                 row[f"label_{fam}"] = fam in f
             rows.append(row)
-    df = pd.DataFrame(rows)
-    feats = features_from_sequences(seqs)
-    df = pd.concat([df, feats], axis=1)
-    t0 = 1.7e9 + rng.uniform(0, 60, len(df))
-    df["first_ts"] = t0
-    df["last_ts"] = t0 + df["Flow Duration"].to_numpy()
-    df["packets"] = df["Total Fwd Packets"] + df["Total Backward Packets"]
-    df["bytes"] = df["Total Length of Fwd Packets"] + df["Total Length of Bwd Packets"]
-    df["duration_s"] = df["Flow Duration"]
-    if sequences:
-        df["seq_time_s"] = [s[0] for s in seqs]
-        df["seq_size"] = [s[1].astype(np.int32) for s in seqs]
-        df["seq_flags"] = [s[3].astype(np.int16) for s in seqs]
-        df["seq_dir"] = [(1 - 2 * s[2]).astype(np.int8) for s in seqs]  # +1 forward, -1 backward
+    df = pd.concat([pd.DataFrame(rows), _flow_table(seqs, src_ips, src_ports, sequences)], axis=1)
+    # Runs happen at different times; shift each flow by its run's start.
+    shift = 1.7e9 + rng.uniform(0, 60, len(df))
+    df["first_ts"] = df["first_ts"] + shift
+    df["last_ts"] = df["last_ts"] + shift
     return df
 
 

@@ -4,28 +4,18 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import matplotlib
+import numpy as np
+from matplotlib.ticker import NullFormatter
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-from matplotlib.ticker import NullFormatter  # noqa: E402
+from uavcas.report.figure import plt, save_png
 
-from uavcas.atomic import atomic_path  # noqa: E402
+from .layer1_pathloss import Layer1Result
+from .layer2_mobility import Layer2Result, sim_track
+from .layer3_link import Layer3Result
+from .layer4_fidelity import Layer4Result
 
-from .layer1_pathloss import Layer1Result  # noqa: E402
-from .layer2_mobility import Layer2Result, sim_track  # noqa: E402
-from .layer3_link import Layer3Result  # noqa: E402
-from .layer4_fidelity import Layer4Result  # noqa: E402
-
+_DPI = 110
 _MAX_POINTS = 1500  # per panel: enough to see the cloud, small PNGs
-
-
-def _save(fig, path: Path) -> Path:
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, dpi=110, bbox_inches="tight", format="png")
-    plt.close(fig)
-    return path
 
 
 def _binned_median(x, y, edges):
@@ -68,7 +58,7 @@ def pathloss_figure(res: Layer1Result, path: Path, seed: int = 0) -> Path:
     axes[1, 0].set_ylabel("residual (dB)")
     axes[0, 0].legend(fontsize=7, loc="lower right")
     fig.suptitle("Layer 1: Maeng LTE 3.51 GHz held-out path loss vs models")
-    return _save(fig, path)
+    return save_png(fig, path, dpi=_DPI)
 
 
 def crossval_figure(res: Layer1Result, path: Path) -> Path:
@@ -82,7 +72,7 @@ def crossval_figure(res: Layer1Result, path: Path) -> Path:
     ax.set_ylabel("multi-band measured path loss (dB)")
     ax.legend(fontsize=7, markerscale=4)
     ax.set_title("Layer 1 cross-validation (nothing fitted on these data)")
-    return _save(fig, path)
+    return save_png(fig, path, dpi=_DPI)
 
 
 def mobility_figures(res: Layer2Result, out_dir: Path, seed: int = 0) -> list[Path]:
@@ -114,7 +104,8 @@ def mobility_figures(res: Layer2Result, out_dir: Path, seed: int = 0) -> list[Pa
     axes2[0, 0].set_ylabel("CDF")
     fig.suptitle("Layer 2: held-out AFAR trajectories vs the twin's fitted missions (centred)")
     fig2.suptitle("Layer 2: speed CDFs, held-out AFAR (solid) vs twin (dashed)")
-    return [_save(fig, out_dir / "mobility_trajectories.png"), _save(fig2, out_dir / "mobility_speed_cdf.png")]
+    return [save_png(fig, out_dir / "mobility_trajectories.png", dpi=_DPI),
+            save_png(fig2, out_dir / "mobility_speed_cdf.png", dpi=_DPI)]
 
 
 def link_figure(res: Layer3Result, path: Path) -> Path:
@@ -132,7 +123,7 @@ def link_figure(res: Layer3Result, path: Path) -> Path:
     r = res.results["logdistance"]["per_flight"][rep.name]["r_chain"]
     ax.set_title(f"Layer 3: flight {rep.name} (held-out), Pearson r = {r:.2f}")
     ax.legend(fontsize=8, loc="lower left")
-    return _save(fig, path)
+    return save_png(fig, path, dpi=_DPI)
 
 
 def fidelity_figure(res: Layer4Result, path: Path) -> Path:
@@ -146,4 +137,4 @@ def fidelity_figure(res: Layer4Result, path: Path) -> Path:
     txt = ", ".join(f"H({k.replace('|', ',')})={v:.2f}" for k, v in list(res.hellinger.items())[:4])
     ax.set_title("Layer 4: RSS distributions on one scale\n" + txt, fontsize=9)
     ax.legend(fontsize=8)
-    return _save(fig, path)
+    return save_png(fig, path, dpi=_DPI)

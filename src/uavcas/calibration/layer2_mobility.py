@@ -45,6 +45,7 @@ from uavcas.mobility import (
     resample_uniform,
     velocities_from_positions,
 )
+from uavcas.vocabulary import MISSIONS
 
 from .loaders import AfarFlight, CalibrationDataError, local_xy_m
 from .metrics import jsd_on_shared_bins, spatial_kl_bits
@@ -56,7 +57,6 @@ CELL_M = 10.0
 N_SIM_UAV = 4
 CRUISE_FRACTION = 0.8
 PAPER_ASSIGNMENT = {301: "spiral", 309: "spiral", 328: "grid", 288: "hover_transit", 300: "random"}
-MISSIONS = ("spiral", "grid", "hover_transit", "random")
 
 
 @dataclass(frozen=True)

@@ -4,7 +4,7 @@ Errors (dB): e = predicted - measured. rmse = sqrt(mean e^2); mae = mean |e|; me
 median |e|; bias = mean e (positive: the model predicts more loss / more power than measured);
 r = Pearson correlation of predicted and measured (scipy.stats.pearsonr).
 
-Divergences on shared histograms (`uavcas.analysis.divergence`): Hellinger
+Divergences on shared histograms (`uavcas.stats.divergence`): Hellinger
 H = ||sqrt p - sqrt q||_2 / sqrt 2 in [0, 1]; Jensen-Shannon *divergence* with base-2 logs in
 [0, 1] (the square of scipy's JS distance). Spatial KL(real || sim) in bits over (x, y)
 occupancy maps on a shared grid, smoothed as Lee's skew divergence: KL(p || (1 - lam) q + lam p)
@@ -19,7 +19,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.stats import entropy, pearsonr
 
-from uavcas.analysis.divergence import hellinger, histogram, jsd
+from uavcas.stats.divergence import hellinger, histogram, jsd
 
 KL_SKEW = 0.01
 

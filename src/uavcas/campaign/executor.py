@@ -1,7 +1,8 @@
 """Where runs execute: a local pool of N concurrent runs, or a dask.distributed cluster.
 
-Both yield `RunOutcome`s as runs finish. The local pool uses threads because each run is a child
-process (`uavcas run`) plus an extraction; the threads only wait. On Dask, each run asks for the
+Both yield `RunOutcome`s as runs finish and retry failures by one rule (`retry.Retries`). The
+local pool uses threads because each run is a child process (`campaign.worker`) plus an
+extraction; the threads only wait. On Dask, each run asks for the
 worker resource `emulator=1`, so a worker started with `--resources emulator=1` emulates one
 scenario at a time, and the outcome (shard bytes and the small run files) returns to the client.
 """
@@ -14,6 +15,7 @@ from concurrent.futures import FIRST_COMPLETED, Future, ThreadPoolExecutor, wait
 from uavcas.scenario import ManifestEntry
 
 from .layout import CampaignDir
+from .retry import Retries
 from .task import RunOutcome, execute_entry
 
 
@@ -26,12 +28,12 @@ def run_local(
     on_retry: Callable[[RunOutcome, int], None] | None = None,
 ) -> Iterator[RunOutcome]:
     """Run entries `jobs` at a time into their run directories; retry a failure `retries` times."""
-    attempts: dict[int, int] = {}
+    tries = Retries(retries, on_retry)
     by_index = {e.index: e for e in entries}
     pending = list(entries)
 
     def submit(pool: ThreadPoolExecutor, e: ManifestEntry) -> Future:
-        attempts[e.index] = attempts.get(e.index, 0) + 1
+        tries.started(e.index)
         cdir.reset(e.index)
         return pool.submit(execute_entry, e, str(cdir.run_dir(e.index)), profile)
 
@@ -43,9 +45,7 @@ def run_local(
             done, running = wait(running, return_when=FIRST_COMPLETED)
             for fut in done:
                 out: RunOutcome = fut.result()
-                if not out.ok and attempts[out.index] <= retries:
-                    if on_retry:
-                        on_retry(out, attempts[out.index])
+                if tries.again(out):
                     pending.insert(0, by_index[out.index])
                     continue
                 yield out
@@ -63,11 +63,11 @@ def run_dask(
     from distributed import Client, as_completed
 
     with Client(address, timeout=connect_timeout_s) as client:
-        attempts: dict[int, int] = {}
+        tries = Retries(retries, on_retry)
         by_index = {e.index: e for e in entries}
 
         def submit(e: ManifestEntry):
-            attempts[e.index] = attempts.get(e.index, 0) + 1
+            n = tries.started(e.index)
             return client.submit(
                 execute_entry,
                 e.to_dict(),
@@ -76,7 +76,7 @@ def run_dask(
                 return_files=True,
                 resources={"emulator": 1},
                 pure=False,
-                key=f"uavcas-run-{e.index}-try{attempts[e.index]}",
+                key=f"uavcas-run-{e.index}-try{n}",
             )
 
         futures = as_completed([submit(e) for e in entries])
@@ -86,9 +86,7 @@ def run_dask(
             except Exception as exc:  # the worker died or the task could not run at all
                 idx = int(str(fut.key).split("-")[2])
                 out = RunOutcome(index=idx, ok=False, host="?", wall_s=0.0, error=f"dask: {exc}")
-            if not out.ok and attempts[out.index] <= retries:
-                if on_retry:
-                    on_retry(out, attempts[out.index])
+            if tries.again(out):
                 futures.add(submit(by_index[out.index]))
                 continue
             yield out

@@ -16,7 +16,7 @@ from uavcas.scenario import ManifestEntry
 
 from .executor import run_dask, run_local
 from .layout import CampaignDir, CampaignError
-from .task import RunOutcome, outcome_summary
+from .task import RunOutcome
 
 DEFAULT_RETRIES = 2
 
@@ -38,7 +38,7 @@ def _commit(cdir: CampaignDir, out: RunOutcome) -> None:
     for name, data in out.files.items():
         atomic_write_bytes(run_dir / name, data)
     atomic_write_bytes(cdir.shard_path(out.index), out.shard)
-    atomic_write_text(run_dir / "outcome.json", json.dumps(outcome_summary(out), indent=1, sort_keys=True) + "\n")
+    atomic_write_text(run_dir / "outcome.json", json.dumps(out.summary(), indent=1, sort_keys=True) + "\n")
     cdir.mark_done(out.index, {"index": out.index, "n_flows": out.n_flows, "host": out.host})
 
 

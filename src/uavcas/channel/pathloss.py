@@ -40,6 +40,8 @@ import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 from scipy.constants import c as SPEED_OF_LIGHT_M_S
 
+from uavcas.vocabulary import PATHLOSS_MODELS
+
 from .geometry import MIN_DISTANCE_M, LinkGeometry, PathLossResult
 from .tr36777 import AerialModel, RMaAV, UMaAV, UMiAV
 
@@ -204,7 +206,7 @@ class TwoRay:
 
 
 PathLossModel = LogDistance | FreeSpace | TwoRay | AerialModel
-PATHLOSS_NAMES = ("logdist", "3gpp", "uma", "rma", "umi", "tworay", "freespace")
+PATHLOSS_NAMES = PATHLOSS_MODELS  # the scenario vocabulary's names
 
 
 def make_pathloss(

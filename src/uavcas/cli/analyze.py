@@ -16,7 +16,7 @@ VIEW_HELP = "Flow view to use when the dataset holds several (5tuple | hostpair)
 
 
 def _load(path: Path, view: str | None = None):
-    from uavcas.ids.external import load_any
+    from uavcas.dataset.read import load_any
 
     try:
         return load_any(path, view=view)

@@ -23,7 +23,7 @@ def _parse_holdout(items: list[str]) -> tuple[tuple[str, str], ...]:
 
 @bench_app.command("ids")
 def ids_cmd(
-    dataset: Path = typer.Argument(..., help="Dataset directory (flows.parquet), or a CICIDS2017/UNSW-NB15 sample."),
+    dataset: Path = typer.Argument(..., help="Dataset directory (flows.parquet), the authors' CSV (*_ts.csv) or a CICIDS2017/UNSW-NB15 sample."),
     out: Path = typer.Option(..., "--out", help="Output directory."),
     protocol: str = typer.Option("multiclass", "--protocol", help="binary | multiclass | ood | cross-condition."),
     models: str = typer.Option("all", "--models", help="Comma-separated: lr,sgd,rf,mlp,lightgbm,cnn1d,lstm,convnet,tinyml,cnn_bilstm (or all)."),
@@ -32,11 +32,11 @@ def ids_cmd(
     holdout: list[str] = typer.Option([], "--holdout", help="AXIS=VALUE held out (cross-condition; repeatable)."),
     seed: int = typer.Option(0, "--seed"),
     threads: int = typer.Option(0, "--threads", min=0, help="Threads per model (0: cores available)."),
-    fmt: str = typer.Option("auto", "--format", help="auto | uavcas | cicids2017 | unsw-nb15."),
+    fmt: str = typer.Option("auto", "--format", help="auto | uavcas | uavcas-csv | cicids2017 | unsw-nb15."),
     view: str = typer.Option(None, "--view", help="Flow view when the dataset holds several (5tuple | hostpair)."),
 ) -> None:
     """Train and evaluate the baselines; writes results.csv/json/md (+ confusion matrices)."""
-    from uavcas.ids.external import load_any
+    from uavcas.dataset.read import load_any
     from uavcas.ids.models import MODELS
     from uavcas.ids.protocols import PROTOCOLS, SCALERS, BenchConfig, run_protocol
     from uavcas.ids.results import write_results

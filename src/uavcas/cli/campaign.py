@@ -49,7 +49,7 @@ def run_cmd(
 ) -> None:
     """Plan, emulate, extract and label every scenario; append each run's shard to the dataset."""
     from uavcas.campaign import CampaignError, read_manifest, run_campaign
-    from uavcas.dataset.schema import CLASSES
+    from uavcas.schema import CLASSES
 
     if preset is not None and manifest_file is not None:
         raise fail("give --preset or --manifest, not both")

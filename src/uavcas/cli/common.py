@@ -24,7 +24,10 @@ def plan_or_fail(config: str, seed: int, windows: int, window_s: float, profile:
     from uavcas.twin.profile import ProfileError
 
     try:
-        return make_plan(config, seed=seed, windows=windows, window_s=window_s, profile=profile)
+        p = make_plan(config, seed=seed, windows=windows, window_s=window_s, profile=profile)
+        if p.config != config:
+            err_console.print(f"note: scenario normalised to its canonical form {p.config}", highlight=False)
+        return p
     except ScenarioError as e:
         raise fail(str(e)) from None
     except ProfileError as e:

@@ -45,7 +45,7 @@ def flows_cmd(
 ) -> None:
     """Flows of one capture (or of several capture points, de-duplicated)."""
     from uavcas.flows import CSV_LEAD_COLUMNS, FlowConfig, extract_flows
-    from uavcas.dataset.schema import FEATURES
+    from uavcas.schema import FEATURES
 
     if fmt not in ("table", "csv", "parquet"):
         raise fail(f"--format: {fmt!r} is not one of table, csv, parquet")

@@ -7,40 +7,13 @@ the kernel is probed (in a throw-away namespace the probe removes) for the shape
 
 from __future__ import annotations
 
-import importlib.util
-import os
-import shutil
 import time
 from pathlib import Path
 
 import typer
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
-
 from .common import console, fail, plan_or_fail
-
-BASE_TOOLS = ("ip", "tc", "bridge", "nft", "iptables", "tcpdump", "nginx", "curl", "timeout", "bash")
-RUN_FILES = ("plan.json", "run.json", "attacks.jsonl", "shaping.jsonl")
-
-
-def preflight(plan, out: Path) -> str | None:
-    """The first reason this run cannot start, or None. Creates nothing."""
-    if os.geteuid() != 0:
-        return "uavcas run needs root (network namespaces, bridges, tc); run it as root"
-    if not Path("/proc/self/ns/net").exists():
-        return "this kernel has no network namespaces (/proc/self/ns/net is missing)"
-    families = {a.family for a in plan.attacks}
-    tools = list(BASE_TOOLS) + (["hping3"] if families & {"dos", "ddos"} else [])
-    missing = [t for t in tools if shutil.which(t) is None]
-    if missing:
-        return f"missing tool(s): {', '.join(missing)}; install them with scripts/setup.sh (as root)"
-    if "replay" in families and importlib.util.find_spec("scapy") is None:
-        return "replay needs python scapy in this environment (pip install scapy)"
-    if out.exists() and not out.is_dir():
-        return f"--out {out} exists and is not a directory"
-    if out.is_dir() and any(out.iterdir()) and not any((out / f).exists() for f in RUN_FILES):
-        return f"--out {out} is not empty and holds no uavcas run; choose an empty or new directory"
-    return None
 
 
 def run_cmd(
@@ -63,16 +36,16 @@ def run_cmd(
             check_prefix(prefix)
         except ValueError as e:
             raise fail(f"--prefix: {e}") from None
+    from uavcas.emulation.preflight import preflight
+
     reason = preflight(p, out)
     if reason:
         raise fail(reason)
-    from uavcas.emulation.probe import probe
+    from uavcas.emulation.preflight import probe_kernel
 
-    feats = probe()
-    if not feats.netns:
-        raise fail("cannot create network namespaces here (ip netns add failed)")
-    if feats.shaper == "none":
-        raise fail("no usable shaper on this kernel (need netem, or htb + nft numgen + NFQUEUE); see `uavcas doctor`")
+    feats, reason = probe_kernel()
+    if reason:
+        raise fail(reason)
 
     from uavcas.emulation.runner import RunOptions, realize
 
@@ -87,26 +60,28 @@ def run_cmd(
         task = progress.add_task("setting up", total=len(p.windows))
         t0 = [0.0]
 
-        def on_event(e: dict) -> None:
-            kind = e.get("kind")
-            if kind == "setup":
-                progress.update(task, description=f"setup {e['seconds']:.2f} s (prefix {e['prefix']})")
-            elif kind == "window":
-                t0[0] = e.get("t0_unix", t0[0])
-                progress.update(task, completed=e["window"],
-                                description=f"window {e['window'] + 1}/{e['n_windows']}")
-            elif kind == "attack" and e.get("event") in ("start", "stop"):
-                rel = e["t_unix"] - t0[0] if t0[0] else 0.0
-                more = f" ({e['syn_count']} SYNs)" if "syn_count" in e else ""
-                more += f" ({e['dropped_frames']} frames dropped)" if "dropped_frames" in e else ""
-                progress.console.print(f"  t={rel:6.2f} s  {e['event']:5s} {e['attack_id']}{more}", highlight=False)
-            elif kind == "attack" and e.get("event") == "rate":
-                progress.console.print(f"           rate {e['attack_id']} {e['attacker']}: {e['measured_pps']:.0f} pps "
-                                       f"(nominal {e['nominal_pps']:.0f}, hping3 -i u{e['hping_interval_us']})",
+        def on_event(e) -> None:
+            from uavcas.events import AttackLogged, AttackRate, RunDone, SetupDone, WindowApplied
+
+            if isinstance(e, SetupDone):
+                progress.update(task, description=f"setup {e.seconds:.2f} s (prefix {e.prefix})")
+            elif isinstance(e, WindowApplied):
+                t0[0] = e.t0_unix if e.t0_unix is not None else t0[0]
+                progress.update(task, completed=e.window, description=f"window {e.window + 1}/{e.n_windows}")
+            elif isinstance(e, AttackLogged) and e.record.event in ("start", "stop"):
+                r = e.record
+                rel = r.t_unix - t0[0] if t0[0] else 0.0
+                more = f" ({r.syn_count} SYNs)" if getattr(r, "syn_count", None) is not None else ""
+                more += f" ({r.dropped_frames} frames dropped)" if getattr(r, "dropped_frames", None) is not None else ""
+                progress.console.print(f"  t={rel:6.2f} s  {r.event:5s} {r.attack_id}{more}", highlight=False)
+            elif isinstance(e, AttackLogged) and isinstance(e.record, AttackRate):
+                r = e.record
+                progress.console.print(f"           rate {r.attack_id} {r.attacker}: {r.measured_pps:.0f} pps "
+                                       f"(nominal {r.nominal_pps:.0f}, hping3 -i u{r.hping_interval_us})",
                                        highlight=False)
-            elif kind == "done":
-                progress.update(task, completed=len(p.windows) if e["exit_status"] == 0 else None,
-                                description="done" if e["exit_status"] == 0 else e["reason"])
+            elif isinstance(e, RunDone):
+                progress.update(task, completed=len(p.windows) if e.exit_status == 0 else None,
+                                description="done" if e.exit_status == 0 else e.reason)
 
         started = time.time()
         try:
@@ -116,8 +91,8 @@ def run_cmd(
         except Exception as e:
             raise fail(f"run failed: {type(e).__name__}: {str(e).splitlines()[0] if str(e) else ''}", code=1) from None
     info = art.run_info
-    console.print(f"{len(art.pcaps)} pcaps, {info.get('packets_captured', 0)} packets captured, "
-                  f"{info.get('capture_drops')} dropped; wall {time.time() - started:.1f} s; "
+    console.print(f"{len(art.pcaps)} pcaps, {info.packets_captured if info else 0} packets captured, "
+                  f"{info.capture_drops if info else None} dropped; wall {time.time() - started:.1f} s; "
                   f"exit {art.exit_status} ({art.exit_reason})", highlight=False)
     if art.exit_status != 0:
         raise typer.Exit(art.exit_status)

@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from .schema import FEATURES
+from uavcas.schema import FEATURES
 
 US = 1e-6
 # our name -> (candidate source names after stripping spaces, unit factor)

@@ -18,7 +18,7 @@ import pyarrow.parquet as pq
 
 from uavcas.atomic import atomic_path
 
-from .schema import (
+from uavcas.schema import (
     AXIS_COLUMNS,
     COUNT_COLUMNS,
     FEATURES,

@@ -29,7 +29,7 @@ import pyarrow as pa
 
 from uavcas.atomic import atomic_path
 
-from .schema import FAMILIES, FAMILY_CLASS, FEATURES
+from uavcas.schema import FAMILIES, FAMILY_CLASS, FEATURES
 
 ID_COLS = ("flow_id", "src_ip", "src_port", "dst_ip", "dst_port", "protocol", "config")
 TS_ALIASES = {

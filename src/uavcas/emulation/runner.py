@@ -11,7 +11,7 @@ Cleanup always happens: the Emulation context manager tears down on exceptions, 
 (turned into SystemExit by the core) and Ctrl-C (KeyboardInterrupt); tools run in their own
 sessions so Ctrl-C reaches only us and we stop them in order. After kill -9, `uavcas clean`
 removes the run by its registry entry. The run directory's small files (attacks.jsonl,
-shaping.jsonl, run.json) are written atomically in every case, run.json last, with the exit
+shaping.jsonl, run.json: `uavcas.rundir.RunDir`) are written atomically in every case, run.json last, with the exit
 status (0 ok, 130 SIGINT, 128+n other signals, 1 error).
 """
 
@@ -21,18 +21,19 @@ import json
 import platform
 import shutil
 import statistics
-import sys
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from uavcas import __version__
 from uavcas.atomic import atomic_write_text
+from uavcas.attacks import family
+from uavcas.events import AttackLogged, Progress, RunDone, SetupDone, WindowApplied, attack_log_text
+from uavcas.rundir import CaptureRecord, RunDir, RunInfo
+from uavcas.versions import package_versions
 
 from .apps import capture
-from .apps.flood import CALIBRATE_AFTER_S, CALIBRATE_EVERY_S
 from .apps.traffic import BenignTraffic
 from .apps.versions import tool_versions
 from .attacks import AttackExecutor
@@ -40,9 +41,6 @@ from .emulation import Emulation
 
 if TYPE_CHECKING:
     from uavcas.twin.model import Plan
-
-RUN_FILES = ("plan.json", "run.json", "attacks.jsonl", "shaping.jsonl")
-
 
 @dataclass(frozen=True)
 class RunOptions:
@@ -61,24 +59,12 @@ class RunArtifacts:
     exit_status: int
     exit_reason: str
     pcaps: list[Path] = field(default_factory=list)
-    capture: list[dict] = field(default_factory=list)
-    run_info: dict = field(default_factory=dict)
+    capture: list[CaptureRecord] = field(default_factory=list)
+    run_info: RunInfo | None = None
 
     @property
-    def plan_path(self) -> Path:
-        return self.out_dir / "plan.json"
-
-    @property
-    def attacks_path(self) -> Path:
-        return self.out_dir / "attacks.jsonl"
-
-    @property
-    def shaping_path(self) -> Path:
-        return self.out_dir / "shaping.jsonl"
-
-    @property
-    def run_json(self) -> Path:
-        return self.out_dir / "run.json"
+    def run_dir(self) -> RunDir:
+        return RunDir(self.out_dir)
 
 
 @dataclass(order=True)
@@ -95,38 +81,35 @@ def schedule(plan: "Plan") -> list[_Event]:
         if a.stop_s <= a.start_s:  # empty window: nothing to do (and stop would precede start)
             continue
         ev += [_Event(a.start_s, 2, "start", a), _Event(a.stop_s, 0, "stop", a)]
-        if a.family in ("dos", "ddos"):
-            t = a.start_s + CALIBRATE_AFTER_S
-            while t < a.stop_s - 0.5:
-                ev.append(_Event(t, 3, "calibrate", a))
-                t += CALIBRATE_EVERY_S
+        ev += [_Event(t, 3, "calibrate", a) for t in family(a.family).calibration_times(a)]
     ev.append(_Event(plan.duration_s, 9, "end"))
     return sorted(ev)
 
 
 def prepare_out_dir(out: Path) -> None:
     """Create OUT, or reuse an empty one or a previous run's (its files are replaced)."""
+    rd = RunDir(out)
     out.mkdir(parents=True, exist_ok=True)
-    shutil.rmtree(out / "pcap", ignore_errors=True)
-    shutil.rmtree(out / "logs", ignore_errors=True)
-    for name in RUN_FILES:
-        (out / name).unlink(missing_ok=True)
-    (out / "pcap").mkdir()
+    shutil.rmtree(rd.pcap_dir, ignore_errors=True)
+    shutil.rmtree(rd.logs_dir, ignore_errors=True)
+    for f in rd.files():
+        f.unlink(missing_ok=True)
+    rd.pcap_dir.mkdir()
 
 
 def realize(plan: "Plan", out_dir: str | Path, options: RunOptions = RunOptions(),
-            on_event: Callable[[dict], None] | None = None, features=None) -> RunArtifacts:
+            on_event: Callable[[Progress], None] | None = None, features=None) -> RunArtifacts:
     """Realise `plan` into `out_dir` in real time (needs root). See the module docstring."""
     out = Path(out_dir)
     prepare_out_dir(out)
-    atomic_write_text(out / "plan.json", plan.to_json())
+    atomic_write_text(RunDir(out).plan_json, plan.to_json())
     notify = on_event or (lambda e: None)
     st = _State(plan, out, time.time())
     try:
         with Emulation(plan, prefix=options.prefix, features=features) as emu:
             st.emu = emu
             st.timings["setup_s"] = time.time() - st.wall0
-            notify({"kind": "setup", "prefix": emu.prefix, "seconds": st.timings["setup_s"]})
+            notify(SetupDone(prefix=emu.prefix, seconds=st.timings["setup_s"]))
             try:
                 _play(st, options, notify)
                 st.exit_status, st.exit_reason = 0, "ok"
@@ -145,7 +128,7 @@ def realize(plan: "Plan", out_dir: str | Path, options: RunOptions = RunOptions(
         raise
     finally:
         _write_outputs(st)
-        notify({"kind": "done", "exit_status": st.exit_status, "reason": st.exit_reason})
+        notify(RunDone(exit_status=st.exit_status, reason=st.exit_reason))
     return st.artifacts()
 
 
@@ -162,15 +145,16 @@ class _State:
         self.executor: AttackExecutor | None = None
         self.traffic: BenignTraffic | None = None
         self.captures: list[capture.Capture] = []
-        self.capture_stats: list[dict] = []
+        self.capture_stats: list[CaptureRecord] = []
         self.clients: list[dict] = []
         self.delay_stats: dict | None = None
         self.exit_status, self.exit_reason = 1, "not finished"
-        self.info: dict = {}
+        self.info: RunInfo | None = None
+        self.wind_down_errors: list[str] = []
 
     def artifacts(self) -> RunArtifacts:
         return RunArtifacts(self.out, self.t0, time.time() - self.wall0, self.exit_status, self.exit_reason,
-                            sorted((self.out / "pcap").glob("*.pcap")), self.capture_stats, self.info)
+                            RunDir(self.out).pcaps(), self.capture_stats, self.info)
 
 
 def _apply_window(st: _State, i: int) -> None:
@@ -183,21 +167,22 @@ def _apply_window(st: _State, i: int) -> None:
                        "timings_s": {k: round(v, 6) for k, v in rep.timings_s.items()}})
 
 
-def _play(st: _State, opt: RunOptions, notify: Callable[[dict], None]) -> None:
+def _play(st: _State, opt: RunOptions, notify: Callable[[Progress], None]) -> None:
     plan, emu = st.plan, st.emu
     work = emu.naming.run_dir / "apps"
     dur = plan.duration_s
     t = time.time()
-    st.captures = capture.start_all(emu, [n.name for n in plan.nodes], st.out / "pcap", work / "logs", dur + 120)
+    st.captures = capture.start_all(emu, [n.name for n in plan.nodes], RunDir(st.out).pcap_dir, work / "logs",
+                                    dur + 120)
     st.traffic = BenignTraffic(emu, plan, work, dur, telemetry_on=opt.telemetry, think_mean_s=opt.think_mean_s,
                                n_images=opt.n_images)
     st.traffic.start_servers()
-    st.executor = AttackExecutor(emu, plan, work, dur, on_event=lambda r: notify({"kind": "attack", **r}))
+    st.executor = AttackExecutor(emu, plan, work, dur, on_event=lambda r: notify(AttackLogged(record=r)))
     st.executor.prepare()
     st.timings["apps_s"] = time.time() - t
     _apply_window(st, 0)
     st.t0 = time.time()
-    notify({"kind": "window", "window": 0, "t0_unix": st.t0, "n_windows": len(plan.windows)})
+    notify(WindowApplied(window=0, t0_unix=st.t0, n_windows=len(plan.windows)))
     st.traffic.start_clients()
     for ev in schedule(plan):
         target = st.t0 + ev.t_s
@@ -207,7 +192,7 @@ def _play(st: _State, opt: RunOptions, notify: Callable[[dict], None]) -> None:
         t_ev = time.time()
         if ev.kind == "window":
             _apply_window(st, ev.obj)
-            notify({"kind": "window", "window": ev.obj, "n_windows": len(plan.windows)})
+            notify(WindowApplied(window=ev.obj, n_windows=len(plan.windows)))
         elif ev.kind == "start":
             st.executor.start(ev.obj)
         elif ev.kind == "stop":
@@ -227,7 +212,7 @@ def _wind_down(st: _State, opt: RunOptions) -> None:
                  lambda: st.executor and st.executor.collect(),
                  lambda: st.traffic and setattr(st, "clients", [c.to_dict() for c in st.traffic.stop()]),
                  lambda: setattr(st, "delay_stats", _delay_stats(st.emu)),
-                 lambda: setattr(st, "capture_stats", [c.to_dict() for c in capture.stop_all(st.captures)])):
+                 lambda: setattr(st, "capture_stats", capture.stop_all(st.captures))):
         try:
             step()
         except Exception as e:
@@ -237,9 +222,9 @@ def _wind_down(st: _State, opt: RunOptions) -> None:
     if opt.keep_logs and st.emu is not None:
         logs = st.emu.naming.run_dir / "apps" / "logs"
         if logs.is_dir():
-            shutil.copytree(logs, st.out / "logs", dirs_exist_ok=True)
+            shutil.copytree(logs, RunDir(st.out).logs_dir, dirs_exist_ok=True)
     st.timings["stop_s"] = time.time() - t
-    st.info["wind_down_errors"] = errors
+    st.wind_down_errors = errors
 
 
 def _delay_stats(emu: Emulation) -> dict | None:
@@ -249,39 +234,30 @@ def _delay_stats(emu: Emulation) -> dict | None:
 
 def _write_outputs(st: _State) -> None:
     ex = st.executor
-    lines = ex.log_lines() if ex else []
-    atomic_write_text(st.out / "attacks.jsonl", "".join(json.dumps(r) + "\n" for r in lines))
-    atomic_write_text(st.out / "shaping.jsonl", "".join(json.dumps(r) + "\n" for r in st.shaping))
+    rd = RunDir(st.out)
+    atomic_write_text(rd.attacks_jsonl, attack_log_text(ex.log_lines() if ex else []))
+    atomic_write_text(rd.shaping_jsonl, "".join(json.dumps(r) + "\n" for r in st.shaping))
     emu = st.emu
-    feats = emu.features.to_dict() if emu else None
     lat = st.lateness_ms
-    drops = [c.get("dropped_by_kernel") for c in st.capture_stats]
-    st.info.update({
-        "config": st.plan.config, "seed": st.plan.seed, "windows": len(st.plan.windows),
-        "window_s": st.plan.window_s, "prefix": emu.prefix if emu else None,
-        "t0_unix": st.t0, "t_end_unix": time.time(), "wall_s": round(time.time() - st.wall0, 3),
-        "exit_status": st.exit_status, "exit_reason": st.exit_reason,
-        "versions": _versions(), "tool_versions": tool_versions(), "kernel": platform.release(),
-        "kernel_features": feats, "shaper_backend": emu.backend if emu else None,
-        "timings": {**{k: round(v, 4) for k, v in st.timings.items()},
-                    "schedule_lateness_ms": {"max": round(max(lat), 3), "mean": round(statistics.fmean(lat), 3)}
-                    if lat else None},
-        "window_applies": st.windows,
-        "schedule": st.events,
-        "capture": st.capture_stats,
-        "capture_drops": sum(d for d in drops if d) if st.capture_stats else None,
-        "packets_captured": sum(c.get("captured") or 0 for c in st.capture_stats),
-        "http_clients": st.clients, "delay_daemon": st.delay_stats,
-        "attack_errors": ex.errors if ex else [],
-    })
-    atomic_write_text(st.out / "run.json", json.dumps(st.info, indent=1, default=str) + "\n")
-
-
-def _versions() -> dict:
-    out = {"uavcas": __version__, "python": sys.version.split()[0]}
-    for mod in ("scapy", "dpkt", "pydantic"):
-        try:
-            out[mod] = __import__(mod).__version__
-        except Exception:
-            out[mod] = None
-    return out
+    drops = [c.dropped_by_kernel for c in st.capture_stats]
+    now = time.time()
+    st.info = RunInfo(
+        config=st.plan.config, seed=st.plan.seed, windows=len(st.plan.windows), window_s=st.plan.window_s,
+        prefix=emu.prefix if emu else None, t0_unix=st.t0, t_end_unix=now, wall_s=round(now - st.wall0, 3),
+        exit_status=st.exit_status, exit_reason=st.exit_reason,
+        versions=package_versions("scapy", "dpkt", "pydantic"), tool_versions=tool_versions(),
+        kernel=platform.release(),
+        kernel_features=emu.features.to_dict() if emu else None, shaper_backend=emu.backend if emu else None,
+        timings={**{k: round(v, 4) for k, v in st.timings.items()},
+                 "schedule_lateness_ms": {"max": round(max(lat), 3), "mean": round(statistics.fmean(lat), 3)}
+                 if lat else None},
+        window_applies=st.windows,
+        schedule=st.events,
+        capture=st.capture_stats,
+        capture_drops=sum(d for d in drops if d) if st.capture_stats else None,
+        packets_captured=sum(c.captured or 0 for c in st.capture_stats),
+        http_clients=st.clients, delay_daemon=st.delay_stats,
+        attack_errors=ex.errors if ex else [],
+        wind_down_errors=st.wind_down_errors,
+    )
+    atomic_write_text(rd.run_json, st.info.to_json())

@@ -213,12 +213,12 @@ def delay_check(measured_ms: float, hops: list[HopConfig]) -> Check:
     return Check("one-way delay (median)", "ms", expected, expected, measured_ms, expected - tol, expected + tol)
 
 
-def loss_check(measured: float, n: int, hops: list[HopConfig]) -> Check:
+def loss_check(measured: float, n: int, hops: list[HopConfig], confidence: float = 0.99) -> Check:
     keep = 1.0
     for h in hops:
         keep *= 1 - h.loss
     expected = 1 - keep
-    lo, hi = binomial_interval(n, expected)
+    lo, hi = binomial_interval(n, expected, confidence)
     return Check(f"loss ({n} probes)", "%", expected * 100, expected * 100, measured * 100, lo * 100, hi * 100)
 
 

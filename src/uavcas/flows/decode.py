@@ -92,10 +92,11 @@ def decode(raw: RawCapture) -> tuple[dict[str, np.ndarray], DecodeStats]:
         ethertype[raw_ip] = np.where(ver == 4, ETH_IPV4, np.where(ver == 6, ETH_IPV6, 0))
     unsupported = tuple(sorted(set(np.unique(lt).tolist()) - set(SUPPORTED_LINKTYPES)))
 
-    version = g.u8(l3) >> 4
+    b0 = g.u8(l3)  # version and IHL share the first byte: gather it once
+    version = b0 >> 4
     is4 = (ethertype == ETH_IPV4) & (version == 4)
     is6 = (ethertype == ETH_IPV6) & (version == 6)
-    ihl = (g.u8(l3) & 0x0F).astype(np.int64) * 4
+    ihl = (b0 & 0x0F).astype(np.int64) * 4
     full4 = is4 & (ihl >= 20) & (l3 + ihl <= end)
     full6 = is6 & (l3 + 40 <= end)
     keep = full4 | full6

@@ -27,7 +27,7 @@ import numpy as np
 import pandas as pd
 import pyarrow as pa
 
-from uavcas.dataset.schema import ACTIVITY_TIMEOUT_S, FEATURES
+from uavcas.schema import ACTIVITY_TIMEOUT_S, FEATURES
 
 from .assemble import Flows
 from .packets import PacketTable, addresses_to_str

@@ -12,7 +12,7 @@ from collections.abc import Iterable
 import numpy as np
 import pandas as pd
 
-from uavcas.dataset import schema
+from uavcas import schema
 
 
 class MetadataLeakError(ValueError):

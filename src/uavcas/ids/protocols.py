@@ -14,7 +14,8 @@ from sklearn.metrics import confusion_matrix, f1_score, roc_auc_score
 from sklearn.preprocessing import MinMaxScaler, RobustScaler, StandardScaler
 from threadpoolctl import threadpool_limits
 
-from uavcas.dataset import schema
+from uavcas import schema
+from uavcas.vocabulary import families_of
 
 from .features import feature_matrix
 from .models import DEEP, DISPLAY, MODELS, fit_model, make_model
@@ -158,14 +159,6 @@ def run_multiclass(df: pd.DataFrame, cfg: BenchConfig) -> ProtocolResult:
     return res
 
 
-def composition(attacks: str) -> tuple[str, ...]:
-    """Families of a scenario's attack field: 'blackhole+dos=1000' -> ('blackhole', 'dos')."""
-    fams = {tok.split("=", 1)[0].strip().lower() for tok in str(attacks).split("+")}
-    fams.discard("benign")
-    fams.discard("")
-    return tuple(sorted(fams))
-
-
 def run_ood(df: pd.DataFrame, cfg: BenchConfig) -> ProtocolResult:
     """Train attack-vs-benign on single-attack configurations; AUROC per collaborative one.
 
@@ -175,7 +168,7 @@ def run_ood(df: pd.DataFrame, cfg: BenchConfig) -> ProtocolResult:
     res = ProtocolResult("ood")
     if "attacks" not in df.columns:
         raise ValueError("ood protocol needs the 'attacks' axis column (a uavcas dataset)")
-    comp = df["attacks"].map(composition)
+    comp = df["attacks"].map(families_of)
     single = (comp.map(len) <= 1).to_numpy()
     multi = ~single
     if not multi.any() or not single.any():

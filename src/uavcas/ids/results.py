@@ -57,7 +57,7 @@ def confusion_figure(res: ProtocolResult, path: Path) -> Path | None:
     """Confusion matrices (row-normalised) of the best and the worst model by macro F1."""
     if not res.confusion:
         return None
-    from uavcas.analysis.figures import plt, save_png
+    from uavcas.report.figure import plt, save_png
 
     df = results_frame(res)
     f1 = df[(df["metric"] == "f1_macro") & (df["class"] == "")].set_index("model")["value"]

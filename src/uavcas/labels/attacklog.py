@@ -1,6 +1,6 @@
 """The ground truth of one run, typed: attack windows and replay injections.
 
-Read from RUN_DIR/attacks.jsonl (authoritative: epoch times of the capture clock, see
+Read from RUN_DIR/attacks.jsonl through the `uavcas.events` records (authoritative: epoch times of the capture clock, see
 docs/formats.md). An attack of the plan with no `start` record in the log (e.g. a run that crashed
 before logging it) falls back to the plan: start/stop = run.json `t0_unix` + plan `start_s`/`stop_s`
 and the IPs of the plan's nodes; such windows carry `from_plan=True`. A `start` without `stop`
@@ -9,12 +9,11 @@ lasts until +inf (the end of the capture).
 
 from __future__ import annotations
 
-import json
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from uavcas.dataset.schema import FAMILIES
+from uavcas.events import AttackStart, AttackStop, Inject, RecordError, read_attack_records
 from uavcas.twin.model import Plan
 
 
@@ -54,64 +53,36 @@ class AttackLog:
         return [w for w in self.windows if w.family in families]
 
 
-def _need(rec: dict, key: str, where: str):
-    if key not in rec:
-        raise LabelError(f"{where}: record has no '{key}'")
-    return rec[key]
-
-
 def read_attack_log(path: Path, plan: Plan | None = None, t0_unix: float | None = None) -> AttackLog:
     """Parse attacks.jsonl (may be absent for a benign run) and fill gaps from the plan."""
-    starts: dict[str, dict] = {}
+    starts: dict[str, AttackStart] = {}
     stops: dict[str, float] = {}
     injections: list[Injection] = []
-    if path.exists():
-        for lineno, line in enumerate(path.read_text().splitlines(), 1):
-            if not line.strip():
-                continue
-            where = f"{path}:{lineno}"
-            try:
-                rec = json.loads(line)
-            except json.JSONDecodeError as exc:
-                raise LabelError(f"{where}: not JSON ({exc.msg})") from None
-            event = _need(rec, "event", where)
-            try:
-                if event == "start":
-                    fam = _need(rec, "family", where)
-                    if fam not in FAMILIES:
-                        raise LabelError(f"{where}: unknown family {fam!r}")
-                    starts[_need(rec, "attack_id", where)] = {**rec, "_where": where}
-                elif event == "stop":
-                    stops[_need(rec, "attack_id", where)] = float(_need(rec, "t_unix", where))
-                elif event == "inject":
-                    seq = rec.get("seq")
-                    injections.append(
-                        Injection(
-                            attack_id=str(_need(rec, "attack_id", where)),
-                            t_unix=float(_need(rec, "t_unix", where)),
-                            src_ip=str(_need(rec, "src_ip", where)),
-                            dst_ip=str(_need(rec, "dst_ip", where)),
-                            protocol=int(_need(rec, "protocol", where)),
-                            ip_id=int(_need(rec, "ip_id", where)),
-                            ttl=int(_need(rec, "ttl", where)),
-                            seq=None if seq is None else int(seq),
-                        )
-                    )
-            except (TypeError, ValueError) as exc:
-                if isinstance(exc, LabelError):
-                    raise
-                raise LabelError(f"{where}: bad field value ({exc})") from None
+    try:
+        records = read_attack_records(path) if path.exists() else []
+    except RecordError as exc:
+        raise LabelError(str(exc)) from None
+    for rec in records:
+        if isinstance(rec, AttackStart):
+            starts[rec.attack_id] = rec
+        elif isinstance(rec, AttackStop):
+            stops[rec.attack_id] = rec.t_unix
+        elif isinstance(rec, Inject):
+            injections.append(
+                Injection(attack_id=rec.attack_id, t_unix=rec.t_unix, src_ip=rec.src_ip, dst_ip=rec.dst_ip,
+                          protocol=rec.protocol, ip_id=rec.ip_id, ttl=rec.ttl, seq=rec.seq)
+            )
     windows: list[AttackWindow] = []
     for aid, rec in starts.items():
-        attackers = tuple(rec.get("attacker_ips") or _plan_ips(plan, rec.get("attackers", [])))
-        victims = tuple(rec.get("victim_ips") or _plan_ips(plan, rec.get("victims", [])))
+        attackers = tuple(rec.attacker_ips or _plan_ips(plan, rec.attackers))
+        victims = tuple(rec.victim_ips or _plan_ips(plan, rec.victims))
         windows.append(
             AttackWindow(
                 attack_id=aid,
-                family=rec["family"],
+                family=rec.family,
                 attacker_ips=attackers,
                 victim_ips=victims,
-                start_unix=float(_need(rec, "t_unix", rec["_where"])),
+                start_unix=rec.t_unix,
                 stop_unix=stops.get(aid, math.inf),
             )
         )

@@ -1,16 +1,9 @@
 """Ground-truth labels of flows from the run's attack log.
 
 Modes:
-- `ours` (default), how each family is decided:
-  * dos / ddos  -> "flood-packets": a flow is labelled when it carries at least one packet of the
-    flood, i.e. a TCP packet with SYN set and ACK clear, from one of the attack's attacker IPs to
-    one of its victim IPs, captured inside [start, stop) of that attack (packet-exact: the same
-    host pair outside the window, or answering SYN-ACKs alone, do not make a flood flow).
-  * replay      -> "replay-injections": a flow carries a packet matching an `inject` record on
-    (src_ip, dst_ip, ip_id, ttl, and seq for TCP) captured within REPLAY_MATCH_TOLERANCE_S of the
-    record's t_unix (packet-exact).
-  * blackhole / wormhole -> "victim-window": a flow to or from a victim IP whose lifetime
-    [first_ts, last_ts] overlaps the attack window [start, stop).
+- `ours` (default): each family's own ground-truth rule (`AttackFamily.truth` in
+  `uavcas.attacks.<family>`: packet-exact SYN floods, packet-exact replay injections, or flows
+  touching a victim during the attack window); label_source names the rules that fired.
 - `paper` (the authors' IP membership): a flow gets a family when its source or destination IP is
   one of the attack's attacker or victim IPs, over the whole run (no time gating);
   label_source "ip-membership".
@@ -22,105 +15,76 @@ by '+' in the order of SOURCES, or "none").
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
 import pandas as pd
 
-from uavcas.dataset.schema import FAMILIES, class_name
+from uavcas.attacks import families, family
 from uavcas.flows.assemble import Flows
 from uavcas.flows.packets import PacketTable, address_to_words
+from uavcas.schema import FAMILIES, class_name
 
-from .attacklog import AttackLog
+from .attacklog import AttackLog, AttackWindow
 
 LabelMode = Literal["ours", "paper"]
 LABEL_MODES: tuple[str, ...] = ("ours", "paper")
-REPLAY_MATCH_TOLERANCE_S = 1.0
-SOURCES: tuple[str, ...] = ("flood-packets", "replay-injections", "victim-window", "ip-membership")
-FAMILY_SOURCE = {
-    "dos": "flood-packets",
-    "ddos": "flood-packets",
-    "replay": "replay-injections",
-    "blackhole": "victim-window",
-    "wormhole": "victim-window",
-}
-TCP_SYN, TCP_ACK = 0x02, 0x10
+PAPER_SOURCE = "ip-membership"
+# Order of the parts of a label_source value (fixed: datasets compare across versions).
+SOURCES: tuple[str, ...] = ("flood-packets", "replay-injections", "victim-window", PAPER_SOURCE)
+assert {f.label_source for f in families()} <= set(SOURCES), "a family's label_source is missing from SOURCES"
 
 
-def _addr_mask(hi: np.ndarray, lo: np.ndarray, ips) -> np.ndarray:
-    mask = np.zeros(hi.shape[0], dtype=bool)
-    for ip in ips:
-        h, l = address_to_words(ip)
-        mask |= (hi == np.uint64(h)) & (lo == np.uint64(l))
-    return mask
+@dataclass
+class TruthContext:
+    """What a family's ground-truth rule may look at: the run's packets, flows and attack log."""
 
+    packets: PacketTable
+    flows: Flows
+    frame: pd.DataFrame
+    log: AttackLog
 
-def _flows_of(packet_flow: np.ndarray, mask: np.ndarray) -> np.ndarray:
-    f = packet_flow[mask]
-    return np.unique(f[f >= 0])
+    def __post_init__(self) -> None:
+        self.n_flows = self.flows.n_flows
+        self._packet_flow = self.flows.packet_flow(len(self.packets))
 
-
-def _replay_packets(p: PacketTable, log: AttackLog) -> np.ndarray:
-    """Mask of packets that match an inject record (see module rules)."""
-    mask = np.zeros(len(p), dtype=bool)
-    if not log.injections or len(p) == 0:
+    def _addr_mask(self, hi: np.ndarray, lo: np.ndarray, ips) -> np.ndarray:
+        mask = np.zeros(hi.shape[0], dtype=bool)
+        for ip in ips:
+            h, l = address_to_words(ip)
+            mask |= (hi == np.uint64(h)) & (lo == np.uint64(l))
         return mask
-    inj = pd.DataFrame(
-        {
-            "src": [address_to_words(i.src_ip)[1] for i in log.injections],
-            "dst": [address_to_words(i.dst_ip)[1] for i in log.injections],
-            "src_hi": [address_to_words(i.src_ip)[0] for i in log.injections],
-            "dst_hi": [address_to_words(i.dst_ip)[0] for i in log.injections],
-            "ip_id": [i.ip_id for i in log.injections],
-            "ttl": [i.ttl for i in log.injections],
-            "seqk": [-1 if (i.seq is None or i.protocol != 6) else i.seq for i in log.injections],
-            "t_inj": [i.t_unix for i in log.injections],
-        }
-    ).astype({"src": np.uint64, "dst": np.uint64, "src_hi": np.uint64, "dst_hi": np.uint64, "ip_id": np.int64, "ttl": np.int64, "seqk": np.int64})
-    cand = np.flatnonzero(np.isin(p["src_lo"], inj["src"].to_numpy()))
-    pk = pd.DataFrame(
-        {
-            "row": cand,
-            "src": p["src_lo"][cand],
-            "dst": p["dst_lo"][cand],
-            "src_hi": p["src_hi"][cand],
-            "dst_hi": p["dst_hi"][cand],
-            "ip_id": p["ip_id"][cand].astype(np.int64),
-            "ttl": p["ttl"][cand].astype(np.int64),
-            "seqk": np.where(p["proto"][cand] == 6, p["tcp_seq"][cand].astype(np.int64), -1),
-            "ts": p["ts_s"][cand],
-        }
-    )
-    m = pk.merge(inj, on=["src", "dst", "src_hi", "dst_hi", "ip_id", "ttl", "seqk"], how="inner")
-    hit = m.loc[(m["ts"] - m["t_inj"]).abs() <= REPLAY_MATCH_TOLERANCE_S, "row"].to_numpy()
-    mask[hit] = True
-    return mask
+
+    def packets_from(self, ips) -> np.ndarray:
+        return self._addr_mask(self.packets["src_hi"], self.packets["src_lo"], ips)
+
+    def packets_to(self, ips) -> np.ndarray:
+        return self._addr_mask(self.packets["dst_hi"], self.packets["dst_lo"], ips)
+
+    def flows_with(self, packet_mask: np.ndarray) -> np.ndarray:
+        """Flow mask: the flows holding at least one of the masked packets."""
+        f = self._packet_flow[packet_mask]
+        hits = np.zeros(self.n_flows, dtype=bool)
+        hits[np.unique(f[f >= 0])] = True
+        return hits
+
+    def victim_window(self, windows: list[AttackWindow]) -> np.ndarray:
+        """Flows to or from a victim IP whose lifetime [first_ts, last_ts] overlaps [start, stop)."""
+        src = self.frame["src_ip"].to_numpy(dtype=object)
+        dst = self.frame["dst_ip"].to_numpy(dtype=object)
+        first, last = self.frame["first_ts"].to_numpy(), self.frame["last_ts"].to_numpy()
+        hits = np.zeros(len(self.frame), dtype=bool)
+        for w in windows:
+            victims = np.asarray(w.victim_ips, dtype=object)
+            touches = np.isin(src, victims) | np.isin(dst, victims)
+            hits |= touches & (first < w.stop_unix) & (last >= w.start_unix)
+        return hits
 
 
 def _family_flows_ours(p: PacketTable, fl: Flows, frame: pd.DataFrame, log: AttackLog) -> dict[str, np.ndarray]:
-    n = fl.n_flows
-    pflow = fl.packet_flow(len(p))
-    hits = {f: np.zeros(n, dtype=bool) for f in FAMILIES}
-    syn_only = (p["proto"] == 6) & ((p["tcp_flags"] & (TCP_SYN | TCP_ACK)) == TCP_SYN)
-    for w in log.of_family("dos", "ddos"):
-        mask = (
-            syn_only
-            & (p["ts_s"] >= w.start_unix)
-            & (p["ts_s"] < w.stop_unix)
-            & _addr_mask(p["src_hi"], p["src_lo"], w.attacker_ips)
-            & _addr_mask(p["dst_hi"], p["dst_lo"], w.victim_ips)
-        )
-        hits[w.family][_flows_of(pflow, mask)] = True
-    if log.injections:
-        hits["replay"][_flows_of(pflow, _replay_packets(p, log))] = True
-    src = frame["src_ip"].to_numpy(dtype=object)
-    dst = frame["dst_ip"].to_numpy(dtype=object)
-    first, last = frame["first_ts"].to_numpy(), frame["last_ts"].to_numpy()
-    for w in log.of_family("blackhole", "wormhole"):
-        victims = np.asarray(w.victim_ips, dtype=object)
-        touches = np.isin(src, victims) | np.isin(dst, victims)
-        hits[w.family] |= touches & (first < w.stop_unix) & (last >= w.start_unix)
-    return hits
+    ctx = TruthContext(p, fl, frame, log)
+    return {f.name: f.truth(ctx, log.of_family(f.name)) for f in families()}
 
 
 def _family_flows_paper(frame: pd.DataFrame, log: AttackLog) -> dict[str, np.ndarray]:
@@ -153,9 +117,9 @@ def label_flows(
         if not fams:
             src_names[c] = "none"
         elif mode == "paper":
-            src_names[c] = "ip-membership"
+            src_names[c] = PAPER_SOURCE
         else:
-            used = {FAMILY_SOURCE[f] for f in fams}
+            used = {family(f).label_source for f in fams}
             src_names[c] = "+".join(s for s in SOURCES if s in used)
     out["label"] = pd.Series(code).map(names).to_numpy(dtype=object)
     out["label_source"] = pd.Series(code).map(src_names).to_numpy(dtype=object)

@@ -14,8 +14,7 @@ from typing import Literal, Optional
 
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
-MissionKind = Literal["spiral", "grid", "hover_transit", "random"]
-MISSION_KINDS: tuple[str, ...] = ("spiral", "grid", "hover_transit", "random")
+from uavcas.vocabulary import MISSIONS as MISSION_KINDS  # the one list of missions
 
 
 class _Params(BaseModel):
@@ -133,11 +132,10 @@ class GaussMarkovParams(_Params):
 MissionParams = SpiralParams | GridParams | HoverTransitParams | GaussMarkovParams
 
 PARAMS_BY_KIND: dict[str, type[_Params]] = {
-    "spiral": SpiralParams,
-    "grid": GridParams,
-    "hover_transit": HoverTransitParams,
-    "random": GaussMarkovParams,
+    c.model_fields["kind"].default: c for c in (SpiralParams, GridParams, HoverTransitParams, GaussMarkovParams)
 }
+if set(PARAMS_BY_KIND) != set(MISSION_KINDS):
+    raise ImportError(f"mission parameter models {sorted(PARAMS_BY_KIND)} != vocabulary {sorted(MISSION_KINDS)}")
 
 
 class MobilityProfile(BaseModel):

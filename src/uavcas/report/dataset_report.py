@@ -13,15 +13,15 @@ import html
 import json
 from pathlib import Path
 
-import matplotlib
+import numpy as np
+import pandas as pd
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-import pandas as pd  # noqa: E402
+from uavcas.atomic import atomic_write_text
+from uavcas.schema import AXIS_COLUMNS, CLASSES
 
-from uavcas.atomic import atomic_path, atomic_write_text  # noqa: E402
-from uavcas.dataset.schema import AXIS_COLUMNS, CLASSES  # noqa: E402
+from .figure import plt, save_png
+
+_DPI = 100
 
 # Features shown per class: time structure, volume and size, the ones the paper's figures use.
 SHOWN_FEATURES = ("Flow IAT Mean", "Flow Packets/s", "Flow Duration", "Packet Length Mean", "Total Fwd Packets", "SYN Flag Count")
@@ -29,13 +29,6 @@ SHOWN_FEATURES = ("Flow IAT Mean", "Flow Packets/s", "Flow Duration", "Packet Le
 
 class ReportError(ValueError):
     pass
-
-
-def _save(fig, path: Path) -> Path:
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, format="png", dpi=100, bbox_inches="tight")
-    plt.close(fig)
-    return path
 
 
 def _feature_figure(df: pd.DataFrame, out: Path) -> list[Path]:
@@ -62,7 +55,7 @@ def _feature_figure(df: pd.DataFrame, out: Path) -> list[Path]:
         ax.set_ylabel(f"log10({feat})")
         ax.set_title(f"{feat} per class", fontsize=10)
         safe = feat.replace("/", "_per_").replace(" ", "_")
-        paths.append(_save(fig, out / f"feature_{safe}.png"))
+        paths.append(save_png(fig, out / f"feature_{safe}.png", dpi=_DPI))
     return paths
 
 

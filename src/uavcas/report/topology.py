@@ -4,14 +4,11 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import matplotlib
+from matplotlib.collections import LineCollection
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-from matplotlib.collections import LineCollection  # noqa: E402
+from uavcas.twin.model import Plan, Window
 
-from uavcas.atomic import atomic_path  # noqa: E402
-from uavcas.twin.model import Plan, Window  # noqa: E402
+from .figure import plt, save_png
 
 
 def _roles(plan: Plan, w: Window) -> dict[str, str]:
@@ -70,8 +67,6 @@ def draw_plan_windows(plan: Plan, out_dir: str | Path) -> list[Path]:
         fig.colorbar(sm, ax=ax, ticks=range(7), label="MCS (grey: wired backhaul)")
         fig.suptitle(plan.config, fontsize=8)
         path = out_dir / f"topology_w{w.index:02d}.png"
-        with atomic_path(path) as tmp:
-            fig.savefig(tmp, format="png")
-        plt.close(fig)
-        paths.append(path)
+        # full canvas at the figure's dpi: every window's PNG has the same size and axes
+        paths.append(save_png(fig, path, dpi="figure", tight=False))
     return paths

@@ -2,101 +2,55 @@
 
 `<attacks>-<n_uav>-<n_bs>-<payload>-<pathloss>-<modulation>-<mission>-<tx_dbm>-<noise>`, e.g.
 `blackhole+dos=1000-20-2-image-logdist-adaptive-random-30-95` (noise 95 means -95 dBm).
-Parsing then formatting gives the input back byte for byte; anything else is refused with a
+The words come from `uavcas.vocabulary`; each attack token is parsed by its family
+(`uavcas.attacks`). The form is canonical: attack tokens are ordered as the vocabulary orders
+the families, so `dos=1000+blackhole-...` is normalised to `blackhole+dos=1000-...` (the same
+scenario, hence the same plan). Any other deviation (leading zeros, ...) is refused with a
 one-line `ScenarioError` naming the field at fault.
 """
 
 from __future__ import annotations
 
 import re
-from typing import Annotated, Literal, Union
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, ConfigDict, Field, field_validator
 
-FIELD_NAMES = (
-    "attacks",
-    "n_uav",
-    "n_bs",
-    "payload",
-    "pathloss",
-    "modulation",
-    "mission",
-    "tx_dbm",
-    "noise",
+from uavcas.attacks import AttackSpec, ScenarioError, family
+from uavcas.attacks.base import choice, int_field
+from uavcas.vocabulary import (
+    BENIGN_TOKEN,
+    FAMILIES,
+    FIELD_NAMES,
+    MISSIONS,
+    PATHLOSS_MODELS,
+    PAYLOADS,
+    Mission,
+    Pathloss,
+    Payload,
 )
-PAYLOADS = ("image", "telemetry", "mixed")
-PATHLOSS_MODELS = ("logdist", "3gpp", "uma", "rma", "umi", "tworay", "freespace")
-MISSIONS = ("spiral", "grid", "hover_transit", "random")
-SEQ_MODES = ("inc", "rand", "zero")
-# Canonical token order (alphabetical by family) = the order of the paper's composition names.
-FAMILY_ORDER = ("blackhole", "ddos", "dos", "replay", "wormhole")
 
-_INT = re.compile(r"^(0|[1-9][0-9]*)$")
+__all__ = ["AttackSpec", "FIELD_NAMES", "Scenario", "ScenarioError", "attacks_of", "canonical", "parse"]
+
 _MCS = re.compile(r"^mcs([0-6])$")
 
 
-class ScenarioError(ValueError):
-    """A malformed scenario string; the message is one line and names the bad field."""
-
-
-class _Frozen(BaseModel):
+class Scenario(BaseModel):
     model_config = ConfigDict(frozen=True, extra="forbid")
 
-
-class Flood(_Frozen):
-    family: Literal["dos", "ddos"]
-    interval_us: int = Field(gt=0)  # hping3 inter-packet interval: 1000 us ~ 1,000 SYN/s nominal
-
-    @property
-    def nominal_pps(self) -> float:
-        return 1e6 / self.interval_us
-
-    def token(self) -> str:
-        return f"{self.family}={self.interval_us}"
-
-
-class Blackhole(_Frozen):
-    family: Literal["blackhole"] = "blackhole"
-
-    def token(self) -> str:
-        return "blackhole"
-
-
-class Wormhole(_Frozen):
-    family: Literal["wormhole"] = "wormhole"
-
-    def token(self) -> str:
-        return "wormhole"
-
-
-class Replay(_Frozen):
-    family: Literal["replay"] = "replay"
-    buffer_pkts: int = Field(gt=0)
-    delay_ms: int = Field(ge=0)
-    rate_pps: int = Field(gt=0)
-    ttl_dec: int = Field(ge=0, le=254)
-    seq_mode: Literal["inc", "rand", "zero"]
-
-    def token(self) -> str:
-        return (
-            f"replay={self.buffer_pkts},{self.delay_ms},{self.rate_pps},"
-            f"{self.ttl_dec},{self.seq_mode}"
-        )
-
-
-AttackSpec = Annotated[Union[Flood, Blackhole, Wormhole, Replay], Field(discriminator="family")]
-
-
-class Scenario(_Frozen):
-    attacks: tuple[AttackSpec, ...] = ()  # empty = benign
+    attacks: tuple[AttackSpec, ...] = ()  # empty = benign; canonical family order
     n_uav: int = Field(ge=1, le=250)
     n_bs: int = Field(ge=1, le=16)
-    payload: Literal["image", "telemetry", "mixed"] = "image"
-    pathloss: Literal["logdist", "3gpp", "uma", "rma", "umi", "tworay", "freespace"] = "logdist"
+    payload: Payload = "image"
+    pathloss: Pathloss = "logdist"
     modulation: str = "adaptive"  # "adaptive" or a fixed level "mcs0".."mcs6"
-    mission: Literal["spiral", "grid", "hover_transit", "random"] = "random"
+    mission: Mission = "random"
     tx_dbm: int = 30
     noise: int = 95  # positive magnitude: the noise floor is -noise dBm
+
+    @field_validator("attacks")
+    @classmethod
+    def _canonical_order(cls, v: tuple) -> tuple:
+        return tuple(sorted(v, key=lambda a: FAMILIES.index(a.family)))
 
     @property
     def noise_dbm(self) -> float:
@@ -111,18 +65,21 @@ class Scenario(_Frozen):
         m = _MCS.match(self.modulation)
         return int(m.group(1)) if m else None
 
-    def attack(self, family: str):
+    def attack(self, name: str):
         for a in self.attacks:
-            if a.family == family:
+            if a.family == name:
                 return a
         return None
 
+    @property
+    def attacks_token(self) -> str:
+        return "+".join(a.token() for a in self.attacks) or BENIGN_TOKEN
+
     def to_string(self) -> str:
-        attacks = "+".join(a.token() for a in self.attacks) or "benign"
         return "-".join(
             str(v)
             for v in (
-                attacks,
+                self.attacks_token,
                 self.n_uav,
                 self.n_bs,
                 self.payload,
@@ -142,9 +99,9 @@ class Scenario(_Frozen):
         return parse(text)
 
     def axes(self) -> dict[str, object]:
-        """Axis values as flat columns (for datasets and per-axis analysis)."""
+        """Axis values as flat columns (for datasets and per-axis analysis): vocabulary.AXIS_COLUMNS."""
         return {
-            "attacks": "+".join(a.token() for a in self.attacks) or "benign",
+            "attacks": self.attacks_token,
             "n_uav": self.n_uav,
             "n_bs": self.n_bs,
             "payload": self.payload,
@@ -156,53 +113,38 @@ class Scenario(_Frozen):
         }
 
 
-def _int_field(name: str, raw: str, lo: int, hi: int) -> int:
-    if not _INT.match(raw):
-        raise ScenarioError(f"field '{name}': expected a non-negative integer, got {raw!r}")
-    v = int(raw)
-    if not lo <= v <= hi:
-        raise ScenarioError(f"field '{name}': {v} is outside [{lo}, {hi}]")
-    return v
-
-
-def _choice(name: str, raw: str, choices: tuple[str, ...]) -> str:
-    if raw not in choices:
-        raise ScenarioError(f"field '{name}': {raw!r} is not one of {', '.join(choices)}")
-    return raw
-
-
 def _parse_attack(tok: str):
     name, eq, arg = tok.partition("=")
-    if name in ("dos", "ddos"):
-        if not eq:
-            raise ScenarioError(f"field 'attacks': {name} needs an interval in us, e.g. {name}=1000")
-        return Flood(family=name, interval_us=_int_field(f"attacks.{name}", arg, 1, 10_000_000))
-    if name in ("blackhole", "wormhole"):
-        if eq:
-            raise ScenarioError(f"field 'attacks': {name} takes no value, got {tok!r}")
-        return Blackhole() if name == "blackhole" else Wormhole()
-    if name == "replay":
-        parts = arg.split(",") if eq else []
-        if len(parts) != 5:
-            raise ScenarioError(
-                "field 'attacks': replay needs 5 values "
-                f"<buffer>,<delay_ms>,<pps>,<ttl_dec>,<inc|rand|zero>, got {tok!r}"
-            )
-        buf, delay, pps, ttl, mode = parts
-        return Replay(
-            buffer_pkts=_int_field("attacks.replay.buffer", buf, 1, 1_000_000),
-            delay_ms=_int_field("attacks.replay.delay_ms", delay, 0, 3_600_000),
-            rate_pps=_int_field("attacks.replay.pps", pps, 1, 1_000_000),
-            ttl_dec=_int_field("attacks.replay.ttl_dec", ttl, 0, 254),
-            seq_mode=_choice("attacks.replay.seq_mode", mode, SEQ_MODES),
-        )
-    raise ScenarioError(
-        f"field 'attacks': unknown attack token {tok!r} "
-        "(benign, dos=<us>, ddos=<us>, blackhole, wormhole, replay=<buf>,<ms>,<pps>,<ttl>,<mode>)"
-    )
+    if name not in FAMILIES:
+        forms = ", ".join([BENIGN_TOKEN] + [family(f).usage for f in FAMILIES])
+        raise ScenarioError(f"field 'attacks': unknown attack token {tok!r} ({forms})")
+    spec = family(name).parse(arg if eq else None, tok)
+    if spec.token() != tok:  # e.g. leading zeros; the token must read back as written
+        raise ScenarioError(f"field 'attacks': {tok!r} is not in canonical form ({spec.token()!r})")
+    return spec
+
+
+def attacks_of(field: str) -> tuple:
+    """The specs of a scenario's attacks field ('benign' -> ()), in canonical order."""
+    if field == BENIGN_TOKEN:
+        return ()
+    toks = field.split("+")
+    if any(t == "" for t in toks):
+        raise ScenarioError(f"field 'attacks': empty token in {field!r}")
+    if BENIGN_TOKEN in toks:
+        raise ScenarioError(f"field 'attacks': '{BENIGN_TOKEN}' cannot be combined with attacks")
+    attacks = tuple(_parse_attack(t) for t in toks)
+    fams = [a.family for a in attacks]
+    if len(set(fams)) != len(fams):
+        raise ScenarioError(f"field 'attacks': a family appears twice in {field!r}")
+    floods = [f for f in fams if family(f).routes_attack_traffic]
+    if len(floods) > 1:
+        raise ScenarioError(f"field 'attacks': {' and '.join(sorted(floods))} cannot be combined (use one)")
+    return tuple(sorted(attacks, key=lambda a: FAMILIES.index(a.family)))
 
 
 def parse(text: str) -> Scenario:
+    """The scenario of `text`; an out-of-order attack field is normalised (see `canonical`)."""
     if not isinstance(text, str) or not text:
         raise ScenarioError("scenario: empty string")
     fields = text.split("-")
@@ -212,41 +154,36 @@ def parse(text: str) -> Scenario:
             f"({'-'.join(FIELD_NAMES)}), got {len(fields)} in {text!r}"
         )
     raw = dict(zip(FIELD_NAMES, fields))
-    if raw["attacks"] == "benign":
-        attacks: tuple = ()
-    else:
-        toks = raw["attacks"].split("+")
-        if any(t == "" for t in toks):
-            raise ScenarioError(f"field 'attacks': empty token in {raw['attacks']!r}")
-        if "benign" in toks:
-            raise ScenarioError("field 'attacks': 'benign' cannot be combined with attacks")
-        attacks = tuple(_parse_attack(t) for t in toks)
-        fams = [a.family for a in attacks]
-        if len(set(fams)) != len(fams):
-            raise ScenarioError(f"field 'attacks': a family appears twice in {raw['attacks']!r}")
-        if {"dos", "ddos"} <= set(fams):
-            raise ScenarioError("field 'attacks': dos and ddos cannot be combined (use ddos)")
+    attacks = attacks_of(raw["attacks"])
     modulation = raw["modulation"]
     if modulation != "adaptive" and not _MCS.match(modulation):
         raise ScenarioError(
             f"field 'modulation': {modulation!r} is not 'adaptive' or a fixed level mcs0..mcs6"
         )
-    n_uav = _int_field("n_uav", raw["n_uav"], 1, 250)
-    if attacks and n_uav < 2:
-        raise ScenarioError("field 'n_uav': an attack needs at least 2 UAVs (attacker + victim)")
-    if any(a.family == "ddos" for a in attacks) and n_uav < 3:
-        raise ScenarioError("field 'n_uav': ddos needs at least 3 UAVs (2 attackers + 1 victim)")
+    n_uav = int_field("n_uav", raw["n_uav"], 1, 250)
+    for a in attacks:
+        need = family(a.family).min_uavs
+        if n_uav < need:
+            raise ScenarioError(f"field 'n_uav': {a.family} needs at least {need} UAVs (attackers + victim)")
     sc = Scenario(
         attacks=attacks,
         n_uav=n_uav,
-        n_bs=_int_field("n_bs", raw["n_bs"], 1, 16),
-        payload=_choice("payload", raw["payload"], PAYLOADS),
-        pathloss=_choice("pathloss", raw["pathloss"], PATHLOSS_MODELS),
+        n_bs=int_field("n_bs", raw["n_bs"], 1, 16),
+        payload=choice("payload", raw["payload"], PAYLOADS),
+        pathloss=choice("pathloss", raw["pathloss"], PATHLOSS_MODELS),
         modulation=modulation,
-        mission=_choice("mission", raw["mission"], MISSIONS),
-        tx_dbm=_int_field("tx_dbm", raw["tx_dbm"], 0, 60),
-        noise=_int_field("noise", raw["noise"], 30, 200),
+        mission=choice("mission", raw["mission"], MISSIONS),
+        tx_dbm=int_field("tx_dbm", raw["tx_dbm"], 0, 60),
+        noise=int_field("noise", raw["noise"], 30, 200),
     )
-    if sc.to_string() != text:  # e.g. leading zeros are refused by _INT already; belt and braces
+    # Only the order of attack tokens may differ from the canonical form; e.g. leading zeros are
+    # refused by int_field already (belt and braces).
+    expected = "-".join([sc.attacks_token] + fields[1:])
+    if sc.to_string() != expected:
         raise ScenarioError(f"scenario: {text!r} is not in canonical form ({sc.to_string()!r})")
     return sc
+
+
+def canonical(text: str) -> str:
+    """The canonical form of a scenario string (attack tokens in vocabulary order)."""
+    return parse(text).to_string()

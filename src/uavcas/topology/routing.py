@@ -25,7 +25,7 @@ class Topology:
     """Active links of one window, as sorted index pairs, and why each exists."""
 
     edges: tuple[Edge, ...]
-    reasons: tuple[str, ...]  # "nearest", "bridge", "backhaul", "wormhole" per edge
+    reasons: tuple[str, ...]  # "nearest", "bridge", "backhaul", "detour" per edge
     overrides: tuple[tuple[int, int, int], ...] = ()  # (victim, attacker, bs) wormhole detours
 
     def adjacency(self, n: int) -> list[list[int]]:
@@ -107,8 +107,8 @@ def with_wormholes(
         if victim == attacker or is_bs[victim] or is_bs[attacker]:
             raise ValueError("wormhole victim and attacker must be two different UAVs")
         b = int(bs[int(np.argmin(dist[attacker, bs]))])
-        edges.setdefault(_edge(victim, attacker), "wormhole")
-        edges.setdefault(_edge(attacker, b), "wormhole")
+        edges.setdefault(_edge(victim, attacker), "detour")
+        edges.setdefault(_edge(attacker, b), "detour")
         overrides.append((victim, attacker, b))
     order = sorted(edges)
     return Topology(tuple(order), tuple(edges[e] for e in order), tuple(overrides))

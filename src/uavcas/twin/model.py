@@ -7,15 +7,18 @@ consumed by the emulator (`uavcas.emulation`), the labeller and the reports. Its
 
 from __future__ import annotations
 
-from typing import Literal
+from typing import Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, ConfigDict, Field, model_validator
+
+from uavcas.attacks import AttackSpec, family
+from uavcas.scenario.codec import Scenario, ScenarioError
+from uavcas.vocabulary import FAMILIES, Family
 
 SCHEMA_VERSION = 1
 
 NodeKind = Literal["uav", "bs"]
 LinkKind = Literal["air", "backhaul"]
-Family = Literal["dos", "ddos", "blackhole", "wormhole", "replay"]
 
 
 class _Frozen(BaseModel):
@@ -90,11 +93,28 @@ class Attack(_Frozen):
     start_s: float
     stop_s: float
     params: dict[str, float | int | str] = Field(default_factory=dict)
+    spec: AttackSpec  # the scenario's typed token of this family
+
+    @model_validator(mode="before")
+    @classmethod
+    def _spec_from_params(cls, data: Any) -> Any:
+        # plan.json written before attacks carried their spec, and hand-made attacks
+        if isinstance(data, dict) and data.get("spec") is None and data.get("family") in FAMILIES:
+            data = {**data, "spec": family(data["family"]).spec_from_params(data.get("params") or {})}
+        return data
+
+    @model_validator(mode="after")
+    def _spec_matches(self) -> "Attack":
+        if self.spec.family != self.family:
+            raise ValueError(f"attack {self.attack_id}: spec of {self.spec.family!r} on a {self.family!r} attack")
+        return self
 
 
 class Plan(_Frozen):
     schema_version: int = SCHEMA_VERSION
     config: str  # the scenario string, canonical form
+    # Its typed axes and attack specs (None for hand-made plans whose config is no scenario).
+    scenario: Scenario | None = None
     seed: int
     window_s: float
     profile: str  # channel/mobility profile name the plan was made with
@@ -102,6 +122,17 @@ class Plan(_Frozen):
     nodes: list[Node]
     windows: list[Window]
     attacks: list[Attack]
+
+    @model_validator(mode="before")
+    @classmethod
+    def _scenario_from_config(cls, data: Any) -> Any:
+        # plan.json written before plans carried the typed scenario
+        if isinstance(data, dict) and "scenario" not in data and isinstance(data.get("config"), str):
+            try:
+                data = {**data, "scenario": Scenario.parse(data["config"])}
+            except ScenarioError:
+                pass
+        return data
 
     @property
     def duration_s(self) -> float:

@@ -5,7 +5,7 @@ base-station placement, mobility, shadowing and the attack schedule, so changing
 attack draw) leaves the others as they were.
 
 Per window k (t = k * window_s): mobility gives positions; the routing rule gives the active
-links (plus wormhole detours while one is scheduled); the channel chain gives every link its
+links (plus the detours of traffic-detouring attacks while one is scheduled); the channel chain gives every link its
 rate, delay and loss. The channel is evaluated for every node pair each window, active or not,
 so correlated shadowing evolves with the geometry rather than with the routing.
 """
@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from uavcas.attacks import family
 from uavcas.channel import Channel
 from uavcas.mobility import Area, make_mission
 from uavcas.scenario import Scenario
@@ -123,10 +124,8 @@ def plan(
         t0, t1 = w * window_s, (w + 1) * window_s
         pos = np.vstack([uav_tracks[w], bs_pos])
         topo = nearest_neighbour_topology(pos, is_bs)
-        active_wormholes = [a for a in attacks if a.family == "wormhole" and a.start_s < t1 and a.stop_s > t0]
-        pairs = [
-            (names.index(v), names.index(a.attackers[0])) for a in active_wormholes for v in a.victims
-        ]
+        detours = [a for a in attacks if family(a.family).detours_traffic and a.start_s < t1 and a.stop_s > t0]
+        pairs = [(names.index(v), names.index(a.attackers[0])) for a in detours for v in a.victims]
         if pairs:
             topo = with_wormholes(topo, pos, is_bs, pairs)
         arr = channel.evaluate(pos, all_pairs, is_bs)  # advances shadowing for every pair
@@ -147,6 +146,7 @@ def plan(
         )
     return Plan(
         config=scenario.to_string(),
+        scenario=scenario,
         seed=seed,
         window_s=float(window_s),
         profile=prof.name,
@@ -186,7 +186,7 @@ def _routes(names, topo, is_bs, n_uav, n_bs, attacks: list[Attack], t0, t1) -> l
     n = len(names)
     wanted: list[tuple[int, int]] = [(u, n_uav + u % n_bs) for u in range(n_uav)]
     for a in attacks:
-        if a.start_s < t1 and a.stop_s > t0 and a.family in ("dos", "ddos"):
+        if a.start_s < t1 and a.stop_s > t0 and family(a.family).routes_attack_traffic:
             wanted += [(names.index(x), names.index(v)) for x in a.attackers for v in a.victims]
     seen, out = set(), []
     for s, d in wanted:

@@ -9,7 +9,7 @@ import pytest
 from scapy.layers.inet import IP, TCP, UDP
 from scapy.layers.l2 import Ether
 
-from uavcas.emulation.apps import capture, client, flood, hooks, images, nginx, replayer, telemetry
+from uavcas.emulation.apps import capture, client, flood, images, nginx, replayer, telemetry
 
 
 def test_images_are_seeded_jpeg_sized(tmp_path):
@@ -71,16 +71,6 @@ def test_capture_stats_parse():
     argv = capture.argv("s3", capture.Path("/x/s-uav3.pcap"))
     assert "-p" not in argv and "-U" in argv and argv[argv.index("-Z") + 1] == "root"
     assert capture.point_name("uav3") == "s-uav3"
-
-
-def test_blackhole_ruleset_drops_ipv4_both_ways_and_never_arp():
-    rs = hooks.blackhole_ruleset("uavcas_bh_blackhole_0", ["h2", "l2-*"], "10.9.0.3")
-    assert 'iifname { "h2", "l2-*" }' in rs
-    assert "ip saddr 10.9.0.3 counter drop" in rs and "ip daddr 10.9.0.3 counter drop" in rs
-    assert "arp" not in rs and "priority -20" in rs
-    lines = hooks.mirror_lines("h2", "h1")
-    assert any("ingress" in x and "mirror dev h1" in x for x in lines)
-    assert any("egress" in x and "mirror dev h1" in x for x in lines)
 
 
 def _frame(src="10.9.0.3", dst="10.9.0.9", ttl=64, seq=1000, ip_id=7, payload=b"x" * 100) -> bytes:

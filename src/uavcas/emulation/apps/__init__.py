@@ -1,4 +1,5 @@
 """Real programs run inside an emulation's namespaces: benign traffic, attack tools, capture.
+(The fabric-side rules of attacks, e.g. the blackhole's nft table, live in `uavcas.attacks`.)
 
 * `images`    seeded JPEG-like payloads (tens to hundreds of KB) served by every UAV;
 * `nginx`     one nginx per UAV (no systemd: own conf, `daemon off`, paths under the run dir);
@@ -7,7 +8,6 @@
 * `flood`     hping3 SYN flood with closed-loop rate calibration and an exact SYN counter;
 * `replayer`  scapy replay process fed by a port mirror (run inside the attacker namespace);
 * `capture`   one tcpdump per switch, with its drop counters;
-* `hooks`     fabric-side rules the attacks need (blackhole table, port mirrors);
 * `traffic`   the benign traffic of a run (servers before t0, clients at t0, summary at the end);
 * `procs`     a supervised process: started in its own session, stopped by PID with a signal;
 * `versions`  versions of the external tools, for run.json.

@@ -16,8 +16,9 @@ from __future__ import annotations
 import re
 import signal
 import time
-from dataclasses import asdict, dataclass
 from pathlib import Path
+
+from uavcas.rundir import CaptureRecord
 
 from .procs import Proc, spawn, wait_for
 
@@ -27,21 +28,6 @@ BUFFER_KIB = 8192
 # this long so the last block reaches the file.
 DRAIN_S = 1.2
 SNAPLEN = 262144
-
-
-@dataclass
-class CaptureStats:
-    point: str
-    path: str
-    captured: int | None
-    received_by_filter: int | None
-    dropped_by_kernel: int | None
-    dropped_by_interface: int | None
-    size_bytes: int
-    exit_code: int | None
-
-    def to_dict(self) -> dict:
-        return asdict(self)
 
 
 _STAT = re.compile(r"(\d+) packets? (captured|received by filter|dropped by kernel|dropped by interface)")
@@ -77,16 +63,18 @@ class Capture:
     def ready(self) -> bool:
         return "listening on" in self.proc.stderr() or not self.proc.alive()
 
-    def stop(self) -> CaptureStats:
+    def stop(self) -> CaptureRecord:
         code = self.proc.stop(signal.SIGINT, grace_s=5.0)
         wait_for(lambda: "captured" in self.proc.stderr(), 1.0)
         st = parse_stats(self.proc.stderr())
         size = self.path.stat().st_size if self.path.exists() else 0
-        return CaptureStats(self.point, str(self.path), st.get("captured"), st.get("received by filter"),
-                            st.get("dropped by kernel"), st.get("dropped by interface"), size, code)
+        return CaptureRecord(point=self.point, path=str(self.path), captured=st.get("captured"),
+                             received_by_filter=st.get("received by filter"),
+                             dropped_by_kernel=st.get("dropped by kernel"),
+                             dropped_by_interface=st.get("dropped by interface"), size_bytes=size, exit_code=code)
 
 
-def stop_all(caps: list[Capture], drain_s: float = DRAIN_S) -> list[CaptureStats]:
+def stop_all(caps: list[Capture], drain_s: float = DRAIN_S) -> list[CaptureRecord]:
     time.sleep(drain_s)
     return [c.stop() for c in caps]
 

@@ -2,7 +2,7 @@
 
 Runs inside the attacker's namespace (`python -m uavcas.emulation.apps.replayer ...`, the
 venv's python). The fabric mirrors the victim's host port to the attacker's host port
-(`hooks.mirror_on`), so the attacker's `eth0` receives a copy of every IPv4 frame the victim
+(`uavcas.attacks.replay.mirror_on`), so the attacker's `eth0` receives a copy of every IPv4 frame the victim
 sends or receives, wherever the two are. What the authors' code got wrong, and what we do:
 
 * it sniffed only its own port: we read the mirror, i.e. the victim's real traffic;
@@ -36,9 +36,11 @@ import sys
 import time
 from dataclasses import dataclass
 
+from uavcas.events import Inject
+from uavcas.vocabulary import SEQ_MODES
+
 ETH_P_IP = 0x0800
 PACKET_OUTGOING = 4
-SEQ_MODES = ("inc", "rand", "zero")
 
 
 @dataclass(frozen=True)
@@ -193,8 +195,7 @@ def run(args: argparse.Namespace) -> dict:
             out, rec = rep.next_injection(now)
             t = time.time()
             sock.send(out)
-            log.write(json.dumps({"event": "inject", "attack_id": args.attack_id, "family": "replay",
-                                  "t_unix": t, **rec}) + "\n")
+            log.write(Inject(attack_id=args.attack_id, family=args.family, t_unix=t, **rec).to_line())
             now = time.time()
     log.close()
     return rep.stats
@@ -213,6 +214,7 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--seconds", type=float, required=True)
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--attack-id", required=True)
+    ap.add_argument("--family", required=True, help="Attack family written into the inject records.")
     ap.add_argument("--log", required=True)
     stats = run(ap.parse_args(argv))
     print(json.dumps({"stats": stats}), flush=True)

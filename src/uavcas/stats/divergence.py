@@ -1,13 +1,17 @@
-"""Bounded divergences between IAT distributions on shared, recorded, log-spaced bins.
+"""Bounded divergences between two samples' distributions on shared, recorded bins.
+
+Used by the analyses (IAT distributions on log-spaced bins, `log_bins`, bootstrapped over flows)
+and by the calibration (measured vs simulated link quantities on its own linear bins).
 
 Both metrics are in [0, 1]:
 - Hellinger distance H(p, q) = ||sqrt(p) - sqrt(q)||_2 / sqrt(2).
 - Jensen–Shannon divergence with base-2 logarithms, JSD(p, q) = jensenshannon(p, q, base=2) ** 2
   (scipy returns the JS *distance*, the square root of the divergence).
 
-Bins: edge 0 followed by `n_bins` geometric edges from the smallest to the largest positive IAT
-of all samples compared, so every value (zeros included, see `iat.py`) falls in a bin and the
-bins scale with the data (changing the time unit changes nothing). Bootstrap resamples *flows*
+`log_bins`: edge 0 followed by `n_bins` geometric edges from the smallest to the largest
+positive value of all samples compared, so every value (zero IATs included, see
+`uavcas.analysis.iat`) falls in a bin and the bins scale with the data (changing the time unit
+changes nothing). Bootstrap resamples *flows*
 (IATs inside a flow are dependent), seeded; intervals are percentile intervals. Plug-in
 divergences are biased upward on finite samples (two samples of one distribution do not give 0,
 and a resample of them gives more): read a value against the same-distribution baseline, not 0.

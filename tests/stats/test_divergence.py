@@ -8,7 +8,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
-from uavcas.analysis.divergence import (
+from uavcas.stats.divergence import (
     compare_pairwise,
     compare_pooled,
     flow_counts,

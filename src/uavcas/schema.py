@@ -1,11 +1,16 @@
 """Column contract of a uavcas dataset (`flows.parquet`), shared by extraction, labels, analysis, IDS.
 
+It sits at the base of the package (below `flows/`, `labels/` and `dataset/`), next to the
+vocabulary it derives the class and axis columns from.
+
 The 47 flow statistics carry CICFlowMeter names so they can be compared with CICIDS-style data.
 Units: times in seconds, sizes in bytes (link-layer frame length, as tshark's frame.len), rates per
 second. The split "flow-level 25 / direction-aware 22" follows the paper's feature description.
 """
 
 from __future__ import annotations
+
+from uavcas import vocabulary as _v
 
 SCHEMA_VERSION = 1
 
@@ -70,60 +75,12 @@ assert len(FLOW_FEATURES) == 25 and len(DIRECTION_FEATURES) == 22 and len(set(FE
 # Idle/active split of CICFlowMeter: a gap longer than this ends an active period.
 ACTIVITY_TIMEOUT_S = 5.0
 
-# Attack families in canonical (alphabetical) order; class strings of pairs join in this order,
-# which is also the order of the paper's composition names (Blackhole+DoS, DDoS+Replay, ...).
-FAMILIES: tuple[str, ...] = ("blackhole", "ddos", "dos", "replay", "wormhole")
-FAMILY_CLASS: dict[str, str] = {
-    "blackhole": "Blackhole",
-    "ddos": "DDoS",
-    "dos": "DoS",
-    "replay": "Replay",
-    "wormhole": "Wormhole",
-}
-BENIGN = "Benign"
-LABEL_COLUMNS: tuple[str, ...] = tuple(f"label_{f}" for f in FAMILIES)
-
-
-def class_name(families: set[str] | list[str] | tuple[str, ...]) -> str:
-    """Canonical class string of a set of families: 'Benign', 'DoS', 'Blackhole+DoS', ..."""
-    fams = set(families)
-    unknown = fams - set(FAMILIES)
-    if unknown:
-        raise ValueError(f"unknown attack family {sorted(unknown)}; known: {list(FAMILIES)}")
-    if not fams:
-        return BENIGN
-    return "+".join(FAMILY_CLASS[f] for f in FAMILIES if f in fams)
-
-
-# The 15 classes of the paper: Benign, 5 singles, 9 complementary pairs.
-PAIRS: tuple[tuple[str, str], ...] = (
-    ("blackhole", "dos"),
-    ("blackhole", "ddos"),
-    ("dos", "wormhole"),
-    ("ddos", "wormhole"),
-    ("blackhole", "wormhole"),
-    ("blackhole", "replay"),
-    ("ddos", "replay"),
-    ("dos", "replay"),
-    ("replay", "wormhole"),
-)
-CLASSES: tuple[str, ...] = (
-    (BENIGN,) + tuple(FAMILY_CLASS[f] for f in FAMILIES) + tuple(class_name(p) for p in PAIRS)
-)
-assert len(CLASSES) == 15
+# The vocabulary's words, re-exported: the dataset's class and label columns derive from them.
+BENIGN, CLASSES, FAMILIES, FAMILY_CLASS, PAIRS = _v.BENIGN, _v.CLASSES, _v.FAMILIES, _v.FAMILY_CLASS, _v.PAIRS
+LABEL_COLUMNS, class_name = _v.LABEL_COLUMNS, _v.class_name
 
 # Per-flow identity and provenance columns. Never features (the IDS refuses them).
-AXIS_COLUMNS: tuple[str, ...] = (
-    "attacks",
-    "n_uav",
-    "n_bs",
-    "payload",
-    "pathloss",
-    "modulation",
-    "mission",
-    "tx_dbm",
-    "noise_dbm",
-)
+AXIS_COLUMNS: tuple[str, ...] = _v.AXIS_COLUMNS
 ID_COLUMNS: tuple[str, ...] = (
     "run_id",
     "config",

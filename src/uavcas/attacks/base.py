@@ -1,0 +1,147 @@
+"""What an attack family is: one class owning every layer's rule for that family.
+
+A family (`AttackFamily` subclass, one per module of this package, registered by name) owns
+- its codec token and typed parameters (`spec`, `parse`),
+- its schedule rule (`attackers`: who attacks, given the shared victim and the swarm),
+- its executor on the kernel (`prepare`/`start`/`stop`/`calibrate`, plus routing hooks),
+- its ground-truth rule for labels (`truth`: which flows it makes attack flows).
+
+Layers outside this package ask the registry (`uavcas.attacks.family(name)`) and never test a
+family name themselves. Modules here import the emulation, flows and labels code lazily, inside
+the methods: the codec imports this package, and those layers import the codec.
+"""
+
+from __future__ import annotations
+
+import re
+from abc import ABC, abstractmethod
+from typing import TYPE_CHECKING, Any, ClassVar
+
+import numpy as np
+from pydantic import BaseModel, ConfigDict
+
+if TYPE_CHECKING:
+    from uavcas.emulation.attacks import AttackExecutor
+    from uavcas.labels.attacklog import AttackWindow
+    from uavcas.labels.label import TruthContext
+    from uavcas.twin.model import Attack, Window
+
+
+class ScenarioError(ValueError):
+    """A malformed scenario string; the message is one line and names the bad field.
+
+    Defined here because family tokens are parsed by their families; the codec re-exports it.
+    """
+
+
+_INT = re.compile(r"^(0|[1-9][0-9]*)$")
+
+
+def int_field(name: str, raw: str, lo: int, hi: int) -> int:
+    if not _INT.match(raw):
+        raise ScenarioError(f"field '{name}': expected a non-negative integer, got {raw!r}")
+    v = int(raw)
+    if not lo <= v <= hi:
+        raise ScenarioError(f"field '{name}': {v} is outside [{lo}, {hi}]")
+    return v
+
+
+def choice(name: str, raw: str, choices: tuple[str, ...]) -> str:
+    if raw not in choices:
+        raise ScenarioError(f"field '{name}': {raw!r} is not one of {', '.join(choices)}")
+    return raw
+
+
+class SpecBase(BaseModel):
+    """Typed parameters of one attack token of a scenario string."""
+
+    model_config = ConfigDict(frozen=True, extra="forbid")
+
+    def token(self) -> str:
+        return self.family  # type: ignore[attr-defined]
+
+
+class ScheduleDraw:
+    """The state one schedule draw shares between the families of a composition."""
+
+    def __init__(self, uav_names: list[str], victim: str, pool: list[str],
+                 routes0: dict[str, list[str]] | None, rng: np.random.Generator) -> None:
+        self.uav_names, self.victim, self.pool = uav_names, victim, pool  # pool: seeded order
+        self.routes0 = routes0 or {}
+        self.rng = rng
+        self.used: set[str] = set()
+
+    @property
+    def n_uav(self) -> int:
+        return len(self.uav_names)
+
+    def take(self, k: int) -> list[str]:
+        """k attackers, preferring UAVs no other family of this composition uses (reused only
+        when the swarm is small), in node order."""
+        fresh = [u for u in self.pool if u not in self.used]
+        chosen = (fresh + [u for u in self.pool if u in self.used])[:k]
+        self.used.update(chosen)
+        return sorted(chosen, key=self.uav_names.index)
+
+
+class AttackFamily(ABC):
+    name: ClassVar[str]  # codec token and `Attack.family`; one of vocabulary.FAMILIES
+    spec: ClassVar[type[SpecBase]]
+    usage: ClassVar[str]  # the token's form, for error messages
+    label_source: ClassVar[str]  # label_source value of flows this family's truth rule marks
+    tools: ClassVar[tuple[str, ...]] = ()  # executables the executor needs on the host
+    python_modules: ClassVar[tuple[str, ...]] = ()  # importable modules the executor needs
+    min_uavs: ClassVar[int] = 2  # attacker(s) + victim
+    routes_attack_traffic: ClassVar[bool] = False  # the plan routes attacker -> victim paths
+    detours_traffic: ClassVar[bool] = False  # the plan detours victim <-> BS through the attacker
+
+    # codec -------------------------------------------------------------------------------------
+    def parse(self, arg: str | None, tok: str) -> SpecBase:
+        """The spec of token `tok` (`arg` is what follows '=', None without one)."""
+        if arg is not None:
+            raise ScenarioError(f"field 'attacks': {self.name} takes no value, got {tok!r}")
+        return self.spec(family=self.name)
+
+    def spec_from_params(self, params: dict[str, Any]) -> SpecBase:
+        """The spec of a plan attack written before attacks carried one (its `params`)."""
+        return self.spec(family=self.name)
+
+    # schedule ----------------------------------------------------------------------------------
+    def params(self, spec: SpecBase) -> dict[str, float | int | str]:
+        return spec.model_dump(exclude={"family"})
+
+    def attackers(self, spec: SpecBase, draw: ScheduleDraw) -> list[str]:
+        return draw.take(1)
+
+    # executor ----------------------------------------------------------------------------------
+    def calibration_times(self, attack: "Attack") -> list[float]:
+        """Plan times (s) at which the runner calls `calibrate` during the attack."""
+        return []
+
+    def prepare(self, ex: "AttackExecutor", attack: "Attack") -> None:
+        """Before t0 (processes that need time to start)."""
+
+    @abstractmethod
+    def start(self, ex: "AttackExecutor", attack: "Attack") -> dict[str, Any]:
+        """Start the attack; returns the family's fields of the `start` record."""
+
+    @abstractmethod
+    def stop(self, ex: "AttackExecutor", attack: "Attack") -> dict[str, Any]:
+        """Undo the attack completely; returns the family's fields of the `stop` record."""
+
+    def calibrate(self, ex: "AttackExecutor", attack: "Attack") -> None:
+        pass
+
+    def overrides(self, ex: "AttackExecutor", attack: "Attack", window: "Window") -> list[tuple[str, str, str]]:
+        """Forwarding overrides (victim, via, bs) while the attack is active."""
+        return []
+
+    def idle_routes(self, ex: "AttackExecutor", attack: "Attack", window: "Window",
+                    adj: dict[str, list[str]]) -> dict[tuple[str, str], list[str] | None]:
+        """Routes replacing the window's while the attack is *not* active (src, dst) -> hops."""
+        return {}
+
+    # ground truth ------------------------------------------------------------------------------
+    @abstractmethod
+    def truth(self, ctx: "TruthContext", windows: list["AttackWindow"]) -> np.ndarray:
+        """Boolean mask over the flows: the flows this family's attack windows make attack flows."""

@@ -1,0 +1,103 @@
+"""Blackhole: the victim's traffic vanishes at its own switch while the attack lasts.
+
+- token `blackhole` (no parameters);
+- schedule: the 'attacker' is the compromised relay credited with the drop, the victim's first
+  hop towards its BS at t = 0 when that is a UAV (else any other UAV);
+- executor: an nft *bridge* table on the victim's switch drops the victim's IPv4 frames on every
+  port of that switch, in both directions (ip saddr = victim and ip daddr = victim). ARP is
+  another ethertype and is never matched, so neighbours keep resolving; other nodes' transit
+  through the same switch is untouched. Priority -20: before the shaper's loss table (-10) and
+  before br_netfilter hands frames to iptables/NFQUEUE (0), so dropped frames cost no delay
+  work. One atomic `nft -f`, deleted at stop (its drop count is logged);
+- truth ("victim-window"): a flow to or from a victim IP whose lifetime overlaps [start, stop).
+"""
+
+from __future__ import annotations
+
+import json
+import re
+from typing import TYPE_CHECKING, Any, Literal
+
+import numpy as np
+
+from .base import AttackFamily, ScheduleDraw, SpecBase
+from .registry import register
+
+if TYPE_CHECKING:
+    from uavcas.emulation.attacks import AttackExecutor
+    from uavcas.labels.attacklog import AttackWindow
+    from uavcas.labels.label import TruthContext
+    from uavcas.twin.model import Attack
+
+
+class BlackholeSpec(SpecBase):
+    family: Literal["blackhole"] = "blackhole"
+
+
+def table_name(attack_id: str) -> str:
+    return "uavcas_bh_" + re.sub(r"[^A-Za-z0-9_]", "_", attack_id)
+
+
+def ruleset(table: str, ports: list[str], victim_ip: str) -> str:
+    ifs = ", ".join(f'"{p}"' for p in sorted(ports))
+    return (f"table bridge {table} {{\n"
+            f"  chain fw {{ type filter hook forward priority -20; policy accept;\n"
+            f"    iifname {{ {ifs} }} ether type ip ip saddr {victim_ip} counter drop\n"
+            f"    iifname {{ {ifs} }} ether type ip ip daddr {victim_ip} counter drop\n"
+            f"  }}\n}}\n")
+
+
+def drop_on(fabric_ns: str, table: str, ports: list[str], victim_ip: str) -> None:
+    from uavcas.emulation import kernel
+
+    kernel.run(["ip", "netns", "exec", fabric_ns, "nft", "-f", "-"], input_text=ruleset(table, ports, victim_ip))
+
+
+def drop_off(fabric_ns: str, table: str) -> int:
+    """Delete the table; returns how many frames it dropped (both rules)."""
+    from uavcas.emulation import kernel
+
+    dropped = 0
+    r = kernel.run(["ip", "netns", "exec", fabric_ns, "nft", "-j", "list", "table", "bridge", table], check=False)
+    if r.returncode == 0:
+        for item in json.loads(r.stdout).get("nftables", []):
+            for expr in item.get("rule", {}).get("expr", []):
+                if isinstance(expr, dict) and "counter" in expr:
+                    dropped += int(expr["counter"].get("packets", 0))
+        kernel.run(["ip", "netns", "exec", fabric_ns, "nft", "delete", "table", "bridge", table])
+    return dropped
+
+
+def switch_ports(index: int) -> list[str]:
+    """The victim switch's host port and (by wildcard) every link port it has or will get."""
+    from uavcas.emulation.naming import Naming
+
+    return [Naming.host_port(index), Naming.link_port(index, 0).rsplit("-", 1)[0] + "-*"]
+
+
+@register
+class Blackhole(AttackFamily):
+    name = "blackhole"
+    spec = BlackholeSpec
+    usage = "blackhole"
+    label_source = "victim-window"
+    tools = ("nft",)
+
+    def attackers(self, spec: SpecBase, draw: ScheduleDraw) -> list[str]:
+        route = draw.routes0.get(draw.victim, [])
+        relay = route[1] if len(route) > 1 else None
+        if relay in draw.pool and relay not in draw.used:
+            draw.used.add(relay)
+            return [relay]
+        return draw.take(1)
+
+    def start(self, ex: "AttackExecutor", attack: "Attack") -> dict[str, Any]:
+        for v in attack.victims:
+            drop_on(ex.emu.fabric_ns, table_name(attack.attack_id), switch_ports(ex.index(v)), ex.ip(v))
+        return {"switch": [ex.emu.switch(v).bridge for v in attack.victims]}
+
+    def stop(self, ex: "AttackExecutor", attack: "Attack") -> dict[str, Any]:
+        return {"dropped_frames": drop_off(ex.emu.fabric_ns, table_name(attack.attack_id))}
+
+    def truth(self, ctx: "TruthContext", windows: list["AttackWindow"]) -> np.ndarray:
+        return ctx.victim_window(windows)

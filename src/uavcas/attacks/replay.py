@@ -1,0 +1,202 @@
+"""Replay: an attacker re-sends captured packets of the victim, with rewritten TTL and sequence.
+
+- token `replay=<buffer>,<delay_ms>,<pps>,<ttl_dec>,<inc|rand|zero>`;
+- schedule: one attacker;
+- executor: the replayer process (`emulation.apps.replayer`) is started before t0 (scapy takes a
+  second to import) and sees nothing of the victim until `start` mirrors the victim's host port
+  to the attacker's: tc act_mirred copies every IPv4 frame the victim sends (ingress of its host
+  port) and receives (egress) out of the attacker's host port, so the attacker's `eth0` sees the
+  victim's traffic wherever the attacker is. At stop the mirror is removed and the process ended
+  before `stop` is logged; its `inject` records land in the attack log;
+- truth ("replay-injections"): a flow carrying a packet that matches an `inject` record on
+  (src_ip, dst_ip, ip_id, ttl, and seq for TCP) captured within MATCH_TOLERANCE_S of the
+  record's t_unix (packet-exact).
+"""
+
+from __future__ import annotations
+
+import json
+import signal
+import sys
+from typing import TYPE_CHECKING, Any, Literal
+
+import numpy as np
+from pydantic import Field
+
+from uavcas.vocabulary import SEQ_MODES, SeqMode
+
+from .base import AttackFamily, ScenarioError, SpecBase, choice, int_field
+from .registry import register
+
+if TYPE_CHECKING:
+    from uavcas.emulation.attacks import AttackExecutor
+    from uavcas.labels.attacklog import AttackLog, AttackWindow
+    from uavcas.labels.label import TruthContext
+    from uavcas.twin.model import Attack
+
+MATCH_TOLERANCE_S = 1.0
+READY_S = 20.0  # the replayer's start-up (scapy import) must finish within this
+
+
+class ReplaySpec(SpecBase):
+    family: Literal["replay"] = "replay"
+    buffer_pkts: int = Field(gt=0)
+    delay_ms: int = Field(ge=0)
+    rate_pps: int = Field(gt=0)
+    ttl_dec: int = Field(ge=0, le=254)
+    seq_mode: SeqMode
+
+    def token(self) -> str:
+        return (
+            f"replay={self.buffer_pkts},{self.delay_ms},{self.rate_pps},"
+            f"{self.ttl_dec},{self.seq_mode}"
+        )
+
+
+# The paper's conservative replay, used for plan attacks written without parameters.
+_DEFAULT = {"buffer_pkts": 50, "delay_ms": 200, "rate_pps": 10, "ttl_dec": 5, "seq_mode": "inc"}
+
+
+def mirror_lines(victim_port: str, attacker_port: str) -> list[str]:
+    act = f"action mirred egress mirror dev {attacker_port}"
+    return [f"qdisc replace dev {victim_port} clsact",
+            f"filter add dev {victim_port} ingress protocol ip prio 7 u32 match u32 0 0 {act}",
+            f"filter add dev {victim_port} egress protocol ip prio 7 u32 match u32 0 0 {act}"]
+
+
+def mirror_on(fabric_ns: str, victim_port: str, attacker_port: str) -> None:
+    from uavcas.emulation import kernel
+
+    kernel.run_batch("tc", fabric_ns, mirror_lines(victim_port, attacker_port))
+
+
+def mirror_off(fabric_ns: str, victim_port: str) -> None:
+    from uavcas.emulation import kernel
+
+    # Only the replay puts a clsact on a host port; deleting it removes both filters.
+    kernel.run(["tc", "-n", fabric_ns, "qdisc", "del", "dev", victim_port, "clsact"], check=False)
+
+
+@register
+class Replay(AttackFamily):
+    name = "replay"
+    spec = ReplaySpec
+    usage = "replay=<buf>,<ms>,<pps>,<ttl>,<mode>"
+    label_source = "replay-injections"
+    python_modules = ("scapy",)
+
+    def parse(self, arg: str | None, tok: str) -> ReplaySpec:
+        parts = arg.split(",") if arg is not None else []
+        if len(parts) != 5:
+            raise ScenarioError(
+                "field 'attacks': replay needs 5 values "
+                f"<buffer>,<delay_ms>,<pps>,<ttl_dec>,<inc|rand|zero>, got {tok!r}"
+            )
+        buf, delay, pps, ttl, mode = parts
+        return ReplaySpec(
+            buffer_pkts=int_field("attacks.replay.buffer", buf, 1, 1_000_000),
+            delay_ms=int_field("attacks.replay.delay_ms", delay, 0, 3_600_000),
+            rate_pps=int_field("attacks.replay.pps", pps, 1, 1_000_000),
+            ttl_dec=int_field("attacks.replay.ttl_dec", ttl, 0, 254),
+            seq_mode=choice("attacks.replay.seq_mode", mode, SEQ_MODES),
+        )
+
+    def spec_from_params(self, params: dict[str, Any]) -> ReplaySpec:
+        return ReplaySpec(**{k: params.get(k, v) for k, v in _DEFAULT.items()})
+
+    # executor ----------------------------------------------------------------------------------
+    def prepare(self, ex: "AttackExecutor", attack: "Attack") -> None:
+        from uavcas.emulation.apps.procs import spawn, wait_for
+        from uavcas.emulation.naming import Naming
+
+        s: ReplaySpec = ex.spec(attack)  # type: ignore[assignment]
+        for attacker in attack.attackers:
+            log = ex.log_dir / f"inject-{attack.attack_id}-{attacker}.jsonl"
+            log.parent.mkdir(parents=True, exist_ok=True)
+            log.write_text("")
+            argv = [sys.executable, "-m", "uavcas.emulation.apps.replayer", "--iface", Naming.HOST_IF,
+                    "--victim", ex.ip(attack.victims[0]), "--attacker-ip", ex.ip(attacker),
+                    "--buffer", str(s.buffer_pkts), "--delay-ms", str(float(s.delay_ms)),
+                    "--rate-pps", str(float(s.rate_pps)), "--ttl-dec", str(s.ttl_dec),
+                    "--seq-mode", s.seq_mode, "--seconds", str(ex.duration_s + 30),
+                    "--seed", str(ex.plan.seed * 1000 + ex.index(attacker)), "--attack-id", attack.attack_id,
+                    "--family", attack.family, "--log", str(log)]
+            proc = spawn(lambda av, t, **kw: ex.emu.popen(attacker, av, t, **kw),
+                         f"replayer-{attack.attack_id}-{attacker}", argv, ex.log_dir, ex.duration_s + 40)
+            ex.state[f"{attack.attack_id}/{attacker}"] = proc
+            ex.add_process(proc, log)
+        for attacker in attack.attackers:
+            proc = ex.state[f"{attack.attack_id}/{attacker}"]
+            if not wait_for(lambda: "ready" in proc.stdout() or not proc.alive(), READY_S, 0.05) \
+                    or not proc.alive():
+                raise RuntimeError(f"{attack.attack_id}: replayer did not start: {proc.stderr().strip()[-300:]}")
+
+    def start(self, ex: "AttackExecutor", attack: "Attack") -> dict[str, Any]:
+        v = attack.victims[0]
+        for x in attack.attackers:
+            proc = ex.state[f"{attack.attack_id}/{x}"]
+            if not proc.alive():
+                raise RuntimeError(f"replayer of {x} is not running: {proc.stderr().strip()[-300:]}")
+            mirror_on(ex.emu.fabric_ns, ex.emu.switch(v).host_port, ex.emu.switch(x).host_port)
+        return {"mirror": {"from": ex.emu.switch(v).host_port,
+                           "to": [ex.emu.switch(x).host_port for x in attack.attackers]}}
+
+    def stop(self, ex: "AttackExecutor", attack: "Attack") -> dict[str, Any]:
+        mirror_off(ex.emu.fabric_ns, ex.emu.switch(attack.victims[0]).host_port)
+        stats = {}
+        for x in attack.attackers:
+            proc = ex.state[f"{attack.attack_id}/{x}"]
+            proc.stop(signal.SIGTERM, grace_s=3.0)
+            for line in proc.stdout().splitlines():
+                if line.startswith("{"):
+                    stats[x] = json.loads(line).get("stats")
+        return {"replayer_stats": stats}
+
+    # ground truth ------------------------------------------------------------------------------
+    def truth(self, ctx: "TruthContext", windows: list["AttackWindow"]) -> np.ndarray:
+        if not ctx.log.injections:
+            return np.zeros(ctx.n_flows, dtype=bool)
+        return ctx.flows_with(injected_packets(ctx.packets, ctx.log))
+
+
+def injected_packets(p, log: "AttackLog") -> np.ndarray:
+    """Mask of packets that match an inject record (see the module docstring)."""
+    import pandas as pd
+
+    from uavcas.flows.packets import address_to_words
+
+    mask = np.zeros(len(p), dtype=bool)
+    if not log.injections or len(p) == 0:
+        return mask
+    words = [(address_to_words(i.src_ip), address_to_words(i.dst_ip)) for i in log.injections]
+    inj = pd.DataFrame(
+        {
+            "src": [s[1] for s, _ in words],
+            "dst": [d[1] for _, d in words],
+            "src_hi": [s[0] for s, _ in words],
+            "dst_hi": [d[0] for _, d in words],
+            "ip_id": [i.ip_id for i in log.injections],
+            "ttl": [i.ttl for i in log.injections],
+            "seqk": [-1 if (i.seq is None or i.protocol != 6) else i.seq for i in log.injections],
+            "t_inj": [i.t_unix for i in log.injections],
+        }
+    ).astype({"src": np.uint64, "dst": np.uint64, "src_hi": np.uint64, "dst_hi": np.uint64,
+              "ip_id": np.int64, "ttl": np.int64, "seqk": np.int64})
+    cand = np.flatnonzero(np.isin(p["src_lo"], inj["src"].to_numpy()))
+    pk = pd.DataFrame(
+        {
+            "row": cand,
+            "src": p["src_lo"][cand],
+            "dst": p["dst_lo"][cand],
+            "src_hi": p["src_hi"][cand],
+            "dst_hi": p["dst_hi"][cand],
+            "ip_id": p["ip_id"][cand].astype(np.int64),
+            "ttl": p["ttl"][cand].astype(np.int64),
+            "seqk": np.where(p["proto"][cand] == 6, p["tcp_seq"][cand].astype(np.int64), -1),
+            "ts": p["ts_s"][cand],
+        }
+    )
+    m = pk.merge(inj, on=["src", "dst", "src_hi", "dst_hi", "ip_id", "ttl", "seqk"], how="inner")
+    hit = m.loc[(m["ts"] - m["t_inj"]).abs() <= MATCH_TOLERANCE_S, "row"].to_numpy()
+    mask[hit] = True
+    return mask

@@ -1,0 +1,199 @@
+"""A run directory, typed: its paths (`RunDir`) and its run.json (`RunInfo`).
+
+    RUN_DIR/plan.json       the Plan played (twin.model.Plan)
+    RUN_DIR/run.json        what happened (RunInfo), written last
+    RUN_DIR/attacks.jsonl   the attack log (uavcas.events records)
+    RUN_DIR/shaping.jsonl   per-window shaping records of every link
+    RUN_DIR/pcap/           one capture per switch
+    RUN_DIR/logs/           tool logs (curl results, stderr)
+
+Written by the emulation (`emulation.runner`), read by labels, dataset and the CLI. Unknown or
+missing fields of run.json fail loudly (extra="forbid").
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from pydantic import BaseModel, ConfigDict, ValidationError
+
+from uavcas.events import AttackRecord, RecordError, read_attack_records
+
+if TYPE_CHECKING:
+    from uavcas.twin.model import Plan
+
+CAPTURE_SUFFIXES = (".pcap", ".pcapng")
+
+
+class RunDirError(ValueError):
+    """A run directory or one of its files that cannot be used; one-line message."""
+
+
+class _Strict(BaseModel):
+    model_config = ConfigDict(frozen=True, extra="forbid")
+
+
+class Lateness(_Strict):
+    max: float
+    mean: float
+
+
+class Timings(_Strict):
+    """Seconds per phase of the run (phases an interrupted run never reached are absent)."""
+
+    setup_s: float | None = None
+    apps_s: float | None = None
+    schedule_s: float | None = None
+    stop_s: float | None = None
+    teardown_s: float | None = None
+    schedule_lateness_ms: Lateness | None = None
+
+
+class WindowApply(_Strict):
+    window: int
+    t_unix: float
+    links_up: int
+    links_down: int
+    fdb_changes: int
+    rejected: list[str]
+    timings_s: dict[str, float]
+
+
+class ScheduledEvent(_Strict):
+    t_s: float
+    kind: str  # window, start, stop, calibrate, end
+    what: str | int | None  # the attack id, or the window index
+    late_ms: float
+    took_ms: float
+
+
+class CaptureRecord(_Strict):
+    """One switch's tcpdump, as `uavcas.emulation.apps.capture` reports it."""
+
+    point: str
+    path: str
+    captured: int | None
+    received_by_filter: int | None
+    dropped_by_kernel: int | None
+    dropped_by_interface: int | None
+    size_bytes: int
+    exit_code: int | None
+
+
+class RunInfo(_Strict):
+    """run.json: the run's identity, outcome, environment and measurements."""
+
+    config: str
+    seed: int
+    windows: int
+    window_s: float
+    prefix: str | None
+    t0_unix: float | None  # wall-clock time of plan t = 0 (None: the run never got there)
+    t_end_unix: float
+    wall_s: float
+    exit_status: int  # 0 ok, 130 SIGINT, 128+n other signals, 1 error
+    exit_reason: str
+    versions: dict[str, str | None]
+    tool_versions: dict[str, str | None]
+    kernel: str
+    kernel_features: dict[str, Any] | None
+    shaper_backend: str | None
+    timings: Timings
+    window_applies: list[WindowApply]
+    schedule: list[ScheduledEvent]
+    capture: list[CaptureRecord]  # per switch
+    capture_drops: int | None
+    packets_captured: int
+    http_clients: list[dict[str, Any]]  # per BS client: uavcas.emulation.apps.client results
+    delay_daemon: dict[str, Any] | None
+    attack_errors: list[str]
+    wind_down_errors: list[str]
+    run_id: str | None = None  # set by whoever names runs (e.g. a campaign); else the dir's name
+
+    def to_json(self) -> str:
+        return self.model_dump_json(indent=1, exclude_none=False) + "\n"
+
+
+@dataclass(frozen=True)
+class RunDir:
+    root: Path
+
+    FILES = ("plan.json", "run.json", "attacks.jsonl", "shaping.jsonl")  # the small files of a run
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "root", Path(self.root))
+
+    @property
+    def plan_json(self) -> Path:
+        return self.root / "plan.json"
+
+    @property
+    def run_json(self) -> Path:
+        return self.root / "run.json"
+
+    @property
+    def attacks_jsonl(self) -> Path:
+        return self.root / "attacks.jsonl"
+
+    @property
+    def shaping_jsonl(self) -> Path:
+        return self.root / "shaping.jsonl"
+
+    @property
+    def pcap_dir(self) -> Path:
+        return self.root / "pcap"
+
+    @property
+    def logs_dir(self) -> Path:
+        return self.root / "logs"
+
+    def files(self) -> list[Path]:
+        return [self.root / f for f in self.FILES]
+
+    def holds_run(self) -> bool:
+        """Whether any file of a run is there (a directory uavcas may reuse for a run)."""
+        return any(p.exists() for p in self.files())
+
+    def pcaps(self) -> list[Path]:
+        return sorted(p for p in self.pcap_dir.glob("*") if p.suffix in CAPTURE_SUFFIXES)
+
+    def read_plan(self) -> "Plan":
+        from uavcas.twin.model import Plan
+
+        if not self.plan_json.exists():
+            raise RunDirError(f"{self.root}: no plan.json (not a run directory)")
+        try:
+            return Plan.from_json(self.plan_json.read_text())
+        except ValueError as exc:
+            raise RunDirError(f"{self.plan_json}: invalid plan ({str(exc).splitlines()[0]})") from None
+
+    def read_info(self) -> RunInfo | None:
+        """run.json, or None when the run never wrote one."""
+        if not self.run_json.exists():
+            return None
+        try:
+            return RunInfo.model_validate_json(self.run_json.read_text())
+        except ValidationError as exc:
+            e = exc.errors()[0]
+            loc = ".".join(str(x) for x in e["loc"])
+            if e["type"] == "json_invalid":
+                raise RunDirError(f"{self.run_json}: not JSON ({e['msg']})") from None
+            what = {"missing": "has no field", "extra_forbidden": "has an unknown field"}.get(e["type"], "bad field")
+            raise RunDirError(f"{self.run_json}: {what} '{loc}' ({e['msg']})") from None
+
+    def read_attacks(self) -> list[AttackRecord]:
+        """The attack log ([] when absent: a benign run, or one that crashed before writing it)."""
+        if not self.attacks_jsonl.exists():
+            return []
+        try:
+            return read_attack_records(self.attacks_jsonl)
+        except RecordError as exc:
+            raise RunDirError(str(exc)) from None
+
+    def read_shaping(self) -> list[dict[str, Any]]:
+        if not self.shaping_jsonl.exists():
+            return []
+        return [json.loads(ln) for ln in self.shaping_jsonl.read_text().splitlines() if ln.strip()]

@@ -1,0 +1,1 @@
+"""stats: statistics shared by the analyses and the calibration, owned by neither (divergences)."""

@@ -1,0 +1,93 @@
+"""The words of uavcas, defined once: attack families, class names, scenario axes and their values.
+
+The scenario codec, the pydantic Literal types, the dataset's label and axis columns and the class
+strings all derive from here, so adding a family or a mission means editing this module (plus the
+family's own module in `uavcas.attacks`, or the mission's in `uavcas.mobility`).
+"""
+
+from __future__ import annotations
+
+from typing import Literal, get_args
+
+# Attack families in canonical (alphabetical) order. The scenario codec orders attack tokens this
+# way, and class strings of compositions join in this order, which is also the order of the paper's
+# composition names (Blackhole+DoS, DDoS+Replay, ...).
+Family = Literal["blackhole", "ddos", "dos", "replay", "wormhole"]
+FAMILIES: tuple[str, ...] = get_args(Family)
+FAMILY_CLASS: dict[str, str] = {
+    "blackhole": "Blackhole",
+    "ddos": "DDoS",
+    "dos": "DoS",
+    "replay": "Replay",
+    "wormhole": "Wormhole",
+}
+BENIGN = "Benign"
+BENIGN_TOKEN = "benign"  # the scenario's attacks field of a run without attacks
+
+Payload = Literal["image", "telemetry", "mixed"]
+PAYLOADS: tuple[str, ...] = get_args(Payload)
+Pathloss = Literal["logdist", "3gpp", "uma", "rma", "umi", "tworay", "freespace"]
+PATHLOSS_MODELS: tuple[str, ...] = get_args(Pathloss)
+Mission = Literal["spiral", "grid", "hover_transit", "random"]
+MISSIONS: tuple[str, ...] = get_args(Mission)
+SeqMode = Literal["inc", "rand", "zero"]  # how a replayer rewrites TCP sequence numbers
+SEQ_MODES: tuple[str, ...] = get_args(SeqMode)
+
+# The paper's 9 '-'-separated fields of a scenario string, in order.
+FIELD_NAMES: tuple[str, ...] = (
+    "attacks",
+    "n_uav",
+    "n_bs",
+    "payload",
+    "pathloss",
+    "modulation",
+    "mission",
+    "tx_dbm",
+    "noise",
+)
+# The same axes as dataset columns: the noise floor is stored signed, in dBm.
+AXIS_COLUMNS: tuple[str, ...] = FIELD_NAMES[:-1] + ("noise_dbm",)
+
+LABEL_COLUMNS: tuple[str, ...] = tuple(f"label_{f}" for f in FAMILIES)
+
+
+def canonical_families(families) -> tuple[str, ...]:
+    """The families in canonical order; unknown names are refused."""
+    fams = set(families)
+    unknown = fams - set(FAMILIES)
+    if unknown:
+        raise ValueError(f"unknown attack family {sorted(unknown)}; known: {list(FAMILIES)}")
+    return tuple(f for f in FAMILIES if f in fams)
+
+
+def class_name(families: set[str] | list[str] | tuple[str, ...]) -> str:
+    """Canonical class string of a set of families: 'Benign', 'DoS', 'Blackhole+DoS', ..."""
+    fams = canonical_families(families)
+    return "+".join(FAMILY_CLASS[f] for f in fams) if fams else BENIGN
+
+
+# The 15 classes of the paper: Benign, 5 singles, 9 complementary pairs.
+PAIRS: tuple[tuple[str, str], ...] = (
+    ("blackhole", "dos"),
+    ("blackhole", "ddos"),
+    ("dos", "wormhole"),
+    ("ddos", "wormhole"),
+    ("blackhole", "wormhole"),
+    ("blackhole", "replay"),
+    ("ddos", "replay"),
+    ("dos", "replay"),
+    ("replay", "wormhole"),
+)
+CLASSES: tuple[str, ...] = (
+    (BENIGN,) + tuple(FAMILY_CLASS[f] for f in FAMILIES) + tuple(class_name(p) for p in PAIRS)
+)
+assert len(CLASSES) == 15
+
+
+def families_of(attacks_field: str) -> tuple[str, ...]:
+    """Families of a scenario's attacks field, canonical order: 'blackhole+dos=1000' -> ('blackhole', 'dos').
+
+    Lenient on purpose (datasets from older codec versions): unknown tokens are dropped.
+    """
+    names = {tok.split("=", 1)[0].strip().lower() for tok in str(attacks_field).split("+")}
+    return tuple(f for f in FAMILIES if f in names)

@@ -1,0 +1,41 @@
+"""The campaign's worker (typed result from a child interpreter) and its one retry rule."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from uavcas.campaign.retry import Retries
+from uavcas.campaign.worker import WorkerRequest, WorkerResult, realize_in_child
+
+
+@dataclass
+class _Out:
+    index: int
+    ok: bool
+
+
+def test_retries_a_failure_n_times_then_gives_up():
+    seen = []
+    r = Retries(2, on_retry=lambda out, attempt: seen.append((out.index, attempt)))
+    assert r.started(7) == 1 and r.again(_Out(7, False))
+    assert r.started(7) == 2 and r.again(_Out(7, False))
+    assert r.started(7) == 3 and not r.again(_Out(7, False))
+    assert seen == [(7, 1), (7, 2)]
+    assert r.started(8) == 1 and not r.again(_Out(8, True))
+
+
+def _req(tmp_path, config: str):
+    return WorkerRequest(config=config, seed=0, windows=1, window_s=1.0, out_dir=str(tmp_path / "r"))
+
+
+def test_a_failure_in_the_child_comes_back_as_a_typed_one_line_result(tmp_path):
+    res = realize_in_child(_req(tmp_path, "benign-3-1-image-logdist-adaptive-ellipse-30-95"), limit_s=120)
+    assert isinstance(res, WorkerResult) and not res.ok and res.exit_status == 1
+    assert res.error.startswith("ScenarioError: field 'mission'") and "\n" not in res.error
+    assert not (tmp_path / "r").exists()  # nothing created
+
+
+def test_a_child_over_its_limit_is_stopped(tmp_path):
+    # an invalid scenario, so even a child that got further than its start-up would create nothing
+    res = realize_in_child(_req(tmp_path, "benign-3-1-image-logdist-adaptive-ellipse-30-95"), limit_s=0.01)
+    assert not res.ok and res.exit_status == 124 and "did not finish" in res.error

@@ -1,0 +1,76 @@
+"""RunDir and RunInfo: one list of run files, strict run.json, plans from before typed scenarios."""
+
+from __future__ import annotations
+
+import json
+import shutil
+import sys
+from pathlib import Path
+
+import pytest
+
+sys.path.insert(0, str(Path(__file__).resolve().parent / "labels"))
+from synth_run import CONFIG, build_run, run_info  # noqa: E402
+
+from uavcas.extract import extract  # noqa: E402
+from uavcas.rundir import RunDir, RunDirError, RunInfo  # noqa: E402
+from uavcas.twin import plan  # noqa: E402
+from uavcas.twin.model import Plan  # noqa: E402
+
+
+@pytest.fixture(scope="module")
+def run_dir(tmp_path_factory):
+    return build_run(tmp_path_factory.mktemp("rd") / "run-synth")
+
+
+def test_paths_and_the_one_list_of_run_files(tmp_path):
+    rd = RunDir(tmp_path)
+    assert [p.name for p in rd.files()] == ["plan.json", "run.json", "attacks.jsonl", "shaping.jsonl"]
+    assert (rd.pcap_dir, rd.logs_dir) == (tmp_path / "pcap", tmp_path / "logs")
+    assert not rd.holds_run() and rd.read_info() is None and rd.read_attacks() == []
+    rd.shaping_jsonl.write_text("")
+    assert rd.holds_run()
+    with pytest.raises(RunDirError, match="no plan.json"):
+        rd.read_plan()
+
+
+def test_run_info_is_strict(run_dir, tmp_path):
+    rd = RunDir(tmp_path / "r")
+    shutil.copytree(run_dir, rd.root)
+    info = rd.read_info()
+    assert isinstance(info, RunInfo) and info.run_id == "run-synth" and info == run_info(**info.model_dump())
+    d = json.loads(rd.run_json.read_text())
+    for bad, msg in [({**d, "colour": 1}, "unknown field 'colour'"),
+                     ({k: v for k, v in d.items() if k != "exit_status"}, "has no field 'exit_status'"),
+                     ({**d, "timings": {"setup_s": 1.0, "lunch_s": 3}}, "unknown field 'timings.lunch_s'")]:
+        rd.run_json.write_text(json.dumps(bad))
+        with pytest.raises(RunDirError, match=msg):
+            rd.read_info()
+    rd.run_json.write_text("{")
+    with pytest.raises(RunDirError, match="not JSON"):
+        rd.read_info()
+
+
+def test_plans_carry_the_typed_scenario_and_older_plan_json_still_loads():
+    p = plan("blackhole+dos=1000-5-2-image-logdist-adaptive-grid-30-95", seed=3, windows=2)
+    assert p.scenario.families == ("blackhole", "dos") and p.attacks[1].spec == p.scenario.attacks[1]
+    old = json.loads(p.to_json())
+    del old["scenario"]
+    for a in old["attacks"]:
+        del a["spec"]
+    assert Plan.model_validate_json(json.dumps(old)) == p  # filled from config and params
+    hand = Plan.model_validate({**old, "config": "test"})
+    assert hand.scenario is None and hand.attacks[1].spec.interval_us == 1000
+
+
+def test_extract_takes_the_axes_from_the_plans_scenario(run_dir, tmp_path):
+    shard = extract(run_dir, run_id="17")
+    assert shard.info.run_id == "17" and (shard.frame["run_id"] == "17").all()
+    assert (shard.frame["attacks"] == "blackhole+dos=1000+replay=50,200,10,5,inc").all()
+    assert (shard.frame["config"] == CONFIG).all() and shard.info.n_flows == len(shard.frame)
+    rd = RunDir(tmp_path / "r")
+    shutil.copytree(run_dir, rd.root)
+    p = rd.read_plan()
+    rd.plan_json.write_text(p.model_copy(update={"config": "test", "scenario": None}).to_json())
+    with pytest.raises(RunDirError, match="no scenario"):
+        extract(rd.root)

@@ -1,0 +1,37 @@
+"""The vocabulary is the one source of families, classes and axes; everything else derives from it."""
+
+from __future__ import annotations
+
+import typing
+
+import pytest
+
+from uavcas import schema, vocabulary as v
+from uavcas.scenario import Scenario, parse
+from uavcas.scenario.codec import FIELD_NAMES
+
+
+def test_codec_literals_and_dataset_columns_derive_from_the_vocabulary():
+    assert FIELD_NAMES is v.FIELD_NAMES
+    fields = Scenario.model_fields
+    assert typing.get_args(fields["payload"].annotation) == v.PAYLOADS
+    assert typing.get_args(fields["pathloss"].annotation) == v.PATHLOSS_MODELS
+    assert typing.get_args(fields["mission"].annotation) == v.MISSIONS
+    assert schema.FAMILIES is v.FAMILIES and schema.CLASSES is v.CLASSES and schema.AXIS_COLUMNS is v.AXIS_COLUMNS
+    assert schema.LABEL_COLUMNS == tuple(f"label_{f}" for f in v.FAMILIES)
+    sc = parse("blackhole+dos=1000-5-2-image-logdist-adaptive-grid-30-95")
+    assert tuple(sc.axes()) == v.AXIS_COLUMNS
+
+
+def test_families_are_canonical_and_classes_join_in_that_order():
+    assert list(v.FAMILIES) == sorted(v.FAMILIES)
+    assert v.class_name(["dos", "blackhole"]) == "Blackhole+DoS" == v.class_name(("blackhole", "dos"))
+    assert v.class_name([]) == v.BENIGN
+    assert len(v.CLASSES) == len(set(v.CLASSES)) == 15
+    with pytest.raises(ValueError, match="teleport"):
+        v.class_name(["teleport"])
+
+
+def test_families_of_an_attacks_field():
+    assert v.families_of("replay=50,200,10,5,inc+ddos=1000") == ("ddos", "replay")
+    assert v.families_of("benign") == ()
