@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import re
 from abc import ABC, abstractmethod
+from collections.abc import Callable
 from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
@@ -65,10 +66,12 @@ class ScheduleDraw:
     """The state one schedule draw shares between the families of a composition."""
 
     def __init__(self, uav_names: list[str], victim: str, pool: list[str],
-                 routes0: dict[str, list[str]] | None, rng: np.random.Generator) -> None:
+                 routes0: dict[str, list[str]] | None, rng: np.random.Generator,
+                 detour0: Callable[[str, str], bool] | None = None) -> None:
         self.uav_names, self.victim, self.pool = uav_names, victim, pool  # pool: seeded order
         self.routes0 = routes0 or {}
         self.rng = rng
+        self.detour0 = detour0 or (lambda victim, attacker: True)  # a wormhole detour at t = 0?
         self.used: set[str] = set()
 
     @property

@@ -44,7 +44,8 @@ class Wormhole(AttackFamily):
     def attackers(self, spec: SpecBase, draw: ScheduleDraw) -> list[str]:
         on_path = set(draw.routes0.get(draw.victim, ()))
         off = [u for u in draw.pool if u not in draw.used and u not in on_path]
-        attackers = [off[0]] if off else draw.take(1)
+        able = [u for u in off if draw.detour0(draw.victim, u)]
+        attackers = [(able or off)[0]] if off else draw.take(1)
         draw.used.update(attackers)
         return attackers
 
