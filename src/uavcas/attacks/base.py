@@ -23,6 +23,7 @@ from pydantic import BaseModel, ConfigDict
 
 if TYPE_CHECKING:
     from uavcas.emulation.attacks import AttackExecutor
+    from uavcas.emulation.controller import Detour
     from uavcas.labels.attacklog import AttackWindow
     from uavcas.labels.label import TruthContext
     from uavcas.twin.model import Attack, Window
@@ -135,14 +136,9 @@ class AttackFamily(ABC):
     def calibrate(self, ex: "AttackExecutor", attack: "Attack") -> None:
         pass
 
-    def overrides(self, ex: "AttackExecutor", attack: "Attack", window: "Window") -> list[tuple[str, str, str]]:
-        """Forwarding overrides (victim, via, bs) while the attack is active."""
+    def overrides(self, ex: "AttackExecutor", attack: "Attack", window: "Window") -> list["Detour"]:
+        """Forwarding detours (`emulation.controller.Detour`) while the attack is active."""
         return []
-
-    def idle_routes(self, ex: "AttackExecutor", attack: "Attack", window: "Window",
-                    adj: dict[str, list[str]]) -> dict[tuple[str, str], list[str] | None]:
-        """Routes replacing the window's while the attack is *not* active (src, dst) -> hops."""
-        return {}
 
     # ground truth ------------------------------------------------------------------------------
     @abstractmethod

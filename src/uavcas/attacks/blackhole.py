@@ -94,10 +94,12 @@ class Blackhole(AttackFamily):
     def start(self, ex: "AttackExecutor", attack: "Attack") -> dict[str, Any]:
         for v in attack.victims:
             drop_on(ex.emu.fabric_ns, table_name(attack.attack_id), switch_ports(ex.index(v)), ex.ip(v))
-        return {"switch": [ex.emu.switch(v).bridge for v in attack.victims]}
+        # logged when the rule is in force (nft -f returns after the kernel committed it)
+        return {"t_unix": ex.now(), "switch": [ex.emu.switch(v).bridge for v in attack.victims]}
 
     def stop(self, ex: "AttackExecutor", attack: "Attack") -> dict[str, Any]:
-        return {"dropped_frames": drop_off(ex.emu.fabric_ns, table_name(attack.attack_id))}
+        t = ex.now()  # logged while the rule still holds: replies after it are not blackholed
+        return {"t_unix": t, "dropped_frames": drop_off(ex.emu.fabric_ns, table_name(attack.attack_id))}
 
     def truth(self, ctx: "TruthContext", windows: list["AttackWindow"]) -> np.ndarray:
         return ctx.victim_window(windows)

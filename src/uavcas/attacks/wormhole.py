@@ -1,17 +1,18 @@
-"""Wormhole: the victim's traffic to its BS is tunnelled through the attacker's switch.
+"""Wormhole: the victim's traffic with its BS is tunnelled through the attacker's switch.
 
 - token `wormhole` (no parameters);
-- schedule: the attacker is drawn among UAVs off the victim's route at t = 0 where possible, so
-  the detour really adds a hop instead of re-labelling a path the traffic took anyway;
-- plan: while the attack overlaps a window, the planner adds the detour's links and routes
-  (`detours_traffic`, `topology.routing.with_wormholes`) and lists the override in
-  `Window.wormholes`;
-- executor: the override (victim <-> its BS through the attacker's switch) is laid into the
-  static FDB at start and removed at stop, by re-applying the current window with the active
-  overrides. The detour's links are the plan's, so the extra hop is shaped like any other;
-  while the attack is idle the pair takes the shortest path avoiding the attacker's switch;
-- truth ("victim-window"): a flow to or from a victim IP whose lifetime overlaps [start, stop).
-"""
+- schedule: the attacker is drawn among UAVs off the victim's route at t = 0 that have a detour
+  then (a usable link to the victim, and a usable path to the victim's BS not through it), so the
+  detour really adds a hop and really carries traffic;
+- plan: in each window the attack overlaps, the planner adds the detour's links where it has one
+  (`detours_traffic`, `topology.routing.with_wormholes`: usable links only; a window without
+  one gets no override) and lists it, with its hops, in `Window.wormholes`;
+- executor: at start the current window is re-applied with the detour: both directions of the
+  victim <-> BS traffic (the victim's MAC as source or destination) take the detour's hops
+  through the attacker's switch, and nothing else does (alias destination MACs, see
+  `emulation.controller`); at stop it is re-applied without. The detour's links are the plan's,
+  shaped like any other;
+- truth: see `Wormhole.effects`."""
 
 from __future__ import annotations
 
@@ -24,6 +25,7 @@ from .registry import register
 
 if TYPE_CHECKING:
     from uavcas.emulation.attacks import AttackExecutor
+    from uavcas.emulation.controller import Detour
     from uavcas.labels.attacklog import AttackWindow
     from uavcas.labels.label import TruthContext
     from uavcas.twin.model import Attack, Window
@@ -57,25 +59,11 @@ class Wormhole(AttackFamily):
         del ex.active[attack.attack_id]
         return ex.reapply_window()
 
-    def overrides(self, ex: "AttackExecutor", attack: "Attack", window: "Window") -> list[tuple[str, str, str]]:
-        out: list[tuple[str, str, str]] = []
-        for v in attack.victims:
-            planned = [(o.victim, o.attacker, o.bs) for o in window.wormholes
-                       if o.victim == v and o.attacker in attack.attackers]
-            out += planned or [(v, attack.attackers[0], ex.bs_of(v))]
-        return out
+    def overrides(self, ex: "AttackExecutor", attack: "Attack", window: "Window") -> list["Detour"]:
+        from uavcas.emulation.controller import Detour
 
-    def idle_routes(self, ex: "AttackExecutor", attack: "Attack", window: "Window",
-                    adj: dict[str, list[str]]) -> dict[tuple[str, str], list[str] | None]:
-        from uavcas.emulation.controller import shortest_path
-
-        out: dict[tuple[str, str], list[str] | None] = {}
-        for v in attack.victims:
-            b = ex.bs_of(v)
-            path = shortest_path(adj, v, b, banned=frozenset(attack.attackers))
-            out[(v, b)] = path
-            out[(b, v)] = path[::-1] if path else None
-        return out
+        return [Detour(o.victim, o.attacker, o.bs, tuple(o.hops)) for o in window.wormholes
+                if o.victim in attack.victims and o.attacker in attack.attackers]
 
     def truth(self, ctx: "TruthContext", windows: list["AttackWindow"]) -> np.ndarray:
         return ctx.victim_window(windows)

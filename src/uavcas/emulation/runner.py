@@ -160,7 +160,7 @@ class _State:
 def _apply_window(st: _State, i: int) -> None:
     w = st.plan.windows[i]
     st.executor.window = w
-    rep = st.emu.apply_links(w.links, st.executor.routes_for(w), st.executor.wormholes_for(w), window_index=w.index)
+    rep = st.emu.apply_links(w.links, [r.hops for r in w.routes], st.executor.wormholes_for(w), window_index=w.index)
     st.shaping += [r.to_dict() for r in rep.records]
     st.windows.append({"window": w.index, "t_unix": time.time(), "links_up": rep.links_up,
                        "links_down": rep.links_down, "fdb_changes": rep.fdb_changes, "rejected": rep.rejected,
