@@ -183,7 +183,7 @@ def _play(st: _State, opt: RunOptions, notify: Callable[[Progress], None]) -> No
     _apply_window(st, 0)
     st.t0 = time.time()
     notify(WindowApplied(window=0, t0_unix=st.t0, n_windows=len(plan.windows)))
-    st.traffic.start_clients()
+    st.traffic.start_clients(st.t0)
     for ev in schedule(plan):
         target = st.t0 + ev.t_s
         time.sleep(max(0.0, target - time.time()))
