@@ -4,7 +4,8 @@ A family (`AttackFamily` subclass, one per module of this package, registered by
 - its codec token and typed parameters (`spec`, `parse`),
 - its schedule rule (`attackers`: who attacks, given the shared victim and the swarm),
 - its executor on the kernel (`prepare`/`start`/`stop`/`calibrate`, plus routing hooks),
-- its ground-truth rule for labels (`truth`: which flows it makes attack flows).
+- its ground-truth rule (`effect`, `effects`: which captured packets its attacks made, moved or
+  dropped; flows are labelled from their packets' effects, `uavcas.labels`).
 
 Layers outside this package ask the registry (`uavcas.attacks.family(name)`) and never test a
 family name themselves. Modules here import the emulation, flows and labels code lazily, inside
@@ -25,7 +26,7 @@ if TYPE_CHECKING:
     from uavcas.emulation.attacks import AttackExecutor
     from uavcas.emulation.controller import Detour
     from uavcas.labels.attacklog import AttackWindow
-    from uavcas.labels.label import TruthContext
+    from uavcas.labels.effects import TruthContext
     from uavcas.twin.model import Attack, Window
 
 
@@ -93,6 +94,8 @@ class AttackFamily(ABC):
     spec: ClassVar[type[SpecBase]]
     usage: ClassVar[str]  # the token's form, for error messages
     label_source: ClassVar[str]  # label_source value of flows this family's truth rule marks
+    effect: ClassVar[str]  # the packet effect its rule gives (vocabulary.EFFECTS)
+    truth_rule: ClassVar[str]  # its effect rule in words (the dataset card records it)
     tools: ClassVar[tuple[str, ...]] = ()  # executables the executor needs on the host
     python_modules: ClassVar[tuple[str, ...]] = ()  # importable modules the executor needs
     min_uavs: ClassVar[int] = 2  # attacker(s) + victim
@@ -142,5 +145,6 @@ class AttackFamily(ABC):
 
     # ground truth ------------------------------------------------------------------------------
     @abstractmethod
-    def truth(self, ctx: "TruthContext", windows: list["AttackWindow"]) -> np.ndarray:
-        """Boolean mask over the flows: the flows this family's attack windows make attack flows."""
+    def effects(self, ctx: "TruthContext", windows: list["AttackWindow"]) -> np.ndarray:
+        """Boolean mask over the packet-table rows: the packets this family's attacks affected
+        (every observation of an affected transmission: `ctx.spread`)."""

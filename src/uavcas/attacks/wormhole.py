@@ -12,7 +12,9 @@
   through the attacker's switch, and nothing else does (alias destination MACs, see
   `emulation.controller`); at stop it is re-applied without. The detour's links are the plan's,
   shaped like any other;
-- truth: see `Wormhole.effects`."""
+- truth (effect `wormhole`, label source "wormhole-detour"): a packet to or from a victim seen at
+  the attacker's switch inside [start, stop), in a window where the plan has the detour: it was
+  carried over the attacker's detour. Its other observations carry the same effect."""
 
 from __future__ import annotations
 
@@ -27,7 +29,7 @@ if TYPE_CHECKING:
     from uavcas.emulation.attacks import AttackExecutor
     from uavcas.emulation.controller import Detour
     from uavcas.labels.attacklog import AttackWindow
-    from uavcas.labels.label import TruthContext
+    from uavcas.labels.effects import TruthContext
     from uavcas.twin.model import Attack, Window
 
 
@@ -40,7 +42,10 @@ class Wormhole(AttackFamily):
     name = "wormhole"
     spec = WormholeSpec
     usage = "wormhole"
-    label_source = "victim-window"
+    label_source = "wormhole-detour"
+    effect = "wormhole"
+    truth_rule = ("a packet to or from the victim seen at the attacker's switch inside [start, stop) in a "
+                  "window with the planned detour (carried over the detour)")
     detours_traffic = True
 
     def attackers(self, spec: SpecBase, draw: ScheduleDraw) -> list[str]:
@@ -65,5 +70,12 @@ class Wormhole(AttackFamily):
         return [Detour(o.victim, o.attacker, o.bs, tuple(o.hops)) for o in window.wormholes
                 if o.victim in attack.victims and o.attacker in attack.attackers]
 
-    def truth(self, ctx: "TruthContext", windows: list["AttackWindow"]) -> np.ndarray:
-        return ctx.victim_window(windows)
+    def effects(self, ctx: "TruthContext", windows: list["AttackWindow"]) -> np.ndarray:
+        hit = np.zeros(ctx.n, dtype=bool)
+        for w in windows:
+            victims, attackers = ctx.node_names(w.victim_ips), ctx.node_names(w.attacker_ips)
+            planned = [pw.index for pw in ctx.plan.windows
+                       if any(o.victim in victims and o.attacker in attackers for o in pw.wormholes)]
+            hit |= (ctx.at_switch_of(attackers) & ctx.during(w.start_unix, w.stop_unix)
+                    & ctx.touching(w.victim_ips) & np.isin(ctx.window, planned))
+        return ctx.spread(hit)
