@@ -15,9 +15,9 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from uavcas.flows import FlowConfig, extract_flows
-from uavcas.flows.follow import follow_run
-from uavcas.labels import TruthContext, label_flows, packet_truth, read_attack_log, rule_text
+from uavcas.flows import FlowConfig, Flows, PacketTable, extract_flows
+from uavcas.flows.follow import Followed, follow_run
+from uavcas.labels import PacketTruth, TruthContext, label_flows, packet_truth, read_attack_log, rule_text
 from uavcas.rundir import RunDir, RunDirError
 from uavcas.vocabulary import EFFECTS
 
@@ -53,6 +53,18 @@ def _check_run_id(run_dir: Path, rid: str) -> str:
     return rid
 
 
+@dataclass(frozen=True)
+class Extracted:
+    """A shard and what it was made from: the packet table (every capture point), its flows
+    (`frame.flow_id` numbers them), the followed transmissions and each packet's truth."""
+
+    shard: Shard
+    packets: PacketTable
+    flows: Flows
+    followed: Followed
+    truth: PacketTruth
+
+
 def extract(
     run_dir: Path | str,
     view: str = "5tuple",
@@ -63,6 +75,19 @@ def extract(
     min_attack_fraction: float = 0.0,
 ) -> Shard:
     """Flows + labels of one run. The run id is `run_id`, else run.json's, else the dir's name."""
+    return extract_detailed(run_dir, view, labels, min_packets, allow_truncated, run_id, min_attack_fraction).shard
+
+
+def extract_detailed(
+    run_dir: Path | str,
+    view: str = "5tuple",
+    labels: str = "ours",
+    min_packets: int | None = None,
+    allow_truncated: bool = False,
+    run_id: str | None = None,
+    min_attack_fraction: float = 0.0,
+) -> Extracted:
+    """`extract`, keeping the packet-level results (for audits and tests)."""
     rd = RunDir(Path(run_dir))
     if not rd.root.is_dir():
         raise RunDirError(f"{rd.root}: not a directory")
@@ -90,7 +115,7 @@ def extract(
         df[k] = v
     counts = {str(k): int(v) for k, v in df["label"].value_counts().items()}
     effects = np.bincount(truth.effect.astype(np.int64), minlength=len(EFFECTS))
-    return Shard(
+    shard = Shard(
         frame=df,
         info=ShardInfo(
             run_id=rid,
@@ -110,3 +135,4 @@ def extract(
             extracted_unix=time.time(),
         ),
     )
+    return Extracted(shard, ex.packets, ex.flows, followed, truth)

@@ -19,13 +19,14 @@ def test_attacker_is_off_the_victims_route_where_possible():
     assert family("wormhole").attackers(WormholeSpec(), d2) == ["uav1"]  # nobody off the route: take one
 
 
-def test_attacker_has_a_detour_at_t0_where_possible():
+def test_attacker_has_a_detour_in_most_windows_of_the_attack():
     names = [f"uav{i}" for i in range(5)]
-    d = ScheduleDraw(names, "uav0", ["uav3", "uav1", "uav2", "uav4"], {"uav0": ["uav0", "uav3", "bs0"]},
-                     np.random.default_rng(0), detour0=lambda v, a: a == "uav4")
-    assert family("wormhole").attackers(WormholeSpec(), d) == ["uav4"]
+    counts = {"uav1": 1, "uav2": 2, "uav4": 2}
+    d = ScheduleDraw(names, "uav0", ["uav3", "uav1", "uav4", "uav2"], {"uav0": ["uav0", "uav3", "bs0"]},
+                     np.random.default_rng(0), detours=lambda v, a: counts.get(a, 0))
+    assert family("wormhole").attackers(WormholeSpec(), d) == ["uav4"]  # 2 windows; first of the ties
     nobody = ScheduleDraw(names, "uav0", ["uav3", "uav1"], {"uav0": ["uav0", "uav3", "bs0"]},
-                          np.random.default_rng(0), detour0=lambda v, a: False)
+                          np.random.default_rng(0), detours=lambda v, a: 0)
     assert family("wormhole").attackers(WormholeSpec(), nobody) == ["uav1"]  # off the route anyway
 
 

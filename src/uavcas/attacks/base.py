@@ -69,11 +69,12 @@ class ScheduleDraw:
 
     def __init__(self, uav_names: list[str], victim: str, pool: list[str],
                  routes0: dict[str, list[str]] | None, rng: np.random.Generator,
-                 detour0: Callable[[str, str], bool] | None = None) -> None:
+                 detours: Callable[[str, str], int] | None = None) -> None:
         self.uav_names, self.victim, self.pool = uav_names, victim, pool  # pool: seeded order
         self.routes0 = routes0 or {}
         self.rng = rng
-        self.detour0 = detour0 or (lambda victim, attacker: True)  # a wormhole detour at t = 0?
+        # windows of the attack in which a wormhole detour victim -> attacker -> BS exists
+        self.detours = detours or (lambda victim, attacker: 1)
         self.used: set[str] = set()
 
     @property

@@ -1,9 +1,9 @@
 """Wormhole: the victim's traffic with its BS is tunnelled through the attacker's switch.
 
 - token `wormhole` (no parameters);
-- schedule: the attacker is drawn among UAVs off the victim's route at t = 0 that have a detour
-  then (a usable link to the victim, and a usable path to the victim's BS not through it), so the
-  detour really adds a hop and really carries traffic;
+- schedule: the attacker is drawn among UAVs off the victim's route at t = 0, the one with a
+  detour (a usable link to the victim, and a usable path to the victim's BS not through it) in
+  most windows of the attack, so the detour really adds a hop and really carries traffic;
 - plan: in each window the attack overlaps, the planner adds the detour's links where it has one
   (`detours_traffic`, `topology.routing.with_wormholes`: usable links only; a window without
   one gets no override) and lists it, with its hops, in `Window.wormholes`;
@@ -51,8 +51,8 @@ class Wormhole(AttackFamily):
     def attackers(self, spec: SpecBase, draw: ScheduleDraw) -> list[str]:
         on_path = set(draw.routes0.get(draw.victim, ()))
         off = [u for u in draw.pool if u not in draw.used and u not in on_path]
-        able = [u for u in off if draw.detour0(draw.victim, u)]
-        attackers = [(able or off)[0]] if off else draw.take(1)
+        # the one with a detour in most of the attack's windows (the first in seeded order on ties)
+        attackers = [max(off, key=lambda u: draw.detours(draw.victim, u))] if off else draw.take(1)
         draw.used.update(attackers)
         return attackers
 

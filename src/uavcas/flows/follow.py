@@ -20,7 +20,8 @@ times in the packet table. `follow(table, timeline)` tells those observations ap
 
 The forwarding comes from a `Timeline`: the tables the run installed (`forwarding.jsonl`,
 exact, attacks included) or, for runs made before they were logged, the plan's windows
-(`Timeline.from_plan`: each window's routes and wormhole overrides for the whole window).
+(`Timeline.from_plan`: each window's routes for the whole window; a wormhole detour travels on alias
+MACs outside these tables, so its steps are chained by the planned link delays).
 
 Output per packet-table row: `pid` (int64, equal across a transmission's observations, numbered
 in order of first observation) and `hop` (0 at its first switch). Pure numpy; no root.
@@ -101,7 +102,7 @@ class Timeline:
         epochs = []
         for w in plan.windows:
             fwd = compute(names, [(lk.a, lk.b) for lk in w.links], [r.hops for r in w.routes],
-                          [(o.victim, o.attacker, o.bs) for o in w.wormholes])
+                          detour_links=[(lk.a, lk.b) for lk in w.links if lk.detour])
             t = t0_unix + w.t_s
             begin, end = applied_unix[w.index] if applied_unix is not None and w.index < len(applied_unix) else (t, t)
             epochs.append(ForwardingEpoch(t_begin_unix=begin, t_unix=end, window=w.index, next_hop=fwd.next_hop))

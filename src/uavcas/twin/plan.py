@@ -115,23 +115,25 @@ def plan(
     losses = [_loss_matrix(n, all_pairs, arr.loss) for arr in arrs]
     bs_of = [n_uav + u % scenario.n_bs for u in range(n_uav)]
 
+    # The routing without attacks, per window (attacks only add detours to it).
+    bases = [nearest_neighbour_topology(positions[w], is_bs, losses[w]) for w in range(windows)]
     # Routes of window 0 pick the blackhole relay and an off-path wormhole attacker.
-    topo0 = nearest_neighbour_topology(positions[0], is_bs, losses[0])
-    routes0 = {names[u]: [names[h] for h in route(topo0, n, u, bs_of[u]) or []] for u in range(n_uav)}
+    routes0 = {names[u]: [names[h] for h in route(bases[0], n, u, bs_of[u]) or []] for u in range(n_uav)}
 
-    def detour0(victim: str, attacker: str) -> bool:
+    def detour_windows(victim: str, attacker: str, start_s: float, stop_s: float) -> int:
+        """Windows of [start_s, stop_s) in which a wormhole detour victim -> attacker -> BS exists."""
         v, a = names.index(victim), names.index(attacker)
-        return bool(with_wormholes(topo0, positions[0], is_bs, [(v, a, bs_of[v])], losses[0]).detours)
+        return sum(bool(with_wormholes(bases[w], positions[w], is_bs, [(v, a, bs_of[v])], losses[w]).detours)
+                   for w in range(windows) if w * window_s < stop_s and (w + 1) * window_s > start_s)
 
     attacks = schedule_attacks(
-        scenario, names[:n_uav], windows * window_s, _rng(seed, _ATTACK_STREAM), routes0, detour0
+        scenario, names[:n_uav], windows * window_s, _rng(seed, _ATTACK_STREAM), routes0, detour_windows
     )
 
     out_windows = []
     for w in range(windows):
         t0, t1 = w * window_s, (w + 1) * window_s
-        pos = positions[w]
-        base = nearest_neighbour_topology(pos, is_bs, losses[w])
+        pos, base = positions[w], bases[w]
         detours = [a for a in attacks if family(a.family).detours_traffic and a.start_s < t1 and a.stop_s > t0]
         triples = [(names.index(v), names.index(a.attackers[0]), bs_of[names.index(v)])
                    for a in detours for v in a.victims]
