@@ -146,3 +146,24 @@ def test_wormhole_detour_and_ddos(synth_run_dir, tmp_path):
     # a plan without the detour in that window: the same packets are no wormhole
     (run / "plan.json").write_text(make_plan().to_json())
     assert not _labelled(run).label_wormhole.any()
+
+
+def test_cli_extract_records_the_rule_in_the_card(synth_run_dir, tmp_path):
+    from typer.testing import CliRunner
+
+    from uavcas.cli import app
+    from uavcas.flows import FlowConfig
+
+    out = tmp_path / "ds"
+    r = CliRunner().invoke(app, ["extract", str(synth_run_dir), "--out", str(out), "--min-attack-fraction", "0.5"])
+    assert r.exit_code == 0, r.output
+    assert f"{1 + N_FLOOD // 5} flow(s) left out" in r.output
+    card = json.loads((out / "dataset.json").read_text())
+    (rule,) = card["label_rules"]
+    assert "attack_fraction < 0.5" in rule and "blackhole:" in rule and "wormhole:" in rule
+    assert card["effect_counts"]["replay"] == 3 and card["runs"][0]["impure_dropped"] == 1 + N_FLOOD // 5
+    bad = CliRunner().invoke(app, ["extract", str(synth_run_dir), "--out", str(tmp_path / "no"),
+                                   "--min-attack-fraction", "1.5"])
+    assert bad.exit_code == 2 and not (tmp_path / "no").exists()
+    with pytest.raises(ValueError, match="window-hostpair"):
+        FlowConfig(view="window-hostpair")  # it needs the run's t0 and window length
