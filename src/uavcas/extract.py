@@ -11,6 +11,7 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -65,17 +66,9 @@ class Extracted:
     truth: PacketTruth
 
 
-def extract(
-    run_dir: Path | str,
-    view: str = "5tuple",
-    labels: str = "ours",
-    min_packets: int | None = None,
-    allow_truncated: bool = False,
-    run_id: str | None = None,
-    min_attack_fraction: float = 0.0,
-) -> Shard:
-    """Flows + labels of one run. The run id is `run_id`, else run.json's, else the dir's name."""
-    return extract_detailed(run_dir, view, labels, min_packets, allow_truncated, run_id, min_attack_fraction).shard
+def extract(run_dir: Path | str, **options: Any) -> Shard:
+    """Flows + labels of one run (options: those of `extract_detailed`)."""
+    return extract_detailed(run_dir, **options).shard
 
 
 def extract_detailed(
@@ -87,7 +80,8 @@ def extract_detailed(
     run_id: str | None = None,
     min_attack_fraction: float = 0.0,
 ) -> Extracted:
-    """`extract`, keeping the packet-level results (for audits and tests)."""
+    """Flows + labels of one run, with the packet-level results (for audits and tests). The run id
+    is `run_id`, else run.json's, else the directory's name."""
     rd = RunDir(Path(run_dir))
     if not rd.root.is_dir():
         raise RunDirError(f"{rd.root}: not a directory")

@@ -1,4 +1,4 @@
-"""Blackhole: the relay credited with the drop, the nft table on the victim's switch, victim-window truth."""
+"""Blackhole: the relay credited with the drop, the nft table on the victim's switch, drops as packet effects."""
 
 from __future__ import annotations
 
