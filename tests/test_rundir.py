@@ -25,7 +25,8 @@ def run_dir(tmp_path_factory):
 
 def test_paths_and_the_one_list_of_run_files(tmp_path):
     rd = RunDir(tmp_path)
-    assert [p.name for p in rd.files()] == ["plan.json", "run.json", "attacks.jsonl", "shaping.jsonl"]
+    assert [p.name for p in rd.files()] == ["plan.json", "run.json", "attacks.jsonl", "shaping.jsonl",
+                                          "forwarding.jsonl"]
     assert (rd.pcap_dir, rd.logs_dir) == (tmp_path / "pcap", tmp_path / "logs")
     assert not rd.holds_run() and rd.read_info() is None and rd.read_attacks() == []
     rd.shaping_jsonl.write_text("")
@@ -74,3 +75,16 @@ def test_extract_takes_the_axes_from_the_plans_scenario(run_dir, tmp_path):
     rd.plan_json.write_text(p.model_copy(update={"config": "test", "scenario": None}).to_json())
     with pytest.raises(RunDirError, match="no scenario"):
         extract(rd.root)
+
+
+def test_forwarding_log_reads_back_and_names_a_bad_line(tmp_path):
+    from uavcas.rundir import ForwardingEpoch
+
+    rd = RunDir(tmp_path)
+    assert rd.read_forwarding() == []
+    ep = ForwardingEpoch(t_begin_unix=1.0, t_unix=1.5, window=0, next_hop={"uav0": {"bs0": "uav1"}})
+    rd.forwarding_jsonl.write_text(ep.model_dump_json() + "\n\n" + '{"t_unix": 2.0}\n')
+    with pytest.raises(RunDirError, match="forwarding.jsonl:3"):
+        rd.read_forwarding()
+    rd.forwarding_jsonl.write_text(ep.model_dump_json() + "\n")
+    assert rd.read_forwarding() == [ep]

@@ -1,8 +1,9 @@
 """Typed records of a run: the attack log (attacks.jsonl) and the runner's progress events.
 
 attacks.jsonl has one JSON object per line, one record type per `event`:
-- `start`: an attack began (t_unix taken just before the action), who and what;
-- `stop`: it was fully undone (t_unix taken just after);
+- `start`: an attack began (t_unix taken just before the action; the blackhole's once its drop
+  rule is in force), who and what;
+- `stop`: it was fully undone (t_unix taken just after; the blackhole's just before its rule goes);
 - `rate`: a flood attacker's measured SYN rate (logged before its `stop`);
 - `inject`: one packet a replayer sent.
 The emulation writes them, the labeller reads them; unknown or missing fields fail loudly

@@ -1,8 +1,9 @@
 """The extraction stage: `extract(run_dir) -> Shard`, one run's labelled flows with their axes.
 
-Captures -> flows (`uavcas.flows`) -> ground-truth labels (`uavcas.labels`) -> identity and axis
-columns from the plan's typed scenario (nothing here parses the config string). Writing the shard
-and the dataset card is `uavcas.dataset.store`'s job.
+Captures -> flows (`uavcas.flows`) -> every packet followed across the switches
+(`uavcas.flows.follow`) -> one effect per packet and labels from them (`uavcas.labels`) -> identity
+and axis columns from the plan's typed scenario (nothing here parses the config string). Writing
+the shard and the dataset card is `uavcas.dataset.store`'s job.
 """
 
 from __future__ import annotations
@@ -10,12 +11,16 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
+import numpy as np
 import pandas as pd
 
-from uavcas.flows import FlowConfig, extract_flows
-from uavcas.labels import label_flows, read_attack_log
+from uavcas.flows import FlowConfig, Flows, PacketTable, extract_flows
+from uavcas.flows.follow import Followed, follow_run
+from uavcas.labels import PacketTruth, TruthContext, label_flows, packet_truth, read_attack_log, rule_text
 from uavcas.rundir import RunDir, RunDirError
+from uavcas.vocabulary import EFFECTS
 
 
 @dataclass(frozen=True)
@@ -29,6 +34,10 @@ class ShardInfo:
     n_packets: int
     n_flows: int
     class_counts: dict[str, int]
+    min_attack_fraction: float
+    impure_dropped: int  # flows left out: attack packets, but attack_fraction < min_attack_fraction
+    effect_counts: dict[str, int]  # captured packet observations per effect (all capture points)
+    label_rule: str
     truncations: list[str]
     extracted_unix: float
 
@@ -45,15 +54,34 @@ def _check_run_id(run_dir: Path, rid: str) -> str:
     return rid
 
 
-def extract(
+@dataclass(frozen=True)
+class Extracted:
+    """A shard and what it was made from: the packet table (every capture point), its flows
+    (`frame.flow_id` numbers them), the followed transmissions and each packet's truth."""
+
+    shard: Shard
+    packets: PacketTable
+    flows: Flows
+    followed: Followed
+    truth: PacketTruth
+
+
+def extract(run_dir: Path | str, **options: Any) -> Shard:
+    """Flows + labels of one run (options: those of `extract_detailed`)."""
+    return extract_detailed(run_dir, **options).shard
+
+
+def extract_detailed(
     run_dir: Path | str,
     view: str = "5tuple",
     labels: str = "ours",
     min_packets: int | None = None,
     allow_truncated: bool = False,
     run_id: str | None = None,
-) -> Shard:
-    """Flows + labels of one run. The run id is `run_id`, else run.json's, else the dir's name."""
+    min_attack_fraction: float = 0.0,
+) -> Extracted:
+    """Flows + labels of one run, with the packet-level results (for audits and tests). The run id
+    is `run_id`, else run.json's, else the directory's name."""
     rd = RunDir(Path(run_dir))
     if not rd.root.is_dir():
         raise RunDirError(f"{rd.root}: not a directory")
@@ -64,17 +92,24 @@ def extract(
     pcaps = rd.pcaps()
     if not pcaps:
         raise RunDirError(f"{rd.root}: no captures in {rd.pcap_dir}")
-    cfg = FlowConfig(view=view, min_packets=min_packets)  # type: ignore[arg-type]
-    ex = extract_flows(pcaps, cfg, points=[p.stem for p in pcaps], allow_truncated=allow_truncated)
     t0 = info.t0_unix if info else None
+    if t0 is None:
+        raise RunDirError(f"{rd.run_json}: no t0_unix (an unfinished run?): packets cannot be placed in the plan")
+    cfg = FlowConfig(view=view, min_packets=min_packets, window_t0_unix=t0, window_s=plan.window_s)  # type: ignore[arg-type]
+    ex = extract_flows(pcaps, cfg, points=[p.stem for p in pcaps], allow_truncated=allow_truncated)
     log = read_attack_log(rd.attacks_jsonl, plan, t0)
-    df = label_flows(ex.packets, ex.flows, ex.frame, log, mode=labels)  # type: ignore[arg-type]
+    _, followed = follow_run(rd.root, table=ex.packets)
+    truth = packet_truth(TruthContext(ex.packets, log, followed, plan, t0))
+    lab = label_flows(ex.flows, ex.frame, log, truth, mode=labels,  # type: ignore[arg-type]
+                      min_attack_fraction=min_attack_fraction)
+    df = lab.frame
     rid = _check_run_id(rd.root, str(run_id or (info.run_id if info else None) or rd.root.resolve().name))
     df["run_id"], df["config"], df["seed"], df["view"] = rid, plan.config, plan.seed, view
     for k, v in plan.scenario.axes().items():
         df[k] = v
     counts = {str(k): int(v) for k, v in df["label"].value_counts().items()}
-    return Shard(
+    effects = np.bincount(truth.effect.astype(np.int64), minlength=len(EFFECTS))
+    shard = Shard(
         frame=df,
         info=ShardInfo(
             run_id=rid,
@@ -86,7 +121,12 @@ def extract(
             n_packets=len(ex.packets),
             n_flows=len(df),
             class_counts=counts,
+            min_attack_fraction=float(min_attack_fraction),
+            impure_dropped=lab.impure_dropped,
+            effect_counts={e: int(c) for e, c in zip(EFFECTS, effects)},
+            label_rule=rule_text(labels, min_attack_fraction),
             truncations=[f"{t.path}@{t.offset}" for t in ex.packets.truncations],
             extracted_unix=time.time(),
         ),
     )
+    return Extracted(shard, ex.packets, ex.flows, followed, truth)

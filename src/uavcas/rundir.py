@@ -4,6 +4,7 @@
     RUN_DIR/run.json        what happened (RunInfo), written last
     RUN_DIR/attacks.jsonl   the attack log (uavcas.events records)
     RUN_DIR/shaping.jsonl   per-window shaping records of every link
+    RUN_DIR/forwarding.jsonl  every forwarding table installed, with when (ForwardingEpoch)
     RUN_DIR/pcap/           one capture per switch
     RUN_DIR/logs/           tool logs (curl results, stderr)
 
@@ -83,6 +84,21 @@ class CaptureRecord(_Strict):
     exit_code: int | None
 
 
+class ForwardingEpoch(_Strict):
+    """One line of forwarding.jsonl: a forwarding table the fabric held from `t_unix` on.
+
+    The switches changed over between `t_begin_unix` (the apply began) and `t_unix` (it ended);
+    in between a frame may have met either table. `next_hop[switch][destination]` is the
+    neighbour switch (node names) a frame for `destination` leaves `switch` towards; a missing
+    entry means the switch had no way there (the frame is dropped).
+    """
+
+    t_begin_unix: float
+    t_unix: float
+    window: int
+    next_hop: dict[str, dict[str, str]]
+
+
 class RunInfo(_Strict):
     """run.json: the run's identity, outcome, environment and measurements."""
 
@@ -121,7 +137,7 @@ class RunInfo(_Strict):
 class RunDir:
     root: Path
 
-    FILES = ("plan.json", "run.json", "attacks.jsonl", "shaping.jsonl")  # the small files of a run
+    FILES = ("plan.json", "run.json", "attacks.jsonl", "shaping.jsonl", "forwarding.jsonl")  # the small files of a run
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "root", Path(self.root))
@@ -156,6 +172,10 @@ class RunDir:
     def holds_run(self) -> bool:
         """Whether any file of a run is there (a directory uavcas may reuse for a run)."""
         return any(p.exists() for p in self.files())
+
+    @property
+    def forwarding_jsonl(self) -> Path:
+        return self.root / "forwarding.jsonl"
 
     def pcaps(self) -> list[Path]:
         return sorted(p for p in self.pcap_dir.glob("*") if p.suffix in CAPTURE_SUFFIXES)
@@ -197,3 +217,17 @@ class RunDir:
         if not self.shaping_jsonl.exists():
             return []
         return [json.loads(ln) for ln in self.shaping_jsonl.read_text().splitlines() if ln.strip()]
+
+    def read_forwarding(self) -> list[ForwardingEpoch]:
+        """The forwarding tables the run installed ([] for runs made before they were logged)."""
+        if not self.forwarding_jsonl.exists():
+            return []
+        out = []
+        for lineno, ln in enumerate(self.forwarding_jsonl.read_text().splitlines(), 1):
+            if not ln.strip():
+                continue
+            try:
+                out.append(ForwardingEpoch.model_validate_json(ln))
+            except ValidationError as exc:
+                raise RunDirError(f"{self.forwarding_jsonl}:{lineno}: {exc.errors()[0]['msg']}") from None
+        return out

@@ -97,6 +97,10 @@ ID_COLUMNS: tuple[str, ...] = (
     "capture_point",
 )
 COUNT_COLUMNS: tuple[str, ...] = ("packets", "bytes", "duration_s")
-SEQUENCE_COLUMNS: tuple[str, ...] = ("seq_time_s", "seq_size", "seq_flags", "seq_dir")
-META_LABEL_COLUMNS: tuple[str, ...] = LABEL_COLUMNS + ("label", "label_source")
+SEQUENCE_COLUMNS: tuple[str, ...] = ("seq_time_s", "seq_size", "seq_flags", "seq_dir", "seq_effect")
+EFFECTS, ATTACK_EFFECTS = _v.EFFECTS, _v.ATTACK_EFFECTS
+# Per-flow ground truth from the packets' effects (labels/effects.py): attack_fraction is exactly
+# attack_packets / packets; attack_packets_<family> split attack_packets by family.
+TRUTH_COLUMNS: tuple[str, ...] = ("attack_packets", "attack_fraction") + _v.ATTACK_PACKET_COLUMNS
+META_LABEL_COLUMNS: tuple[str, ...] = TRUTH_COLUMNS + LABEL_COLUMNS + ("label", "label_source")
 METADATA_COLUMNS: tuple[str, ...] = ID_COLUMNS + AXIS_COLUMNS + META_LABEL_COLUMNS

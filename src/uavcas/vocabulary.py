@@ -50,6 +50,20 @@ AXIS_COLUMNS: tuple[str, ...] = FIELD_NAMES[:-1] + ("noise_dbm",)
 
 LABEL_COLUMNS: tuple[str, ...] = tuple(f"label_{f}" for f in FAMILIES)
 
+# What happened to one captured packet (its ground truth; `uavcas.labels.effects`): an attack
+# made it (flood, replay: an injected copy), the attack moved or dropped it (wormhole: carried
+# over the attacker's detour; blackhole: dropped at the victim's switch), the channel lost it on a
+# shaped link (channel_loss), or nothing did (benign).
+Effect = Literal["benign", "flood", "replay", "blackhole", "wormhole", "channel_loss"]
+EFFECTS: tuple[str, ...] = get_args(Effect)
+# One effect per packet: where several apply, the first of this order wins (a packet an attack
+# made stays that packet whatever happens to it later; one carried over a detour and then dropped
+# keeps the detour, so both families of blackhole+wormhole show in its flows).
+EFFECT_PRECEDENCE: tuple[str, ...] = ("replay", "flood", "wormhole", "blackhole", "channel_loss", "benign")
+ATTACK_EFFECTS: tuple[str, ...] = ("flood", "replay", "blackhole", "wormhole")  # count as attack packets
+# Per-family counts of attack packets in a flow (the family whose attack gave the packet its effect).
+ATTACK_PACKET_COLUMNS: tuple[str, ...] = tuple(f"attack_packets_{f}" for f in FAMILIES)
+
 
 def canonical_families(families) -> tuple[str, ...]:
     """The families in canonical order; unknown names are refused."""

@@ -18,12 +18,15 @@ def synth_run_dir(tmp_path_factory):
 
 @pytest.fixture(scope="session")
 def truth_ctx(synth_run_dir):
-    """A TruthContext of the synthetic run, and its attack log."""
+    """A TruthContext of the synthetic run (packets, follower, attack log, plan) and its flows."""
     from uavcas.flows import FlowConfig, extract_flows
+    from uavcas.flows.follow import follow_run
     from uavcas.labels import TruthContext, read_attack_log
     from uavcas.rundir import RunDir
 
     rd = RunDir(synth_run_dir)
     ex = extract_flows(rd.pcaps(), FlowConfig(view="5tuple"))
-    log = read_attack_log(rd.attacks_jsonl, rd.read_plan(), T0)
-    return TruthContext(ex.packets, ex.flows, ex.frame, log)
+    plan = rd.read_plan()
+    log = read_attack_log(rd.attacks_jsonl, plan, T0)
+    _, followed = follow_run(rd.root, table=ex.packets)
+    return TruthContext(ex.packets, log, followed, plan, T0)

@@ -54,13 +54,14 @@ def test_calibration_one_second_in_then_periodically():
     assert family("blackhole").calibration_times(att) == []
 
 
-def test_truth_is_packet_exact_inside_the_window(truth_ctx):
+def test_effect_is_packet_exact_inside_the_window(truth_ctx):
     (w,) = truth_ctx.log.of_family("dos")
-    hits = family("dos").truth(truth_ctx, [w])
-    f = truth_ctx.frame[hits]
-    assert len(f) == N_FLOOD and (f.src_ip == IPS["uav1"]).all() and (f.dst_ip == IPS["uav0"]).all()
-    assert (f.first_ts >= T0 + DOS_WINDOW[0]).all() and (f.first_ts < T0 + DOS_WINDOW[1]).all()
+    hits = family("dos").effects(truth_ctx, [w])
+    p = truth_ctx.packets.to_pandas()[hits]
+    assert len(p) == N_FLOOD and (p.src_ip == IPS["uav1"]).all() and (p.dst_ip == IPS["uav0"]).all()
+    assert ((p.tcp_flags & 0x12) == 0x02).all()
+    assert (p.ts_s >= T0 + DOS_WINDOW[0]).all() and (p.ts_s < T0 + DOS_WINDOW[1]).all()
     later = dataclasses.replace(w, start_unix=w.stop_unix, stop_unix=w.stop_unix + 10)
-    assert not family("dos").truth(truth_ctx, [later]).any()  # same host pair, outside the window
+    assert not family("dos").effects(truth_ctx, [later]).any()  # same host pair, outside the window
     wrong_way = dataclasses.replace(w, attacker_ips=w.victim_ips, victim_ips=w.attacker_ips)
-    assert not family("dos").truth(truth_ctx, [wrong_way]).any()  # SYN-ACKs alone are no flood
+    assert not family("dos").effects(truth_ctx, [wrong_way]).any()  # SYN-ACKs alone are no flood

@@ -29,12 +29,13 @@ def test_mirror_copies_both_directions_of_the_victims_port():
     assert any("egress" in x and "mirror dev h1" in x for x in lines)
 
 
-def test_truth_matches_each_injection_within_the_tolerance(truth_ctx):
+def test_effect_matches_each_injection_within_the_tolerance(truth_ctx):
     log = truth_ctx.log
     assert len(log.injections) == 3
-    hits = family("replay").truth(truth_ctx, log.of_family("replay"))
-    f = truth_ctx.frame[hits]
-    assert len(f) == 1 and {f.iloc[0].src_ip, f.iloc[0].dst_ip} == {IPS["uav3"], IPS["bs0"]}  # the replayed session
+    hits = family("replay").effects(truth_ctx, log.of_family("replay"))
+    p = truth_ctx.packets.to_pandas()[hits]
+    assert len(p) == 3 and (p.src_ip == IPS["uav3"]).all() and (p.dst_ip == IPS["bs0"]).all()  # the copies
+    assert (p.ttl == 64 - 5).all()
     assert injected_packets(truth_ctx.packets, log).sum() == 3
     late = AttackLog(log.windows, tuple(dataclasses.replace(i, t_unix=i.t_unix + 2 * MATCH_TOLERANCE_S)
                                         for i in log.injections))

@@ -19,14 +19,23 @@ def test_attacker_is_off_the_victims_route_where_possible():
     assert family("wormhole").attackers(WormholeSpec(), d2) == ["uav1"]  # nobody off the route: take one
 
 
+def test_attacker_has_a_detour_in_most_windows_of_the_attack():
+    names = [f"uav{i}" for i in range(5)]
+    counts = {"uav1": 1, "uav2": 2, "uav4": 2}
+    d = ScheduleDraw(names, "uav0", ["uav3", "uav1", "uav4", "uav2"], {"uav0": ["uav0", "uav3", "bs0"]},
+                     np.random.default_rng(0), detours=lambda v, a: counts.get(a, 0))
+    assert family("wormhole").attackers(WormholeSpec(), d) == ["uav4"]  # 2 windows; first of the ties
+    nobody = ScheduleDraw(names, "uav0", ["uav3", "uav1"], {"uav0": ["uav0", "uav3", "bs0"]},
+                          np.random.default_rng(0), detours=lambda v, a: 0)
+    assert family("wormhole").attackers(WormholeSpec(), nobody) == ["uav1"]  # off the route anyway
+
+
 def test_planner_detours_the_victim_through_the_attacker_while_scheduled():
     p = plan("wormhole-6-1-image-logdist-adaptive-grid-30-95", seed=4, windows=4, window_s=5.0)
     (a,) = p.attacks
     assert family(a.family).detours_traffic
     for w in p.windows:
         active = a.start_s < w.t_s + w.duration_s and a.stop_s > w.t_s
-        overrides = [(o.victim, o.attacker) for o in w.wormholes]
-        assert overrides == ([(a.victims[0], a.attackers[0])] if active else [])
-        if active:
-            r = next(r for r in w.routes if r.src == a.victims[0])
-            assert a.attackers[0] in r.hops
+        overrides = [(o.victim, o.attacker, o.hops[:2]) for o in w.wormholes]
+        assert overrides == ([(a.victims[0], a.attackers[0], [a.victims[0], a.attackers[0]])] if active else [])
+        assert any(lk.detour for lk in w.links) == active

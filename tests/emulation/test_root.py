@@ -110,19 +110,23 @@ def test_toggled_links_keep_planned_paths_and_no_others():
         assert reachable(emu, "uav0", "bs0")
 
 
-def test_wormhole_adds_the_attacker_hop():
+def test_wormhole_adds_the_attacker_hop_for_the_victim_only():
+    # uav2 reaches bs0 through the victim's switch: its frames to bs0 must not follow the detour
     wins = [window(0, [link("uav0", "bs0", delay_ms=1.0), link("uav0", "uav1", delay_ms=4.0),
-                       link("uav1", "bs0", delay_ms=4.0)])]
-    p = plan(nodes(2, 1), wins)
+                       link("uav1", "bs0", delay_ms=4.0), link("uav2", "uav0")])]
+    p = plan(nodes(3, 1), wins)
     with Emulation(p, prefix=new_prefix()) as emu:
         emu.apply_window(0)
-        base = _rtt_ms(emu, "uav0", "bs0")
+        base, other = _rtt_ms(emu, "uav0", "bs0"), _rtt_ms(emu, "uav2", "bs0")
         emu.set_wormholes([("uav0", "uav1", "bs0")])
-        assert emu.forwarding.path("uav0", "bs0") == ["uav0", "uav1", "bs0"]
-        worm = _rtt_ms(emu, "uav0", "bs0")
-        assert 1.5 < base < 4.0 and 15.0 < worm < 19.5, (base, worm)
+        assert emu.forwarding.detour_path("uav0", "bs0") == ["uav0", "uav1", "bs0"]
+        worm, other_worm, back = _rtt_ms(emu, "uav0", "bs0"), _rtt_ms(emu, "uav2", "bs0"), _rtt_ms(emu, "bs0", "uav0")
+        assert 1.5 < base < 4.0 and 15.0 < worm < 19.5 and 15.0 < back < 19.5, (base, worm, back)
+        assert abs(other_worm - other) < 1.5, (other, other_worm)
+        emu.set_wormholes([])
+        assert _rtt_ms(emu, "uav0", "bs0") < 4.0
         port = emu.switch("uav1").link_ports["bs0"]
-        assert port == "l1-2"
+        assert port == "l1-3"
 
 
 def test_two_prefixes_coexist_and_lazy_links():

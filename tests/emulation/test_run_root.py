@@ -123,7 +123,7 @@ def test_wormhole_adds_the_attacker_hop_to_the_victims_rtt(tmp_path):
         ex = AttackExecutor(emu, p, tmp_path, p.duration_s)
         w = p.windows[0]
         ex.window = w
-        emu.apply_links(w.links, ex.routes_for(w), ex.wormholes_for(w), window_index=0)
+        emu.apply_links(w.links, [r.hops for r in w.routes], ex.wormholes_for(w), window_index=0)
         before = ping_avg_ms(emu, "bs0", "uav0")
         rec = ex.start(p.attacks[0])
         assert rec.paths["uav0>bs0"] == ["uav0", "uav1", "bs0"] and not rec.rejected

@@ -16,6 +16,7 @@ from uavcas.cli import app  # noqa: E402
 from uavcas.attacks.blackhole import switch_ports  # noqa: E402
 from uavcas.emulation import preflight as preflight_mod  # noqa: E402
 from uavcas.emulation.attacks import AttackExecutor  # noqa: E402
+from uavcas.emulation.controller import Detour  # noqa: E402
 from uavcas.emulation.naming import check_prefix  # noqa: E402
 from uavcas.emulation.runner import prepare_out_dir, schedule  # noqa: E402
 
@@ -45,14 +46,11 @@ def test_wormhole_detour_only_while_active(tmp_path):
     p = _plan()
     ex = AttackExecutor(_FakeEmu(), p, tmp_path, p.duration_s)
     w = p.windows[0]
-    # idle: the victim's own path, avoiding the attacker (the plan routes it through uav1)
-    assert ex.routes_for(w) == [["uav0", "bs0"], ["uav1", "bs0"]] and ex.wormholes_for(w) == []
+    assert ex.wormholes_for(w) == []  # idle: no detour
     ex.active["wormhole-1"] = p.attacks[1]
-    assert ex.routes_for(w) == [["uav0", "uav1", "bs0"], ["uav1", "bs0"]]
-    assert ex.wormholes_for(w) == [("uav0", "uav1", "bs0")]
-    # a window without the plan's override still gets one (victim's BS = uav index mod n_bs)
-    w2 = w.model_copy(update={"wormholes": []})
-    assert ex.wormholes_for(w2) == [("uav0", "uav1", "bs0")]
+    assert ex.wormholes_for(w) == [Detour("uav0", "uav1", "bs0")]
+    # a window where the plan has no detour (no usable one) gets none
+    assert ex.wormholes_for(w.model_copy(update={"wormholes": []})) == []
     assert switch_ports(p.node("uav1").index) == ["h1", "l1-*"]
 
 

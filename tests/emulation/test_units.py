@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 
 from uavcas.emulation import cleanup, naming
-from uavcas.emulation.controller import compute, shortest_path, adjacency
+from uavcas.emulation.controller import Detour, adjacency, compute, shortest_path
 from uavcas.emulation.hosts import host_lines, HostSpec, node_argv, subnet_prefixlen
 from uavcas.emulation.naming import Naming
 from uavcas.emulation.nfqdelay import verdict_msg
@@ -62,21 +62,34 @@ def test_routes_are_honoured_both_ways():
     assert not fwd.rejected
 
 
-def test_wormhole_forces_victim_bs_through_attacker():
-    links = [("uav0", "bs0"), ("uav0", "uav1"), ("uav1", "bs0"), ("uav2", "bs0")]
+def test_wormhole_detours_victim_bs_both_ways_and_nothing_else():
+    links = [("uav0", "bs0"), ("uav0", "uav1"), ("uav1", "bs0"), ("uav2", "uav0")]
     plain = compute(NODES, links)
-    assert plain.path("uav0", "bs0") == ["uav0", "bs0"]
     fwd = compute(NODES, links, wormholes=[("uav0", "uav1", "bs0")])
-    assert fwd.path("uav0", "bs0") == ["uav0", "uav1", "bs0"]
-    assert fwd.path("bs0", "uav0") == ["bs0", "uav1", "uav0"]
-    assert fwd.path("uav2", "bs0") == ["uav2", "bs0"]  # other traffic unchanged
+    assert fwd.detour_path("uav0", "bs0") == ["uav0", "uav1", "bs0"] and not fwd.rejected
+    assert fwd.next_hop == plain.next_hop  # by destination MAC nothing moves: uav2 -> bs0 via uav0 direct
+    assert fwd.path("uav2", "bs0") == ["uav2", "uav0", "bs0"]
+    (d,) = fwd.detours
+    assert d.alias_hops() == {("uav0", "uav0>bs0"): ("uav1", "uav0>bs0"), ("uav1", "uav0>bs0"): ("bs0", "uav0>bs0"),
+                              ("bs0", "bs0>uav0"): ("uav1", "bs0>uav0"), ("uav1", "bs0>uav0"): ("uav0", "bs0>uav0")}
+
+
+def test_detour_links_carry_only_the_detour():
+    # uav1-bs0 exists for the detour only: uav1's own traffic keeps going through uav0
+    links = [("uav0", "bs0"), ("uav0", "uav1"), ("uav1", "bs0")]
+    fwd = compute(NODES, links, wormholes=[Detour("uav0", "uav1", "bs0", ("uav0", "uav1", "bs0"))],
+                  detour_links=[("bs0", "uav1")])
+    assert fwd.path("uav1", "bs0") == ["uav1", "uav0", "bs0"] and fwd.path("bs0", "uav1") == ["bs0", "uav0", "uav1"]
+    assert fwd.detour_path("uav0", "bs0") == ["uav0", "uav1", "bs0"]
 
 
 def test_impossible_override_is_rejected_not_looped():
     links = [("uav0", "bs0")]
     fwd = compute(NODES, links, wormholes=[("uav0", "uav1", "bs0")], routes=[["uav0", "uav3", "bs0"]])
-    assert fwd.path("uav0", "bs0") == ["uav0", "bs0"]
-    assert len(fwd.rejected) == 4
+    assert fwd.path("uav0", "bs0") == ["uav0", "bs0"] and fwd.detours == ()
+    assert fwd.rejected == ["route uav0>uav3>bs0", "route bs0>uav3>uav0", "wormhole uav0>uav1>bs0"]
+    bad_hops = compute(NODES, links + [("uav1", "bs0")], wormholes=[Detour("uav0", "uav1", "bs0", ("uav0", "uav1", "bs0"))])
+    assert bad_hops.detours == () and bad_hops.rejected == ["wormhole uav0>uav1>bs0"]  # uav0-uav1 is no link
 
 
 @pytest.mark.parametrize("overrides", [False, True], ids=["plain", "overrides"])
@@ -95,7 +108,7 @@ def test_random_windows_loop_free_and_shortest(seed, overrides):
         assert (p is None) == (sp is None)  # reachable exactly when connected: no loops, no holes
         if p:
             assert all(b in adj[a] for a, b in zip(p, p[1:])) and len(set(p)) == len(p)
-            if not overrides:  # without routes or wormholes every path is a shortest one
+            if not routes:  # without routes every path is a shortest one (detours use alias MACs)
                 assert len(p) == len(sp), (s, d, p, sp)
 
 

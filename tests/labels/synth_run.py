@@ -7,9 +7,15 @@ Timeline (seconds after T0; attack windows are logged in attacks.jsonl as epoch 
   answered by a SYN-ACK and an RST.
 - Replay replay-0 by uav2: 3 packets of the uav3 -> bs0 session at 12 re-sent at ~13.5 with TTL-5
   and seq+k; each logged as an `inject` record.
-- Blackhole blackhole-0 on uav3 in [40, 50): the session at 42 is affected.
-Capture points: s-bs0 sees every packet to/from bs0 (except one dropped packet of the session at
-1); s-uav0 sees every packet to/from uav0 (duplicates of the bs0 <-> uav0 sessions, +50 us).
+- Blackhole blackhole-0 on uav3 in [40, 50): the fetch at 42 never gets an answer: its SYN and
+  two retransmissions reach uav3's switch and go no further.
+- Channel loss: one ACK of the bs0 -> uav3 session at 22 leaves bs0's switch and never
+  reaches uav3's.
+Links (every window): bs0-uav0, bs0-uav2, bs0-uav3, uav0-uav1. Capture points: s-bs0, s-uav0 and
+s-uav3 see every packet to or from their node, the sender's switch at the send time and the
+receiver's 50 us later (s-bs0 misses one packet of the session at 1); the replayer (uav2) is
+not captured, so injected packets appear at s-bs0 only. `add_wormhole` turns a copy into a
+wormhole run (uav2 detours uav0 <-> bs0 in window 0; s-uav2 sees the session at 1, +25 us).
 """
 
 from __future__ import annotations
@@ -34,7 +40,7 @@ from scapy.layers.l2 import Ether
 from scapy.packet import Raw
 from scapy.utils import wrpcap
 
-from uavcas.twin.model import Attack, Node, Plan, Window
+from uavcas.twin.model import Attack, Link, Node, Plan, Window, WormholeOverride
 
 T0 = 1_700_000_000.0
 CONFIG = "blackhole+dos=1000+replay=50,200,10,5,inc-4-1-image-logdist-adaptive-random-30-95"
@@ -43,6 +49,10 @@ MACS = {n: f"02:00:00:00:00:{i:02x}" for i, n in enumerate(IPS)}
 DOS_WINDOW = (20.0, 30.0)
 BLACKHOLE_WINDOW = (40.0, 50.0)
 N_FLOOD = 50
+HOP_S = 50e-6  # sender's switch -> receiver's switch
+LINKS = (("uav0", "bs0"), ("uav2", "bs0"), ("uav3", "bs0"), ("uav0", "uav1"))
+LOST = {"src": "bs0", "dst": "uav3", "ip_id": 1208}  # an ACK of the session at 22 (channel loss)
+WORMHOLE_WINDOW = (0.5, 3.0)
 
 
 def _pkt(t, a, b, sport, dport, flags, seq=1000, ack=0, payload=b"", ttl=64, ip_id=1):
@@ -75,14 +85,23 @@ def http_session(t, client, server, sport, ip_id0=100):
     return pk
 
 
-def make_plan() -> Plan:
+def _link(a, b, detour=False):
+    return Link(a=a, b=b, kind="air", distance_m=100.0, pathloss_db=80.0, snr_db=25.0, mcs=5, rate_mbps=50.0,
+                delay_ms=HOP_S * 1000, loss=0.0, detour=detour)
+
+
+def make_plan(wormhole: bool = False) -> Plan:
     names = list(IPS)
     nodes = [
         Node(name=n, kind="bs" if n.startswith("bs") else "uav", index=i, ip=IPS[n], mac=MACS[n])
         for i, n in enumerate(names)
     ]
     windows = [
-        Window(index=k, t_s=5.0 * k, duration_s=5.0, positions={n: (0.0, 0.0, 50.0) for n in names}, links=[], routes=[])
+        Window(index=k, t_s=5.0 * k, duration_s=5.0, positions={n: (0.0, 0.0, 50.0) for n in names},
+               links=[_link(a, b) for a, b in LINKS] + ([_link("uav0", "uav2", detour=True)] if wormhole and k == 0 else []),
+               routes=[],
+               wormholes=[WormholeOverride(victim="uav0", attacker="uav2", bs="bs0", hops=["uav0", "uav2", "bs0"])]
+               if wormhole and k == 0 else [])
         for k in range(12)
     ]
     attacks = [
@@ -93,6 +112,22 @@ def make_plan() -> Plan:
     return Plan(config=CONFIG, seed=7, window_s=5.0, profile="test", area_m=(1000.0, 1000.0, 30.0, 110.0), nodes=nodes, windows=windows, attacks=attacks)
 
 
+def _seen_at(pkts, node, extra_s=0.0, exclude=()):
+    """Copies of the packets to or from `node`, timed as its switch sees them."""
+    out = []
+    for p in pkts:
+        if IPS[node] in (p[IP].src, p[IP].dst) and not any(p is e for e in exclude):
+            q = p.copy()
+            q.time = p.time + (0.0 if p[IP].src == IPS[node] else HOP_S + extra_s)
+            out.append(q)
+    return out
+
+
+def blackholed_fetch(t, sport, ip_id0):
+    """A fetch to a blackholed UAV: the SYN and its retransmissions (1 s, then 2 s later)."""
+    return [_pkt(t + dt, "bs0", "uav3", sport, 80, "S", 5000, ip_id=ip_id0 + k) for k, dt in enumerate((0.0, 1.0, 3.0))]
+
+
 def build_run(run_dir: Path, run_id: str = "run-synth") -> Path:
     run_dir.mkdir(parents=True, exist_ok=True)
     (run_dir / "pcap").mkdir(exist_ok=True)
@@ -100,7 +135,10 @@ def build_run(run_dir: Path, run_id: str = "run-synth") -> Path:
     for k, t in enumerate((1, 11, 21, 31, 41, 51)):
         pkts += http_session(t, "bs0", "uav0", 40000 + k, ip_id0=100 * k)
     for k, t in enumerate((2, 12, 22, 32, 42, 52)):
-        pkts += http_session(t, "bs0", "uav3", 41000 + k, ip_id0=1000 + 100 * k)
+        if t == 42:
+            pkts += blackholed_fetch(t, 41000 + k, ip_id0=1000 + 100 * k)
+        else:
+            pkts += http_session(t, "bs0", "uav3", 41000 + k, ip_id0=1000 + 100 * k)
     for k, t in enumerate((5, 45)):
         pkts += http_session(t, "uav1", "uav0", 42000 + k, ip_id0=3000 + 100 * k)
     for i in range(N_FLOOD):
@@ -112,28 +150,27 @@ def build_run(run_dir: Path, run_id: str = "run-synth") -> Path:
             pkts.append(_pkt(t + 0.002, "uav1", "uav0", sp, 80, "R", 78 + i, ip_id=7000 + i))
     # Replay: re-send the uav3 -> bs0 data segments of the session at 12 (ttl - 5, seq + k).
     orig = [p for p in http_session(12, "bs0", "uav3", 41001, ip_id0=1100) if p[IP].src == IPS["uav3"] and len(p[TCP].payload)][:3]
-    injects = []
+    injects, injected = [], []
     for k, o in enumerate(orig):
         r = o.copy()
         r[IP].ttl = o[IP].ttl - 5
         r[TCP].seq = o[TCP].seq + k + 1
         r.time = T0 + 13.5 + 0.1 * k
         pkts.append(r)
+        injected.append(r)
         injects.append(Inject(attack_id="replay-0", family="replay", t_unix=float(r.time), src_ip=r[IP].src,
                               dst_ip=r[IP].dst, src_port=r[TCP].sport, dst_port=r[TCP].dport, protocol=6,
                               ip_id=r[IP].id, ttl=r[IP].ttl, seq=r[TCP].seq, orig_seq=o[TCP].seq,
                               orig_ttl=o[IP].ttl))
     pkts.sort(key=lambda p: float(p.time))
-    bs = [p for p in pkts if IPS["bs0"] in (p[IP].src, p[IP].dst)]
+    bs = _seen_at(pkts, "bs0")
     bs = [p for p in bs if not (p[IP].id == 3 and p[IP].dst == IPS["uav0"])]  # one packet missed at s-bs0
-    u0 = []
-    for p in pkts:
-        if IPS["uav0"] in (p[IP].src, p[IP].dst):
-            q = p.copy()
-            q.time = p.time + 50e-6
-            u0.append(q)
-    wrpcap(str(run_dir / "pcap" / "s-bs0.pcap"), bs)
-    wrpcap(str(run_dir / "pcap" / "s-uav0.pcap"), u0)
+    lost = [p for p in pkts if (p[IP].src, p[IP].dst, p[IP].id) == (IPS[LOST["src"]], IPS[LOST["dst"]], LOST["ip_id"])]
+    assert len(lost) == 1
+    u3 = _seen_at(pkts, "uav3", exclude=injected + lost)  # the replayer sends from uav2's switch
+    wrpcap(str(run_dir / "pcap" / "s-bs0.pcap"), sorted(bs, key=lambda p: float(p.time)))
+    wrpcap(str(run_dir / "pcap" / "s-uav0.pcap"), sorted(_seen_at(pkts, "uav0"), key=lambda p: float(p.time)))
+    wrpcap(str(run_dir / "pcap" / "s-uav3.pcap"), sorted(u3, key=lambda p: float(p.time)))
 
     plan = make_plan()
     (run_dir / "plan.json").write_text(plan.to_json())
@@ -156,4 +193,26 @@ def build_run(run_dir: Path, run_id: str = "run-synth") -> Path:
     ]
     (run_dir / "attacks.jsonl").write_text(attack_log_text(log))
     (run_dir / "run.json").write_text(run_info(run_id=run_id, t0_unix=T0, config=CONFIG, seed=7).to_json())
+    return run_dir
+
+
+def add_wormhole(run_dir: Path) -> Path:
+    """Make `run_dir` (a copy of build_run's) a run where uav2 detours uav0 <-> bs0 during
+    WORMHOLE_WINDOW (window 0): the plan's detour, s-uav2's capture of the session at 1, the log."""
+    from uavcas.rundir import RunDir
+
+    (run_dir / "plan.json").write_text(make_plan(wormhole=True).to_json())
+    session = http_session(1, "bs0", "uav0", 40000, ip_id0=0)
+    mid = []
+    for p in session:
+        q = p.copy()
+        q.time = p.time + HOP_S / 2
+        mid.append(q)
+    wrpcap(str(run_dir / "pcap" / "s-uav2.pcap"), mid)
+    recs = RunDir(run_dir).read_attacks()
+    recs += [AttackStart(attack_id="wormhole-0", family="wormhole", attackers=["uav2"], attacker_ips=[IPS["uav2"]],
+                         victims=["uav0"], victim_ips=[IPS["uav0"]], t_unix=T0 + WORMHOLE_WINDOW[0], params={},
+                         planned_start_s=WORMHOLE_WINDOW[0], planned_stop_s=WORMHOLE_WINDOW[1]),
+             AttackStop(attack_id="wormhole-0", family="wormhole", t_unix=T0 + WORMHOLE_WINDOW[1])]
+    (run_dir / "attacks.jsonl").write_text(attack_log_text(recs))
     return run_dir

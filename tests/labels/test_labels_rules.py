@@ -1,28 +1,27 @@
-"""Labels on the synthetic run: packet-exact floods and replays, victim windows, paper option."""
+"""Labels from per-packet effects on the synthetic run: floods, replays, blackhole drops, wormhole
+detours, channel losses; the purity threshold, the views and the paper option."""
 
 from __future__ import annotations
 
 import json
 
+import numpy as np
 import pytest
-from synth_run import BLACKHOLE_WINDOW, DOS_WINDOW, IPS, N_FLOOD, T0, make_plan
+from synth_run import BLACKHOLE_WINDOW, DOS_WINDOW, IPS, N_FLOOD, T0, add_wormhole, make_plan
 
-from uavcas.events import AttackStart, AttackStop, attack_log_text
-from uavcas.flows import extract_flows
-from uavcas.labels import LabelError, label_flows, read_attack_log
+from uavcas.events import attack_log_text
+from uavcas.extract import extract
+from uavcas.labels import LabelError, read_attack_log
 from uavcas.rundir import RunDir
-from uavcas.schema import LABEL_COLUMNS
-from uavcas.twin.model import Plan
+from uavcas.schema import LABEL_COLUMNS, TRUTH_COLUMNS
 
 
-def _labelled(run_dir, mode="ours", view="5tuple"):
-    from uavcas.flows import FlowConfig
+def _labelled(run_dir, mode="ours", view="5tuple", min_attack_fraction=0.0):
+    return extract(run_dir, view=view, labels=mode, min_attack_fraction=min_attack_fraction).frame
 
-    pcaps = sorted((run_dir / "pcap").glob("*.pcap"))
-    ex = extract_flows(pcaps, FlowConfig(view=view))
-    plan = Plan.from_json((run_dir / "plan.json").read_text())
-    log = read_attack_log(run_dir / "attacks.jsonl", plan, T0)
-    return label_flows(ex.packets, ex.flows, ex.frame, log, mode=mode)
+
+def _effects(df):
+    return [list(x) for x in df["seq_effect"]]
 
 
 def test_flood_flows_are_dos_only_inside_window(synth_run_dir):
@@ -32,22 +31,48 @@ def test_flood_flows_are_dos_only_inside_window(synth_run_dir):
     outside = pair.drop(inside.index)
     assert len(inside) == N_FLOOD and (inside.label == "DoS").all() and inside.label_dos.all()
     assert (inside.label_source == "flood-packets").all()
+    # the SYN is the flood; the victim's SYN-ACK and the attacker's RST are benign packets
+    assert (inside.attack_packets == 1).all() and (inside.attack_packets_dos == 1).all()
+    assert sorted(inside.packets.unique()) == [1, 3]
+    assert all(e[0] == "flood" and set(e[1:]) <= {"benign"} for e in _effects(inside))
     assert len(outside) == 2 and (outside.label == "Benign").all() and (outside.label_source == "none").all()
-    # the victim's other flows are not DoS
     assert not df[(df.src_ip == IPS["bs0"])].label_dos.any()
 
 
-def test_replay_and_blackhole(synth_run_dir):
+def test_replay_blackhole_and_channel_loss(synth_run_dir):
     df = _labelled(synth_run_dir)
-    rep = df[df.label_replay]
-    assert len(rep) == 1 and rep.iloc[0].src_port == 41001 and rep.iloc[0].label_source == "replay-injections"
-    assert rep.iloc[0].packets == 12 + 3  # the session plus the three injected packets
+    (rep,) = df[df.label_replay].itertuples()
+    assert rep.src_port == 41001 and rep.label_source == "replay-injections"
+    assert rep.packets == 12 + 3 and rep.attack_packets == rep.attack_packets_replay == 3  # the injected copies only
+    assert rep.attack_fraction == 3 / 15 and list(rep.seq_effect).count("replay") == 3
     bh = df[df.label_blackhole]
     assert len(bh) == 1 and bh.iloc[0].dst_ip == IPS["uav3"] and bh.iloc[0].label == "Blackhole"
+    assert bh.iloc[0].label_source == "blackhole-drops" and list(bh.iloc[0].seq_effect) == ["blackhole"] * 3
     assert T0 + BLACKHOLE_WINDOW[0] <= bh.iloc[0].first_ts < T0 + BLACKHOLE_WINDOW[1]
+    # the victim's flows outside the window, with nothing affected, are Benign
+    victim = df[(df.dst_ip == IPS["uav3"]) & ~df.label_blackhole & ~df.label_replay]
+    assert len(victim) == 4 and (victim.label == "Benign").all() and (victim.attack_packets == 0).all()
+    (lossy,) = df[df.src_port == 41002].itertuples()
+    assert list(lossy.seq_effect).count("channel_loss") == 1 and lossy.label == "Benign" and lossy.attack_packets == 0
     counts = df.label.value_counts().to_dict()
     assert counts == {"DoS": N_FLOOD, "Benign": 12, "Replay": 1, "Blackhole": 1}
-    assert set(LABEL_COLUMNS) <= set(df.columns)
+    assert set(LABEL_COLUMNS) | set(TRUTH_COLUMNS) <= set(df.columns)
+    assert (df.attack_fraction == df.attack_packets / df.packets).all()
+    assert (df.attack_packets == df[[c for c in TRUTH_COLUMNS if c.startswith("attack_packets_")]].sum(axis=1)).all()
+    assert (df.seq_effect.map(len) == df.packets).all()
+
+
+def test_min_attack_fraction_leaves_out_impure_flows(synth_run_dir):
+    shard = extract(synth_run_dir, min_attack_fraction=0.5)
+    df = shard.frame
+    assert not df.label_replay.any()  # 3 of 15 packets injected
+    assert (df.label == "DoS").sum() == N_FLOOD - N_FLOOD // 5  # SYN + SYN-ACK + RST: 1/3 flood
+    assert shard.info.impure_dropped == 1 + N_FLOOD // 5 and shard.info.min_attack_fraction == 0.5
+    assert ((df.attack_packets == 0) | (df.attack_fraction >= 0.5)).all()
+    assert "attack_fraction < 0.5" in shard.info.label_rule
+    assert shard.info.effect_counts["replay"] == 3 and shard.info.effect_counts["channel_loss"] == 1
+    with pytest.raises(ValueError, match="min_attack_fraction"):
+        extract(synth_run_dir, min_attack_fraction=1.5)
 
 
 def test_paper_ip_membership(synth_run_dir):
@@ -57,12 +82,20 @@ def test_paper_ip_membership(synth_run_dir):
     pair = df[(df.src_ip == IPS["uav1"])]
     assert (pair.label == "DoS").all() and len(pair) == N_FLOOD + 2
     assert (df[df.dst_ip == IPS["uav3"]].label == "Blackhole+Replay").all()
+    assert df.attack_packets.sum() == _labelled(synth_run_dir).attack_packets.sum()  # effects do not depend on it
 
 
-def test_hostpair_view_labels(synth_run_dir):
+def test_hostpair_views_labels(synth_run_dir):
     df = _labelled(synth_run_dir, view="hostpair")
     flood = df[(df.src_ip == IPS["uav1"]) | (df.dst_ip == IPS["uav1"])]
     assert len(flood) == 1 and flood.iloc[0].label == "DoS"
+    win = _labelled(synth_run_dir, view="window-hostpair", min_attack_fraction=0.0)
+    # one flow per host pair per 5 s window (with >= 10 packets): bs0-uav0 in the 6 windows it talks in
+    bu = win[((win.src_ip == IPS["bs0"]) & (win.dst_ip == IPS["uav0"])) | ((win.src_ip == IPS["uav0"]) & (win.dst_ip == IPS["bs0"]))]
+    assert len(bu) == 6 and len(set(((bu.first_ts - T0) // 5).astype(int))) == 6
+    assert (win.last_ts - win.first_ts < 5.0).all() and (win.src_port == 0).all()
+    fl = win[win.label_dos]
+    assert len(fl) == 2 and fl.attack_packets.sum() == N_FLOOD  # the flood spans windows 4 and 5
 
 
 def test_plan_fallback_and_errors(tmp_path):
@@ -93,21 +126,44 @@ def test_plan_fallback_and_errors(tmp_path):
         read_attack_log(bad, plan, T0)
 
 
-def test_wormhole_window_and_ddos(synth_run_dir, tmp_path):
+def test_wormhole_detour_and_ddos(synth_run_dir, tmp_path):
     import shutil
 
     run = tmp_path / "run"
     shutil.copytree(synth_run_dir, run)
     recs = [r.model_copy(update={"family": "ddos"}) if r.family == "dos" else r for r in RunDir(run).read_attacks()]
-    recs += [AttackStart(attack_id="wormhole-0", family="wormhole", attackers=["uav2"], attacker_ips=[IPS["uav2"]],
-                         victims=["uav0"], victim_ips=[IPS["uav0"]], t_unix=T0 + 0.5, params={},
-                         planned_start_s=0.5, planned_stop_s=3.0),
-             AttackStop(attack_id="wormhole-0", family="wormhole", t_unix=T0 + 3.0)]
     lines = attack_log_text(recs)
     assert lines.count('"family":"ddos"') == 3
     (run / "attacks.jsonl").write_text(lines)
+    add_wormhole(run)
     df = _labelled(run)
     worm = df[df.label_wormhole]
     assert len(worm) == 1 and worm.iloc[0].src_port == 40000 and worm.iloc[0].label == "Wormhole"
-    assert worm.iloc[0].label_source == "victim-window"
+    assert worm.iloc[0].label_source == "wormhole-detour" and worm.iloc[0].attack_fraction == 1.0
+    # the victim's other flows during the attack did not cross the attacker's switch: Benign
+    assert not df[(df.dst_ip == IPS["uav0"]) & (df.src_port != 40000)].label_wormhole.any()
     assert (df.label == "DDoS").sum() == N_FLOOD and not df.label_dos.any()
+    # a plan without the detour in that window: the same packets are no wormhole
+    (run / "plan.json").write_text(make_plan().to_json())
+    assert not _labelled(run).label_wormhole.any()
+
+
+def test_cli_extract_records_the_rule_in_the_card(synth_run_dir, tmp_path):
+    from typer.testing import CliRunner
+
+    from uavcas.cli import app
+    from uavcas.flows import FlowConfig
+
+    out = tmp_path / "ds"
+    r = CliRunner().invoke(app, ["extract", str(synth_run_dir), "--out", str(out), "--min-attack-fraction", "0.5"])
+    assert r.exit_code == 0, r.output
+    assert f"{1 + N_FLOOD // 5} flow(s) left out" in r.output
+    card = json.loads((out / "dataset.json").read_text())
+    (rule,) = card["label_rules"]
+    assert "attack_fraction < 0.5" in rule and "blackhole:" in rule and "wormhole:" in rule
+    assert card["effect_counts"]["replay"] == 3 and card["runs"][0]["impure_dropped"] == 1 + N_FLOOD // 5
+    bad = CliRunner().invoke(app, ["extract", str(synth_run_dir), "--out", str(tmp_path / "no"),
+                                   "--min-attack-fraction", "1.5"])
+    assert bad.exit_code == 2 and not (tmp_path / "no").exists()
+    with pytest.raises(ValueError, match="window-hostpair"):
+        FlowConfig(view="window-hostpair")  # it needs the run's t0 and window length

@@ -4,10 +4,12 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from uavcas.topology.routing import (
+    USABLE_LOSS_MAX,
+    Topology,
+    etx,
     is_connected_to_bs,
     nearest_neighbour_topology,
     route,
-    shortest_path,
     with_wormholes,
 )
 
@@ -36,9 +38,8 @@ def test_every_uav_reaches_a_bs_and_links_its_nearest_peer(seed, n_uav, n_bs):
     assert sum(r == "bridge" for r in topo.reasons) <= max(1, n_uav // 2)
     # backhaul: a full mesh between base stations
     assert sum(r == "backhaul" for r in topo.reasons) == n_bs * (n_bs - 1) // 2
-    adj = topo.adjacency(n)
     for u in range(n_uav):
-        p = shortest_path(adj, u, n_uav + u % n_bs)
+        p = route(topo, n, u, n_uav + u % n_bs)
         assert p[0] == u and p[-1] == n_uav + u % n_bs
         assert all(tuple(sorted(h)) in edges for h in zip(p, p[1:]))
 
@@ -71,17 +72,82 @@ def test_routing_is_deterministic_regardless_of_input_order(seed, n_uav, n_bs, r
     assert _links(shuffled, perm) == _links(topo, np.arange(len(pos)))
 
 
-def test_wormhole_detours_victim_bs_traffic_through_the_attacker():
-    pos, is_bs = _swarm(11, 10, 2)
-    topo = with_wormholes(nearest_neighbour_topology(pos, is_bs), pos, is_bs, [(2, 7)])
+def _loss_by_distance(pos, is_bs, reach_m):
+    """A loss matrix: 0 within reach_m, 1 beyond (BS-BS pairs are wired anyway)."""
+    d = np.linalg.norm(pos[:, None] - pos[None], axis=-1)
+    loss = np.where(d <= reach_m, 0.0, 1.0)
+    np.fill_diagonal(loss, 0.0)
+    return loss
+
+
+@settings(max_examples=150, deadline=None)
+@given(st.integers(0, 10**6), st.integers(1, 40), st.integers(1, 3), st.floats(80.0, 600.0))
+def test_quality_routing_never_uses_a_dead_link_and_marks_stranded_uavs(seed, n_uav, n_bs, reach_m):
+    pos, is_bs = _swarm(seed, n_uav, n_bs)
+    loss = _loss_by_distance(pos, is_bs, reach_m)
+    topo = nearest_neighbour_topology(pos, is_bs, loss)
     n = len(pos)
-    for bs in (10, 11):
-        fwd = route(topo, n, 2, bs, is_bs)
-        back = route(topo, n, bs, 2, is_bs)
-        assert fwd[:2] == [2, 7] and back[-2:] == [7, 2] and fwd[-1] == bs
-    assert (2, 7) in topo.edges and topo.overrides[0][:2] == (2, 7)
+    for (i, j), why in zip(topo.edges, topo.reasons):
+        assert why == "backhaul" or loss[i, j] < USABLE_LOSS_MAX
+    d = np.linalg.norm(pos[:, None] - pos[None], axis=-1)
+    for u in range(n_uav):  # nearest *usable* peer
+        ok = np.flatnonzero((loss[u] < USABLE_LOSS_MAX) & (np.arange(n) != u))
+        if ok.size:
+            assert tuple(sorted((u, int(ok[np.argmin(d[u, ok])])))) in topo.edges
+    # disconnected exactly when no usable multi-hop path to a BS exists at all
+    usable = (loss < USABLE_LOSS_MAX) | np.outer(is_bs, is_bs)
+    np.fill_diagonal(usable, False)
+    reach = is_bs.copy()
+    while True:
+        more = reach | (usable[:, reach].any(axis=1))
+        if (more == reach).all():
+            break
+        reach = more
+    assert set(topo.disconnected) == set(np.flatnonzero(~reach & ~is_bs).tolist())
+    for u in range(n_uav):
+        hops = route(topo, n, u, n_uav + u % n_bs)
+        assert (hops is None) == (u in topo.disconnected)
+        if hops is not None:
+            assert all(loss[a, b] < USABLE_LOSS_MAX or (is_bs[a] and is_bs[b]) for a, b in zip(hops, hops[1:]))
+
+
+def test_bridge_takes_the_best_path_not_the_nearest_bs():
+    # UAV 0-1 are a pair far out; 0 is nearer BS 3 but that link is dead; 1 reaches BS 2
+    pos = np.array([[900.0, 900, 50], [905.0, 900, 50], [0.0, 0, 25], [950.0, 990, 25]])
+    is_bs = np.array([False, False, True, True])
+    loss = np.zeros((4, 4))
+    loss[0, 3] = loss[3, 0] = 1.0
+    loss[1, 3] = loss[3, 1] = 0.5
+    topo = nearest_neighbour_topology(pos, is_bs, loss)
+    assert dict(zip(topo.edges, topo.reasons)) == {(0, 1): "nearest", (0, 2): "bridge", (2, 3): "backhaul"}
+    assert topo.disconnected == ()
+    loss[0, 2] = loss[2, 0] = loss[1, 2] = loss[2, 1] = 1.0
+    assert nearest_neighbour_topology(pos, is_bs, loss).disconnected == (0, 1)
+
+
+def test_routes_prefer_fewer_expected_transmissions_then_lower_indices():
+    edges = ((0, 1), (0, 2), (1, 3), (2, 3))
+    clean_via_2 = Topology(edges, ("nearest",) * 4, costs=(1.2, 1.0, 1.2, 1.0))
+    assert route(clean_via_2, 4, 0, 3) == [0, 2, 3]
+    assert route(Topology(edges, ("nearest",) * 4), 4, 0, 3) == [0, 1, 3]  # equal cost: lower index
+    assert route(Topology(((0, 1),), ("nearest",)), 4, 0, 3) is None
+    assert etx(0.0) == 1.0 and np.isinf(etx(1.0)) and etx(0.5) == 4.0
+
+
+def test_wormhole_detour_needs_usable_links_and_avoids_the_victim():
+    pos, is_bs = _swarm(11, 10, 2)
+    loss = np.zeros((12, 12))
+    topo = nearest_neighbour_topology(pos, is_bs, loss)
+    worm = with_wormholes(topo, pos, is_bs, [(2, 7, 10)], loss)
+    (d,) = worm.detours
+    assert d.path[:2] == (2, 7) and d.path[-1] == 10 and 2 not in d.path[1:]
+    assert all(tuple(sorted(h)) in worm.edges for h in zip(d.path, d.path[1:]))
+    # detour edges are never taken by ordinary routes
+    assert all(route(worm, 12, u, 10 + u % 2) == route(topo, 12, u, 10 + u % 2) for u in range(10))
+    loss[2, 7] = loss[7, 2] = 1.0  # the victim cannot hear the attacker: no detour this window
+    assert with_wormholes(topo, pos, is_bs, [(2, 7, 10)], loss).detours == ()
     with pytest.raises(ValueError):
-        with_wormholes(topo, pos, is_bs, [(3, 3)])
+        with_wormholes(topo, pos, is_bs, [(3, 3, 10)])
 
 
 def test_no_bs_is_refused():

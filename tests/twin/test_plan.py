@@ -7,19 +7,42 @@ import pytest
 
 from uavcas.scenario import PRESETS, parse
 from uavcas.twin import Plan, plan
-from uavcas.topology.routing import Topology, is_connected_to_bs
+from uavcas.topology.routing import USABLE_LOSS_MAX, Topology
 
 MISSIONS = ("spiral", "grid", "hover_transit", "random")
 
 
 def _connected(p: Plan) -> bool:
+    """Every UAV not marked disconnected reaches a BS over the window's (non-detour) links, every
+    marked one does not, and no route crosses an unusable link."""
     idx = {nd.name: nd.index for nd in p.nodes}
     is_bs = np.array([nd.kind == "bs" for nd in p.nodes])
     for w in p.windows:
-        edges = tuple(sorted(tuple(sorted((idx[lk.a], idx[lk.b]))) for lk in w.links))
-        if not is_connected_to_bs(Topology(edges, ("x",) * len(edges)), len(p.nodes), is_bs):
-            return False
+        edges = tuple(sorted(tuple(sorted((idx[lk.a], idx[lk.b]))) for lk in w.links if not lk.detour))
+        loss = {(lk.a, lk.b): lk.loss for lk in w.links} | {(lk.b, lk.a): lk.loss for lk in w.links}
+        for r in w.routes:
+            if any(loss[h] >= USABLE_LOSS_MAX for h in zip(r.hops, r.hops[1:])):
+                return False
+        off = set(p.disconnected_uavs(w))
+        sub = Topology(edges, ("x",) * len(edges))
+        for u in (nd for nd in p.nodes if nd.kind == "uav"):
+            if (u.name in off) == _reaches_bs(sub, idx[u.name], is_bs):
+                return False
     return True
+
+
+def _reaches_bs(topo: Topology, u: int, is_bs: np.ndarray) -> bool:
+    seen, todo = {u}, [u]
+    while todo:
+        x = todo.pop()
+        if is_bs[x]:
+            return True
+        for i, j in topo.edges:
+            for a, b in ((i, j), (j, i)):
+                if a == x and b not in seen:
+                    seen.add(b)
+                    todo.append(b)
+    return False
 
 
 @pytest.mark.parametrize("mission", MISSIONS)
@@ -32,8 +55,18 @@ def test_every_window_is_connected_and_routes_are_valid(mission, pathloss):
         assert {r.src for r in w.routes} >= {f"uav{k}" for k in range(15)}
         for r in w.routes:
             assert all(h in links for h in zip(r.hops, r.hops[1:])), r
+            assert r.disconnected == (r.hops == [])
         for lk in w.links:
             assert 0.0 <= lk.loss <= 1.0 and lk.rate_mbps > 0 and lk.delay_ms > 0
+
+
+def test_disconnected_uavs_are_marked_and_counted():
+    # 3 dBm over the 3GPP model: a sparse swarm, some UAVs out of reach of every BS
+    p = plan("benign-10-2-image-3gpp-adaptive-random-0-95", seed=1)
+    marked = sum(len(p.disconnected_uavs(w)) for w in p.windows)
+    assert marked > 0 and _connected(p)
+    assert p.disconnected_fraction == marked / (10 * len(p.windows))
+    assert all(r.hops == [] for w in p.windows for r in w.routes if r.disconnected)
 
 
 def test_same_seed_same_bytes_other_seed_other_plan():
@@ -74,14 +107,18 @@ def test_wormhole_windows_detour_the_victim_through_the_attacker():
     (atk,) = p.attacks
     (victim,), (attacker,) = atk.victims, atk.attackers
     hit = [w for w in p.windows if w.t_s < atk.stop_s and w.t_s + w.duration_s > atk.start_s]
-    assert hit
+    assert hit and any(w.wormholes for w in hit)
     for w in hit:
-        assert [(o.victim, o.attacker) for o in w.wormholes] == [(victim, attacker)]
-        (r,) = [r for r in w.routes if r.src == victim]
-        assert r.hops[:2] == [victim, attacker]
+        links = {(lk.a, lk.b): lk for lk in w.links} | {(lk.b, lk.a): lk for lk in w.links}
+        for o in w.wormholes:
+            assert (o.victim, o.attacker) == (victim, attacker)
+            assert o.hops[:2] == [victim, attacker] and o.hops[-1] == o.bs and victim not in o.hops[1:]
+            assert all(links[h].loss < USABLE_LOSS_MAX for h in zip(o.hops, o.hops[1:]))
+        (r,) = [r for w2 in [w] for r in w2.routes if r.src == victim]
+        assert attacker not in r.hops  # routes stay the undisturbed paths; the detour is the override's
     for w in p.windows:
         if w not in hit:
-            assert not w.wormholes
+            assert not w.wormholes and not any(lk.detour for lk in w.links)
 
 
 def test_physics_varies_with_distance_and_tx_power():
@@ -134,14 +171,11 @@ def test_cli_plan_refuses_bad_config(tmp_path):
 
 
 def test_wormhole_attacker_is_off_the_victims_initial_route():
-    from uavcas.topology.routing import nearest_neighbour_topology, route
-
+    detoured = 0
     for seed in range(20):
         p = plan("wormhole-8-2-image-logdist-adaptive-random-30-95", seed=seed)
         (atk,) = p.attacks
-        names = [nd.name for nd in p.nodes]
-        is_bs = np.array([nd.kind == "bs" for nd in p.nodes])
-        pos = np.array([p.windows[0].positions[nm] for nm in names])
-        v = names.index(atk.victims[0])
-        hops = route(nearest_neighbour_topology(pos, is_bs), len(names), v, 8 + v % 2, is_bs)
-        assert names.index(atk.attackers[0]) not in hops  # the detour adds a hop
+        (r,) = [r for r in p.windows[0].routes if r.src == atk.victims[0]]
+        assert atk.attackers[0] not in r.hops  # the detour adds a hop
+        detoured += any(w.wormholes for w in p.windows)
+    assert detoured >= 15  # the attacker is drawn among UAVs that have a detour at t = 0

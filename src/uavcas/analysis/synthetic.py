@@ -207,6 +207,10 @@ def make_flows(n_flows: int = 3000, flows_per_run: int = 60, seed: int = 0, sequ
                 row[f"label_{fam}"] = fam in f
             rows.append(row)
     df = pd.concat([pd.DataFrame(rows), _flow_table(seqs, src_ips, src_ports, sequences)], axis=1)
+    from uavcas.labels import constructed_truth
+
+    truth = constructed_truth(df)  # every packet of an attack flow is an attack packet, by construction
+    df = pd.concat([df, truth if sequences else truth.drop(columns=["seq_effect"])], axis=1)
     # Runs happen at different times; shift each flow by its run's start.
     shift = 1.7e9 + rng.uniform(0, 60, len(df))
     df["first_ts"] = df["first_ts"] + shift

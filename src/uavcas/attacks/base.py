@@ -4,7 +4,8 @@ A family (`AttackFamily` subclass, one per module of this package, registered by
 - its codec token and typed parameters (`spec`, `parse`),
 - its schedule rule (`attackers`: who attacks, given the shared victim and the swarm),
 - its executor on the kernel (`prepare`/`start`/`stop`/`calibrate`, plus routing hooks),
-- its ground-truth rule for labels (`truth`: which flows it makes attack flows).
+- its ground-truth rule (`effect`, `effects`: which captured packets its attacks made, moved or
+  dropped; flows are labelled from their packets' effects, `uavcas.labels`).
 
 Layers outside this package ask the registry (`uavcas.attacks.family(name)`) and never test a
 family name themselves. Modules here import the emulation, flows and labels code lazily, inside
@@ -15,6 +16,7 @@ from __future__ import annotations
 
 import re
 from abc import ABC, abstractmethod
+from collections.abc import Callable
 from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
@@ -22,8 +24,9 @@ from pydantic import BaseModel, ConfigDict
 
 if TYPE_CHECKING:
     from uavcas.emulation.attacks import AttackExecutor
+    from uavcas.emulation.controller import Detour
     from uavcas.labels.attacklog import AttackWindow
-    from uavcas.labels.label import TruthContext
+    from uavcas.labels.effects import TruthContext
     from uavcas.twin.model import Attack, Window
 
 
@@ -65,10 +68,13 @@ class ScheduleDraw:
     """The state one schedule draw shares between the families of a composition."""
 
     def __init__(self, uav_names: list[str], victim: str, pool: list[str],
-                 routes0: dict[str, list[str]] | None, rng: np.random.Generator) -> None:
+                 routes0: dict[str, list[str]] | None, rng: np.random.Generator,
+                 detours: Callable[[str, str], int] | None = None) -> None:
         self.uav_names, self.victim, self.pool = uav_names, victim, pool  # pool: seeded order
         self.routes0 = routes0 or {}
         self.rng = rng
+        # windows of the attack in which a wormhole detour victim -> attacker -> BS exists
+        self.detours = detours or (lambda victim, attacker: 1)
         self.used: set[str] = set()
 
     @property
@@ -89,6 +95,8 @@ class AttackFamily(ABC):
     spec: ClassVar[type[SpecBase]]
     usage: ClassVar[str]  # the token's form, for error messages
     label_source: ClassVar[str]  # label_source value of flows this family's truth rule marks
+    effect: ClassVar[str]  # the packet effect its rule gives (vocabulary.EFFECTS)
+    truth_rule: ClassVar[str]  # its effect rule in words (the dataset card records it)
     tools: ClassVar[tuple[str, ...]] = ()  # executables the executor needs on the host
     python_modules: ClassVar[tuple[str, ...]] = ()  # importable modules the executor needs
     min_uavs: ClassVar[int] = 2  # attacker(s) + victim
@@ -132,16 +140,12 @@ class AttackFamily(ABC):
     def calibrate(self, ex: "AttackExecutor", attack: "Attack") -> None:
         pass
 
-    def overrides(self, ex: "AttackExecutor", attack: "Attack", window: "Window") -> list[tuple[str, str, str]]:
-        """Forwarding overrides (victim, via, bs) while the attack is active."""
+    def overrides(self, ex: "AttackExecutor", attack: "Attack", window: "Window") -> list["Detour"]:
+        """Forwarding detours (`emulation.controller.Detour`) while the attack is active."""
         return []
-
-    def idle_routes(self, ex: "AttackExecutor", attack: "Attack", window: "Window",
-                    adj: dict[str, list[str]]) -> dict[tuple[str, str], list[str] | None]:
-        """Routes replacing the window's while the attack is *not* active (src, dst) -> hops."""
-        return {}
 
     # ground truth ------------------------------------------------------------------------------
     @abstractmethod
-    def truth(self, ctx: "TruthContext", windows: list["AttackWindow"]) -> np.ndarray:
-        """Boolean mask over the flows: the flows this family's attack windows make attack flows."""
+    def effects(self, ctx: "TruthContext", windows: list["AttackWindow"]) -> np.ndarray:
+        """Boolean mask over the packet-table rows: the packets this family's attacks affected
+        (every observation of an affected transmission: `ctx.spread`)."""

@@ -8,8 +8,13 @@
   another ethertype and is never matched, so neighbours keep resolving; other nodes' transit
   through the same switch is untouched. Priority -20: before the shaper's loss table (-10) and
   before br_netfilter hands frames to iptables/NFQUEUE (0), so dropped frames cost no delay
-  work. One atomic `nft -f`, deleted at stop (its drop count is logged);
-- truth ("victim-window"): a flow to or from a victim IP whose lifetime overlaps [start, stop).
+  work. One atomic `nft -f`, deleted at stop (its drop count is logged). The start is logged
+  once the table is in force and the stop just before it is deleted, so [start, stop) is
+  exactly when the drop held;
+- truth (effect `blackhole`, label source "blackhole-drops"): a packet to or from a victim whose
+  transmission was last seen at the victim's switch, at a time inside [start, stop): the rule
+  dropped it there (seen before the victim's switch and not after it). Its other observations,
+  upstream, carry the same effect.
 """
 
 from __future__ import annotations
@@ -26,7 +31,7 @@ from .registry import register
 if TYPE_CHECKING:
     from uavcas.emulation.attacks import AttackExecutor
     from uavcas.labels.attacklog import AttackWindow
-    from uavcas.labels.label import TruthContext
+    from uavcas.labels.effects import TruthContext
     from uavcas.twin.model import Attack
 
 
@@ -80,7 +85,10 @@ class Blackhole(AttackFamily):
     name = "blackhole"
     spec = BlackholeSpec
     usage = "blackhole"
-    label_source = "victim-window"
+    label_source = "blackhole-drops"
+    effect = "blackhole"
+    truth_rule = ("a packet to or from the victim last seen at the victim's switch inside [start, stop) "
+                  "(dropped there)")
     tools = ("nft",)
 
     def attackers(self, spec: SpecBase, draw: ScheduleDraw) -> list[str]:
@@ -94,10 +102,16 @@ class Blackhole(AttackFamily):
     def start(self, ex: "AttackExecutor", attack: "Attack") -> dict[str, Any]:
         for v in attack.victims:
             drop_on(ex.emu.fabric_ns, table_name(attack.attack_id), switch_ports(ex.index(v)), ex.ip(v))
-        return {"switch": [ex.emu.switch(v).bridge for v in attack.victims]}
+        # logged when the rule is in force (nft -f returns after the kernel committed it)
+        return {"t_unix": ex.now(), "switch": [ex.emu.switch(v).bridge for v in attack.victims]}
 
     def stop(self, ex: "AttackExecutor", attack: "Attack") -> dict[str, Any]:
-        return {"dropped_frames": drop_off(ex.emu.fabric_ns, table_name(attack.attack_id))}
+        t = ex.now()  # logged while the rule still holds: replies after it are not blackholed
+        return {"t_unix": t, "dropped_frames": drop_off(ex.emu.fabric_ns, table_name(attack.attack_id))}
 
-    def truth(self, ctx: "TruthContext", windows: list["AttackWindow"]) -> np.ndarray:
-        return ctx.victim_window(windows)
+    def effects(self, ctx: "TruthContext", windows: list["AttackWindow"]) -> np.ndarray:
+        hit = np.zeros(ctx.n, dtype=bool)
+        for w in windows:
+            at = ctx.at_switch_of(ctx.node_names(w.victim_ips)) & ctx.is_last
+            hit |= at & ctx.during(w.start_unix, w.stop_unix) & ctx.touching(w.victim_ips)
+        return ctx.spread(hit)

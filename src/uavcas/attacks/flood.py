@@ -6,9 +6,9 @@
 - executor: one `emulation.apps.flood.Flood` (hping3 -S to the victim's HTTP port) per
   attacker, its rate calibrated one second in and then periodically; at stop one `rate` record
   per attacker with the measured SYN rate;
-- truth ("flood-packets"): a flow carrying at least one TCP packet with SYN set and ACK clear
+- truth (effect `flood`, label source "flood-packets"): a TCP packet with SYN set and ACK clear
   from an attacker IP to a victim IP captured inside [start, stop) of the attack (packet-exact:
-  the same host pair outside the window, or answering SYN-ACKs alone, do not make a flood flow).
+  the same host pair outside the window, or the victim's answering SYN-ACKs, are not flood).
 """
 
 from __future__ import annotations
@@ -24,7 +24,7 @@ from .registry import register
 if TYPE_CHECKING:
     from uavcas.emulation.attacks import AttackExecutor
     from uavcas.labels.attacklog import AttackWindow
-    from uavcas.labels.label import TruthContext
+    from uavcas.labels.effects import TruthContext
     from uavcas.twin.model import Attack
 
 TCP_SYN, TCP_ACK = 0x02, 0x10
@@ -46,6 +46,8 @@ class FloodSpec(SpecBase):
 class _Flood(AttackFamily):
     spec = FloodSpec
     label_source = "flood-packets"
+    effect = "flood"
+    truth_rule = "a TCP SYN (ACK clear) from an attacker to the victim captured inside [start, stop)"
     tools = ("hping3",)
     routes_attack_traffic = True
 
@@ -109,15 +111,14 @@ class _Flood(AttackFamily):
         return {"syn_count": sum(r.syn_count for r in results)}
 
     # ground truth ------------------------------------------------------------------------------
-    def truth(self, ctx: "TruthContext", windows: list["AttackWindow"]) -> np.ndarray:
+    def effects(self, ctx: "TruthContext", windows: list["AttackWindow"]) -> np.ndarray:
         p = ctx.packets
         syn_only = (p["proto"] == 6) & ((p["tcp_flags"] & (TCP_SYN | TCP_ACK)) == TCP_SYN)
-        hits = np.zeros(ctx.n_flows, dtype=bool)
+        hit = np.zeros(ctx.n, dtype=bool)
         for w in windows:
-            mask = (syn_only & (p["ts_s"] >= w.start_unix) & (p["ts_s"] < w.stop_unix)
+            hit |= (syn_only & ctx.during(w.start_unix, w.stop_unix)
                     & ctx.packets_from(w.attacker_ips) & ctx.packets_to(w.victim_ips))
-            hits |= ctx.flows_with(mask)
-        return hits
+        return ctx.spread(hit)
 
 
 @register

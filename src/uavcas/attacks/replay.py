@@ -8,9 +8,10 @@
   port) and receives (egress) out of the attacker's host port, so the attacker's `eth0` sees the
   victim's traffic wherever the attacker is. At stop the mirror is removed and the process ended
   before `stop` is logged; its `inject` records land in the attack log;
-- truth ("replay-injections"): a flow carrying a packet that matches an `inject` record on
-  (src_ip, dst_ip, ip_id, ttl, and seq for TCP) captured within MATCH_TOLERANCE_S of the
-  record's t_unix (packet-exact).
+- truth (effect `replay`, label source "replay-injections"): a packet that matches an `inject`
+  record of the attack on (src_ip, dst_ip, ip_id, ttl, and seq for TCP) captured within
+  MATCH_TOLERANCE_S of the record's t_unix: an injected copy (packet-exact; the originals it
+  copied stay benign).
 """
 
 from __future__ import annotations
@@ -31,7 +32,7 @@ from .registry import register
 if TYPE_CHECKING:
     from uavcas.emulation.attacks import AttackExecutor
     from uavcas.labels.attacklog import AttackLog, AttackWindow
-    from uavcas.labels.label import TruthContext
+    from uavcas.labels.effects import TruthContext
     from uavcas.twin.model import Attack
 
 MATCH_TOLERANCE_S = 1.0
@@ -83,6 +84,9 @@ class Replay(AttackFamily):
     spec = ReplaySpec
     usage = "replay=<buf>,<ms>,<pps>,<ttl>,<mode>"
     label_source = "replay-injections"
+    effect = "replay"
+    truth_rule = ("a packet matching an inject record (addresses, IP id, TTL, TCP seq) within "
+                  f"{MATCH_TOLERANCE_S:g} s of it (an injected copy)")
     python_modules = ("scapy",)
 
     def parse(self, arg: str | None, tok: str) -> ReplaySpec:
@@ -153,10 +157,12 @@ class Replay(AttackFamily):
         return {"replayer_stats": stats}
 
     # ground truth ------------------------------------------------------------------------------
-    def truth(self, ctx: "TruthContext", windows: list["AttackWindow"]) -> np.ndarray:
-        if not ctx.log.injections:
-            return np.zeros(ctx.n_flows, dtype=bool)
-        return ctx.flows_with(injected_packets(ctx.packets, ctx.log))
+    def effects(self, ctx: "TruthContext", windows: list["AttackWindow"]) -> np.ndarray:
+        from uavcas.labels.attacklog import AttackLog
+
+        ids = {w.attack_id for w in windows}
+        mine = AttackLog(injections=tuple(i for i in ctx.log.injections if i.attack_id in ids))
+        return ctx.spread(injected_packets(ctx.packets, mine))
 
 
 def injected_packets(p, log: "AttackLog") -> np.ndarray:

@@ -1,17 +1,20 @@
-"""Wormhole: the victim's traffic to its BS is tunnelled through the attacker's switch.
+"""Wormhole: the victim's traffic with its BS is tunnelled through the attacker's switch.
 
 - token `wormhole` (no parameters);
-- schedule: the attacker is drawn among UAVs off the victim's route at t = 0 where possible, so
-  the detour really adds a hop instead of re-labelling a path the traffic took anyway;
-- plan: while the attack overlaps a window, the planner adds the detour's links and routes
-  (`detours_traffic`, `topology.routing.with_wormholes`) and lists the override in
-  `Window.wormholes`;
-- executor: the override (victim <-> its BS through the attacker's switch) is laid into the
-  static FDB at start and removed at stop, by re-applying the current window with the active
-  overrides. The detour's links are the plan's, so the extra hop is shaped like any other;
-  while the attack is idle the pair takes the shortest path avoiding the attacker's switch;
-- truth ("victim-window"): a flow to or from a victim IP whose lifetime overlaps [start, stop).
-"""
+- schedule: the attacker is drawn among UAVs off the victim's route at t = 0, the one with a
+  detour (a usable link to the victim, and a usable path to the victim's BS not through it) in
+  most windows of the attack, so the detour really adds a hop and really carries traffic;
+- plan: in each window the attack overlaps, the planner adds the detour's links where it has one
+  (`detours_traffic`, `topology.routing.with_wormholes`: usable links only; a window without
+  one gets no override) and lists it, with its hops, in `Window.wormholes`;
+- executor: at start the current window is re-applied with the detour: both directions of the
+  victim <-> BS traffic (the victim's MAC as source or destination) take the detour's hops
+  through the attacker's switch, and nothing else does (alias destination MACs, see
+  `emulation.controller`); at stop it is re-applied without. The detour's links are the plan's,
+  shaped like any other;
+- truth (effect `wormhole`, label source "wormhole-detour"): a packet to or from a victim seen at
+  the attacker's switch inside [start, stop), in a window where the plan has the detour: it was
+  carried over the attacker's detour. Its other observations carry the same effect."""
 
 from __future__ import annotations
 
@@ -24,8 +27,9 @@ from .registry import register
 
 if TYPE_CHECKING:
     from uavcas.emulation.attacks import AttackExecutor
+    from uavcas.emulation.controller import Detour
     from uavcas.labels.attacklog import AttackWindow
-    from uavcas.labels.label import TruthContext
+    from uavcas.labels.effects import TruthContext
     from uavcas.twin.model import Attack, Window
 
 
@@ -38,13 +42,17 @@ class Wormhole(AttackFamily):
     name = "wormhole"
     spec = WormholeSpec
     usage = "wormhole"
-    label_source = "victim-window"
+    label_source = "wormhole-detour"
+    effect = "wormhole"
+    truth_rule = ("a packet to or from the victim seen at the attacker's switch inside [start, stop) in a "
+                  "window with the planned detour (carried over the detour)")
     detours_traffic = True
 
     def attackers(self, spec: SpecBase, draw: ScheduleDraw) -> list[str]:
         on_path = set(draw.routes0.get(draw.victim, ()))
         off = [u for u in draw.pool if u not in draw.used and u not in on_path]
-        attackers = [off[0]] if off else draw.take(1)
+        # the one with a detour in most of the attack's windows (the first in seeded order on ties)
+        attackers = [max(off, key=lambda u: draw.detours(draw.victim, u))] if off else draw.take(1)
         draw.used.update(attackers)
         return attackers
 
@@ -56,25 +64,18 @@ class Wormhole(AttackFamily):
         del ex.active[attack.attack_id]
         return ex.reapply_window()
 
-    def overrides(self, ex: "AttackExecutor", attack: "Attack", window: "Window") -> list[tuple[str, str, str]]:
-        out: list[tuple[str, str, str]] = []
-        for v in attack.victims:
-            planned = [(o.victim, o.attacker, o.bs) for o in window.wormholes
-                       if o.victim == v and o.attacker in attack.attackers]
-            out += planned or [(v, attack.attackers[0], ex.bs_of(v))]
-        return out
+    def overrides(self, ex: "AttackExecutor", attack: "Attack", window: "Window") -> list["Detour"]:
+        from uavcas.emulation.controller import Detour
 
-    def idle_routes(self, ex: "AttackExecutor", attack: "Attack", window: "Window",
-                    adj: dict[str, list[str]]) -> dict[tuple[str, str], list[str] | None]:
-        from uavcas.emulation.controller import shortest_path
+        return [Detour(o.victim, o.attacker, o.bs, tuple(o.hops)) for o in window.wormholes
+                if o.victim in attack.victims and o.attacker in attack.attackers]
 
-        out: dict[tuple[str, str], list[str] | None] = {}
-        for v in attack.victims:
-            b = ex.bs_of(v)
-            path = shortest_path(adj, v, b, banned=frozenset(attack.attackers))
-            out[(v, b)] = path
-            out[(b, v)] = path[::-1] if path else None
-        return out
-
-    def truth(self, ctx: "TruthContext", windows: list["AttackWindow"]) -> np.ndarray:
-        return ctx.victim_window(windows)
+    def effects(self, ctx: "TruthContext", windows: list["AttackWindow"]) -> np.ndarray:
+        hit = np.zeros(ctx.n, dtype=bool)
+        for w in windows:
+            victims, attackers = ctx.node_names(w.victim_ips), ctx.node_names(w.attacker_ips)
+            planned = [pw.index for pw in ctx.plan.windows
+                       if any(o.victim in victims and o.attacker in attackers for o in pw.wormholes)]
+            hit |= (ctx.at_switch_of(attackers) & ctx.during(w.start_unix, w.stop_unix)
+                    & ctx.touching(w.victim_ips) & np.isin(ctx.window, planned))
+        return ctx.spread(hit)

@@ -26,6 +26,7 @@ def run_local(
     profile: str | None,
     retries: int,
     on_retry: Callable[[RunOutcome, int], None] | None = None,
+    min_attack_fraction: float = 0.0,
 ) -> Iterator[RunOutcome]:
     """Run entries `jobs` at a time into their run directories; retry a failure `retries` times."""
     tries = Retries(retries, on_retry)
@@ -35,7 +36,8 @@ def run_local(
     def submit(pool: ThreadPoolExecutor, e: ManifestEntry) -> Future:
         tries.started(e.index)
         cdir.reset(e.index)
-        return pool.submit(execute_entry, e, str(cdir.run_dir(e.index)), profile)
+        return pool.submit(execute_entry, e, str(cdir.run_dir(e.index)), profile,
+                           min_attack_fraction=min_attack_fraction)
 
     with ThreadPoolExecutor(max_workers=max(1, jobs)) as pool:
         running: set[Future] = set()
@@ -58,6 +60,7 @@ def run_dask(
     retries: int,
     on_retry: Callable[[RunOutcome, int], None] | None = None,
     connect_timeout_s: float = 30.0,
+    min_attack_fraction: float = 0.0,
 ) -> Iterator[RunOutcome]:
     """Submit every entry to the scheduler at `address` (tcp://HOST:8786); yield as they finish."""
     from distributed import Client, as_completed
@@ -74,6 +77,7 @@ def run_dask(
                 None,
                 profile,
                 return_files=True,
+                min_attack_fraction=min_attack_fraction,
                 resources={"emulator": 1},
                 pure=False,
                 key=f"uavcas-run-{e.index}-try{n}",

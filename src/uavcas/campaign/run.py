@@ -58,6 +58,7 @@ def run_campaign(
     profile: str | None = None,
     retries: int = DEFAULT_RETRIES,
     console: Console | None = None,
+    min_attack_fraction: float = 0.0,
 ) -> CampaignResult:
     from uavcas.dataset.store import rebuild
 
@@ -95,9 +96,9 @@ def run_campaign(
 
             progress.update(task, status=status())
             outcomes = (
-                run_dask(todo, scheduler, profile, retries, on_retry)
+                run_dask(todo, scheduler, profile, retries, on_retry, min_attack_fraction=min_attack_fraction)
                 if scheduler
-                else run_local(todo, cdir, jobs, profile, retries, on_retry)
+                else run_local(todo, cdir, jobs, profile, retries, on_retry, min_attack_fraction=min_attack_fraction)
             )
             for out in outcomes:
                 if out.ok:

@@ -50,6 +50,7 @@ def execute_entry(
     view: str = "5tuple",
     labels: str = "ours",
     return_files: bool = False,
+    min_attack_fraction: float = 0.0,
 ) -> RunOutcome:
     """Run one manifest entry into `run_dir` (a temporary directory when None) and extract it."""
     import pyarrow.parquet as pq
@@ -73,7 +74,8 @@ def execute_entry(
         if not res.ok:
             out.error = res.error
             return out
-        shard = extract(base, view=view, labels=labels, run_id=str(entry.index))
+        shard = extract(base, view=view, labels=labels, run_id=str(entry.index),
+                        min_attack_fraction=min_attack_fraction)
         buf = io.BytesIO()
         pq.write_table(to_table(shard.frame, meta=asdict(shard.info)), buf, compression="zstd")
         out.shard = buf.getvalue()

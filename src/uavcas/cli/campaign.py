@@ -46,6 +46,9 @@ def run_cmd(
     profile: str = typer.Option(None, "--profile", help="Twin profile name or JSON path."),
     retries: int = typer.Option(2, "--retries", min=0, help="Extra tries for a failed run."),
     report: bool = typer.Option(True, "--report/--no-report", help="Write DATASET_DIR/report/index.html at the end."),
+    min_attack_fraction: float = typer.Option(
+        0.0, "--min-attack-fraction", min=0.0, max=1.0,
+        help="Leave out flows whose share of attack packets is above 0 but below this (default 0: keep all)."),
 ) -> None:
     """Plan, emulate, extract and label every scenario; append each run's shard to the dataset."""
     from uavcas.campaign import CampaignError, read_manifest, run_campaign
@@ -68,7 +71,8 @@ def run_cmd(
             from uavcas.twin.profile import load_profile
 
             load_profile(profile)
-        result = run_campaign(entries, out, jobs=jobs, scheduler=scheduler, profile=profile, retries=retries)
+        result = run_campaign(entries, out, jobs=jobs, scheduler=scheduler, profile=profile, retries=retries,
+                              min_attack_fraction=min_attack_fraction)
     except (CampaignError, ValueError) as e:
         raise fail(str(e).splitlines()[0]) from None
     except KeyboardInterrupt:

@@ -99,22 +99,28 @@ def flows_cmd(
 def extract_cmd(
     run_dir: Path = typer.Argument(..., help="Run directory (plan.json, run.json, attacks.jsonl, pcap/)."),
     out: Path = typer.Option(..., "--out", help="Dataset directory to add the run's shard to."),
-    view: str = typer.Option("5tuple", "--view", help="Flow key: 5tuple or hostpair."),
-    labels: str = typer.Option("ours", "--labels", help="ours (packet-exact / attack window) or paper (IP membership)."),
+    view: str = typer.Option("5tuple", "--view", help="Flow key: 5tuple, hostpair or window-hostpair (one flow per host pair per plan window)."),
+    labels: str = typer.Option("ours", "--labels", help="ours (from each packet's effect) or paper (IP membership)."),
     min_packets: int = typer.Option(None, "--min-packets", help="Drop smaller flows (default by view)."),
     allow_truncated: bool = typer.Option(False, "--allow-truncated", help="Keep the packets before a truncation."),
+    min_attack_fraction: float = typer.Option(
+        0.0, "--min-attack-fraction", min=0.0, max=1.0,
+        help="Leave out flows whose share of attack packets is above 0 but below this (default 0: keep all)."),
 ) -> None:
     """Extract one run into DATASET_DIR (its shard is replaced if it was extracted before)."""
     from uavcas.dataset.store import extract_run
 
     try:
-        info = extract_run(run_dir, out, view=view, labels=labels, min_packets=min_packets, allow_truncated=allow_truncated)
+        info = extract_run(run_dir, out, view=view, labels=labels, min_packets=min_packets, allow_truncated=allow_truncated,
+                           min_attack_fraction=min_attack_fraction)
     except _errors() as exc:
         raise fail(str(exc)) from None
     for t in info.truncations:
         err_console.print(f"[yellow]warning:[/] truncated capture {t}; kept the packets before it", highlight=False)
     counts = ", ".join(f"{k} {v}" for k, v in sorted(info.class_counts.items()))
     console.print(f"run [bold]{info.run_id}[/]: {info.n_flows} flows from {info.n_packets} packets ({counts}) -> {out}", highlight=False)
+    if info.impure_dropped:
+        console.print(f"{info.impure_dropped} flow(s) left out: attack_fraction below {min_attack_fraction:g}")
 
 
 def export_cmd(

@@ -41,7 +41,8 @@ def print_summary(p) -> None:
         f"{len(p.nodes) - uavs} BSs, {len(p.windows)} windows x {p.window_s:g} s"
     )
     t = Table(title="windows", show_lines=False)
-    for col in ("window", "t_s", "links", "air", "mean rate Mbit/s", "mean delay ms", "max loss", "max hops"):
+    for col in ("window", "t_s", "links", "air", "mean rate Mbit/s", "mean delay ms", "max loss", "max hops",
+                "disconnected"):
         t.add_column(col, justify="right")
     mcs_hist: Counter[int] = Counter()
     for w in p.windows:
@@ -56,8 +57,13 @@ def print_summary(p) -> None:
             f"{sum(lk.delay_ms for lk in air) / max(1, len(air)):.2f}",
             f"{max((lk.loss for lk in air), default=0):.2e}",
             str(max((len(r.hops) - 1 for r in w.routes), default=0)),
+            ", ".join(p.disconnected_uavs(w)) or "-",
         )
     console.print(t)
+    console.print(
+        f"disconnected: {p.disconnected_fraction:.1%} of UAV-windows (no usable path to any BS; "
+        "the runner sends them no benign traffic)"
+    )
     console.print(
         "MCS histogram (air links, all windows): "
         + ", ".join(f"MCS{k}: {mcs_hist[k]}" for k in sorted(mcs_hist))

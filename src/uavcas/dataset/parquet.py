@@ -4,7 +4,9 @@ Dtypes: identity strings are `string`; ports int32, protocol int16, seed/flow_id
 int64; times float64 (Unix seconds for first_ts/last_ts); axis columns as Scenario.axes() gives
 them (n_uav, n_bs, tx_dbm int64; noise_dbm float64; others string); sequences are list columns:
 seq_time_s list<float64>, seq_size list<int32>, seq_flags list<int16>, seq_dir list<int8>
-(+1 forward, -1 backward); the 47 features float64; label_<family> bool; label, label_source string.
+(+1 forward, -1 backward), seq_effect list<string> (one of vocabulary.EFFECTS per packet); the 47
+features float64; attack_packets and attack_packets_<family> int64, attack_fraction float64;
+label_<family> bool; label, label_source string.
 """
 
 from __future__ import annotations
@@ -25,6 +27,7 @@ from uavcas.schema import (
     ID_COLUMNS,
     LABEL_COLUMNS,
     SEQUENCE_COLUMNS,
+    TRUTH_COLUMNS,
 )
 
 _ID_TYPES = {
@@ -59,6 +62,7 @@ _SEQ_TYPES = {
     "seq_size": pa.list_(pa.int32()),
     "seq_flags": pa.list_(pa.int16()),
     "seq_dir": pa.list_(pa.int8()),
+    "seq_effect": pa.list_(pa.string()),
 }
 META_KEY = b"uavcas"
 
@@ -69,6 +73,7 @@ def arrow_schema() -> pa.Schema:
     fields += [pa.field(c, _COUNT_TYPES[c]) for c in COUNT_COLUMNS]
     fields += [pa.field(c, _SEQ_TYPES[c]) for c in SEQUENCE_COLUMNS]
     fields += [pa.field(c, pa.float64()) for c in FEATURES]
+    fields += [pa.field(c, pa.float64() if c == "attack_fraction" else pa.int64()) for c in TRUTH_COLUMNS]
     fields += [pa.field(c, pa.bool_()) for c in LABEL_COLUMNS]
     fields += [pa.field("label", pa.string()), pa.field("label_source", pa.string())]
     return pa.schema(fields)

@@ -2,8 +2,8 @@
 
     DATASET_DIR/shards/<run_id>.parquet   one run (re-extracting the run replaces it)
     DATASET_DIR/flows.parquet             union of all shards, rewritten after every extract
-    DATASET_DIR/dataset.json              schema version, views, label modes, class counts,
-                                          seeds, runs, library versions
+    DATASET_DIR/dataset.json              schema version, views, label modes and rules, class
+                                          counts, packet effect counts, seeds, runs, versions
 
 Extraction itself is `uavcas.extract`. A run is identified by run.json's `run_id` when present,
 else by the run directory's name; one shard per run id, so a run appears once whatever view or labels it was last extracted with.
@@ -25,7 +25,7 @@ import pyarrow.parquet as pq
 
 from uavcas.atomic import atomic_write_text
 from uavcas.extract import ShardInfo, extract
-from uavcas.schema import CLASSES, SCHEMA_VERSION
+from uavcas.schema import CLASSES, EFFECTS, SCHEMA_VERSION
 from uavcas.versions import package_versions
 
 from .parquet import to_table, table_meta, write_table
@@ -45,13 +45,14 @@ def extract_run(
     min_packets: int | None = None,
     allow_truncated: bool = False,
     run_id: str | None = None,
+    min_attack_fraction: float = 0.0,
 ) -> ShardInfo:
     """`uavcas.extract.extract` one run into its shard; then flows.parquet and dataset.json are rebuilt.
 
     `run_id` overrides the run's own id (a campaign names runs by manifest index).
     """
     shard = extract(run_dir, view=view, labels=labels, min_packets=min_packets,
-                    allow_truncated=allow_truncated, run_id=run_id)
+                    allow_truncated=allow_truncated, run_id=run_id, min_attack_fraction=min_attack_fraction)
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     with _locked(out_dir):
@@ -90,12 +91,24 @@ def rebuild(out_dir: Path) -> dict:
         "views": sorted({r.get("view") for r in runs if r.get("view")}),
         "label_modes": sorted({r.get("labels") for r in runs if r.get("labels")}),
         "class_counts": counts,
+        # How flows got their labels: one rule text per (label mode, min_attack_fraction) in use.
+        "label_rules": sorted({r["label_rule"] for r in runs if r.get("label_rule")}),
+        "effect_counts": _effect_counts(runs),
         "seeds": sorted({int(r["seed"]) for r in runs if "seed" in r}),
         "runs": runs,
         "versions": package_versions("numpy", "pandas", "pyarrow"),
     }
     atomic_write_text(out_dir / "dataset.json", json.dumps(card, indent=1, sort_keys=False) + "\n")
     return card
+
+
+def _effect_counts(runs: list[dict]) -> dict[str, int]:
+    """Captured packet observations per effect, summed over the runs."""
+    out = {e: 0 for e in EFFECTS}
+    for r in runs:
+        for e, n in (r.get("effect_counts") or {}).items():
+            out[e] = out.get(e, 0) + int(n)
+    return out
 
 
 def read_card(dataset_dir: Path) -> dict:

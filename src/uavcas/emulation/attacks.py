@@ -7,7 +7,10 @@ records of the attack log (`uavcas.events`), per-attack state, background proces
 current window (re-applied when a family changes forwarding mid-window).
 
 Times: a `start` record's t_unix is taken just *before* the action and a `stop` record's just
-*after* it is fully undone, so every attack packet and effect lies inside [start, stop).
+*after* it is fully undone, so every attack packet and effect lies inside [start, stop). A family
+whose effect is a rule in force (the blackhole's drop table) returns its own `t_unix` instead: the
+moment the rule was installed, and the moment just before it was removed, so [start, stop) is
+exactly when the rule held.
 """
 
 from __future__ import annotations
@@ -22,7 +25,7 @@ from uavcas.attacks import family
 from uavcas.events import AttackRecord, AttackStart, AttackStop, read_attack_records
 
 from .apps.procs import Proc
-from .controller import adjacency
+from .controller import Detour
 
 if TYPE_CHECKING:
     from uavcas.twin.model import Attack, Plan, Window
@@ -78,19 +81,15 @@ class AttackExecutor:
         return bss[uavs.index(uav) % len(bss)]
 
     def reapply_window(self) -> dict[str, Any]:
-        """Re-apply the current window with the active attacks' routes and overrides.
-
-        `Emulation.set_wormholes` keeps the routes of the last window apply, which still hold
-        the planner's detour after a detour stops; re-applying the window recomputes both
-        (shaping is unchanged, so only the FDB moves).
-        """
+        """Re-apply the current window with the detours of the attacks active now (shaping is
+        unchanged, so only the FDB and the detour table move)."""
         w = self.window
         if w is None:
             raise AttackError("no window applied yet")
-        overrides = self.wormholes_for(w)
-        rep = self.emu.apply_links(w.links, self.routes_for(w), overrides, window_index=w.index)
+        detours = self.wormholes_for(w)
+        rep = self.emu.apply_links(w.links, [r.hops for r in w.routes], detours, window_index=w.index)
         fwd = self.emu.forwarding
-        paths = {f"{v}>{b}": fwd.path(v, b) for v, _, b in overrides} if fwd else {}
+        paths = {d.key: fwd.detour_path(d.victim, d.bs) for d in detours} if fwd else {}
         return {"fdb_changes": rep.fdb_changes, "paths": paths, "rejected": list(rep.rejected)}
 
     # lifecycle -----------------------------------------------------------------------------
@@ -109,6 +108,7 @@ class AttackExecutor:
         except Exception as e:
             raise AttackError(f"{a.attack_id}: start failed: {e}") from e
         self.active[a.attack_id] = a
+        t = extra.pop("t_unix", t)
         rec = AttackStart(attack_id=a.attack_id, family=a.family, attackers=list(a.attackers),
                           attacker_ips=[self.ip(x) for x in a.attackers], victims=list(a.victims),
                           victim_ips=[self.ip(v) for v in a.victims], t_unix=t, params=dict(a.params),
@@ -123,7 +123,8 @@ class AttackExecutor:
             extra = family(a.family).stop(self, a)
         finally:
             self.active.pop(a.attack_id, None)
-        rec = AttackStop(attack_id=a.attack_id, family=a.family, t_unix=time.time(), **extra)
+        t = extra.pop("t_unix", None)
+        rec = AttackStop(attack_id=a.attack_id, family=a.family, t_unix=time.time() if t is None else t, **extra)
         self.log(rec)
         return rec
 
@@ -141,31 +142,11 @@ class AttackExecutor:
             proc.stop(signal.SIGTERM, grace_s=2.0)
 
     # forwarding ----------------------------------------------------------------------------
-    def wormholes_for(self, window: "Window") -> list[tuple[str, str, str]]:
-        """Overrides to apply with `window` given the attacks active now."""
-        out: list[tuple[str, str, str]] = []
+    def wormholes_for(self, window: "Window") -> list[Detour]:
+        """Detours to apply with `window` given the attacks active now."""
+        out: list[Detour] = []
         for a in self.active.values():
             out += family(a.family).overrides(self, a, window)
-        return out
-
-    def routes_for(self, window: "Window") -> list[list[str]]:
-        """The window's routes, with the families' own paths for their attacks not active now.
-
-        E.g. the planner routes a wormhole's victim <-> BS pair through the attacker for every
-        window the attack overlaps; the detour must start and stop with the attack, not the window.
-        """
-        idle: dict[tuple[str, str], list[str] | None] = {}
-        adj = None
-        for a in self.plan.attacks:
-            if a.attack_id in self.active:
-                continue
-            if adj is None:
-                adj = adjacency([n.name for n in self.plan.nodes], [(lk.a, lk.b) for lk in window.links])
-            idle.update(family(a.family).idle_routes(self, a, window, adj))
-        out = []
-        for r in window.routes:
-            key = (r.src, r.dst)
-            out.append(list(idle[key]) if idle.get(key) else list(r.hops))
         return out
 
     # the log -------------------------------------------------------------------------------

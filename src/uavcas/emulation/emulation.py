@@ -21,10 +21,10 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Literal
 
 if TYPE_CHECKING:  # only typed against the plan: importing uavcas.twin pulls the whole planner
-    from uavcas.twin.model import Link, Plan, WormholeOverride
+    from uavcas.twin.model import Link, Plan
 
 from . import cleanup, kernel
-from .controller import Forwarding, compute
+from .controller import Detour, Forwarding, compute
 from .fabric import Fabric, LinkKey, SwitchPorts, key
 from .hosts import IPV6_OFF, Hosts, HostSpec
 from .naming import Naming, new_prefix
@@ -78,7 +78,7 @@ class Emulation:
         self.forwarding: Forwarding | None = None
         self._links: list["Link"] = []
         self._routes: list[list[str]] = []
-        self._wormholes: list[tuple[str, str, str]] = []
+        self._wormholes: list[Detour] = []
         self._procs: list[subprocess.Popen] = []
         self._lock: cleanup.RunLock | None = None
         self._old_handlers: dict[int, object] = {}
@@ -174,24 +174,30 @@ class Emulation:
     def apply_window(self, i: int) -> WindowReport:
         w = self.plan.windows[i]
         report = self.apply_links(w.links, [r.hops for r in w.routes],
-                                  [(o.victim, o.attacker, o.bs) for o in w.wormholes], window_index=w.index)
+                                  [Detour.of((o.victim, o.attacker, o.bs), o.hops) for o in w.wormholes],
+                                  window_index=w.index)
         self.window = i
         return report
 
     def apply_links(self, links: Sequence["Link"], routes: Iterable[Sequence[str]] = (),
-                    wormholes: Iterable[tuple[str, str, str]] = (), window_index: int = -1) -> WindowReport:
-        """Make `links` (and only them) active with their shaping, then forwarding for them."""
+                    wormholes: Iterable["Detour | Sequence[str]"] = (), window_index: int = -1) -> WindowReport:
+        """Make `links` (and only them) active with their shaping, then forwarding for them, with
+        the given wormhole detours diverting (`controller`)."""
         t0 = time.perf_counter()
-        self._links, self._routes, self._wormholes = list(links), [list(r) for r in routes], list(wormholes)
+        self._links, self._routes = list(links), [list(r) for r in routes]
+        self._wormholes = [Detour.of(w) for w in wormholes]
         active = {key(self.index[lk.a], self.index[lk.b]) for lk in links}
         created = self.fabric.ensure_links(active)
         t1 = time.perf_counter()
         shapes = self.shapes(links)
         down, up = self.fabric.toggle_lines(active)
-        self.forwarding = compute(self.names, [(lk.a, lk.b) for lk in links], self._routes, self._wormholes)
+        self.forwarding = self._compute()
         want = self.fabric.desired_fdb(self.forwarding)
         fdb = self.fabric.fdb_lines(want)
         t2 = time.perf_counter()
+        stopping = self._stopping_detours()
+        if stopping:
+            self.fabric.apply_detours(self.forwarding.detours)
         # Two concurrent phases: (1) shaping in place + links going down; (2) links coming up +
         # forwarding. A link is thus shaped before its first frame, and traffic only loses the
         # few milliseconds between the phases on paths that change.
@@ -199,6 +205,8 @@ class Emulation:
         t3 = time.perf_counter()
         kernel.run_batches([kernel.Batch("ip", self.fabric.ns, up), kernel.Batch("bridge", self.fabric.ns, fdb)])
         self.fabric.up, self.fabric.fdb = active, want
+        if not stopping:
+            self.fabric.apply_detours(self.forwarding.detours)
         t4 = time.perf_counter()
         timings = {"create_s": t1 - t0, "compute_s": t2 - t1, "phase1_s": t3 - t2, **stage, "phase2_s": t4 - t3,
                    "total_s": t4 - t0}
@@ -211,6 +219,10 @@ class Emulation:
         return WindowReport(window_index, timings, n_up, n_down, created, fdb_changes, self.forwarding.rejected,
                             records)
 
+    def _compute(self) -> Forwarding:
+        return compute(self.names, [(lk.a, lk.b) for lk in self._links], self._routes, self._wormholes,
+                       [(lk.a, lk.b) for lk in self._links if lk.detour])
+
     def shapes(self, links: Sequence["Link"]) -> list[Shape]:
         out = []
         for lk in links:
@@ -219,11 +231,24 @@ class Emulation:
                 out.append(Shape(src, dst, Naming.link_port(a, b), lk.rate_mbps, lk.delay_ms, lk.loss))
         return out
 
-    def set_wormholes(self, overrides: Iterable["WormholeOverride | tuple[str, str, str]"]) -> int:
-        """Re-route the current links with these wormhole overrides (FDB changes only)."""
-        self._wormholes = [tuple(o) if isinstance(o, tuple) else (o.victim, o.attacker, o.bs) for o in overrides]
-        self.forwarding = compute(self.names, [(lk.a, lk.b) for lk in self._links], self._routes, self._wormholes)
-        return self.fabric.apply_forwarding(self.forwarding)
+    def set_wormholes(self, detours: Iterable["Detour | Sequence[str]"]) -> int:
+        """Re-route the current links with these wormhole detours (FDB and detour table only)."""
+        self._wormholes = [Detour.of(d) for d in detours]
+        self.forwarding = self._compute()
+        stopping = self._stopping_detours()
+        if stopping:
+            self.fabric.apply_detours(self.forwarding.detours)
+        changes = self.fabric.apply_forwarding(self.forwarding)
+        if not stopping:
+            self.fabric.apply_detours(self.forwarding.detours)
+        return changes
+
+    def _stopping_detours(self) -> bool:
+        """True when the new detours are a subset of those diverting now: the table changes first
+        (a detour stops diverting before anything else moves); otherwise after the FDB, so a new
+        detour diverts only once its path is in place (alias entries outlive their detour, so
+        frames already diverted still arrive)."""
+        return {(d.victim, d.bs) for d in self.forwarding.detours} <= set(self.fabric.detours_active)
 
     # processes and hooks -------------------------------------------------------------------
     def ns(self, node: str) -> str:

@@ -19,7 +19,7 @@ from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 
 from . import kernel
-from .controller import Forwarding
+from .controller import Detour, Forwarding
 from .hosts import HostSpec
 from .naming import Naming
 from .shaping import Shaper
@@ -27,6 +27,7 @@ from .shaping import Shaper
 LinkKey = tuple[int, int]  # (i, j) with i < j: an undirected switch-to-switch link
 
 PORT_FLAGS = "learning off flood off mcast_flood off bcast_flood off"
+DETOUR_TABLE = "uavcas_detour"
 
 
 @dataclass(frozen=True)
@@ -59,6 +60,8 @@ class Fabric:
         self.created: set[LinkKey] = set()
         self.up: set[LinkKey] = set()
         self.fdb: dict[tuple[int, str], str] = {}  # (switch index, dst MAC) -> port
+        self.detours_active: tuple[tuple[str, str], ...] = ()  # (victim, bs) diverting now
+        self.detours_known: dict[tuple[str, str], Detour] = {}
 
     # setup -------------------------------------------------------------------------------
     def setup(self, precreate: Iterable[LinkKey] = ()) -> dict[str, float]:
@@ -131,7 +134,56 @@ class Fabric:
             i = self.by_name[sw_name].index
             for dst, nh in table.items():
                 want[(i, self.by_name[dst].mac)] = Naming.link_port(i, self.by_name[nh].index)
+        # Detours seen before keep their alias entries (only frames already diverted use them,
+        # and those still in flight when a detour stops must arrive); active ones take precedence.
+        stale = [d for k, d in self.detours_known.items() if k not in {(x.victim, x.bs) for x in fwd.detours}]
+        for d in [*stale, *fwd.detours]:
+            for (sw, alias), (nh, _) in d.alias_hops().items():
+                i = self.by_name[sw].index
+                want[(i, self.alias_mac(alias))] = Naming.link_port(i, self.by_name[nh].index)
         return want
+
+    # wormhole detours (see controller) -------------------------------------------------------
+    def alias_mac(self, alias: str) -> str:
+        """MAC of alias 'a>b' (frames from a to b on a detour): locally administered, 02:77:..."""
+        a, b = (self.by_name[x].index for x in alias.split(">"))
+        return f"02:77:{a >> 8:02x}:{a & 0xFF:02x}:{b >> 8:02x}:{b & 0xFF:02x}"
+
+    def detour_ruleset(self, active: Iterable[Detour], known: Iterable[Detour]) -> str:
+        """The nft bridge table rewriting destination MACs for detours (one atomic transaction).
+
+        For each active detour the sender's switch turns the victim's frames to bs (and bs's
+        frames to the victim) into the alias, at its host port, before the FDB lookup. Every
+        detour ever installed keeps its restore rules (alias -> real MAC on the receiving
+        switch's link ports), so frames still in flight when a detour stops are delivered.
+        """
+        rules = []
+        for d in active:
+            for src, dst in ((d.victim, d.bs), (d.bs, d.victim)):
+                hs, hd = self.by_name[src], self.by_name[dst]
+                rules.append(f'iifname "{Naming.host_port(hs.index)}" ether saddr {hs.mac} '
+                             f'ether daddr {hd.mac} ether daddr set {self.alias_mac(f"{src}>{dst}")}')
+        for d in known:
+            for src, dst in ((d.victim, d.bs), (d.bs, d.victim)):
+                hd = self.by_name[dst]
+                ports = Naming.link_port(hd.index, 0).rsplit("-", 1)[0] + "-*"
+                rules.append(f'iifname "{ports}" ether daddr {self.alias_mac(f"{src}>{dst}")} '
+                             f'ether daddr set {hd.mac}')
+        body = "".join(f"    {r}\n" for r in rules)
+        return (f"table bridge {DETOUR_TABLE}\ndelete table bridge {DETOUR_TABLE}\n"
+                f"table bridge {DETOUR_TABLE} {{\n  chain pre {{ type filter hook prerouting priority -300; "
+                f"policy accept;\n{body}  }}\n}}\n")
+
+    def apply_detours(self, active: Sequence[Detour]) -> bool:
+        """Make exactly `active` divert (restore rules kept for all seen); False when unchanged."""
+        keys = tuple(sorted((d.victim, d.bs) for d in active))
+        known = {**self.detours_known, **{(d.victim, d.bs): d for d in active}}
+        if keys == self.detours_active and known.keys() == self.detours_known.keys():
+            return False
+        kernel.run(["ip", "netns", "exec", self.ns, "nft", "-f", "-"],
+                   input_text=self.detour_ruleset(active, [known[k] for k in sorted(known)]))
+        self.detours_active, self.detours_known = keys, known
+        return True
 
     def fdb_lines(self, want: dict[tuple[int, str], str]) -> list[str]:
         """Replace changed static FDB entries; delete those whose destination became unreachable

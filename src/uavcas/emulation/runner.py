@@ -160,7 +160,7 @@ class _State:
 def _apply_window(st: _State, i: int) -> None:
     w = st.plan.windows[i]
     st.executor.window = w
-    rep = st.emu.apply_links(w.links, st.executor.routes_for(w), st.executor.wormholes_for(w), window_index=w.index)
+    rep = st.emu.apply_links(w.links, [r.hops for r in w.routes], st.executor.wormholes_for(w), window_index=w.index)
     st.shaping += [r.to_dict() for r in rep.records]
     st.windows.append({"window": w.index, "t_unix": time.time(), "links_up": rep.links_up,
                        "links_down": rep.links_down, "fdb_changes": rep.fdb_changes, "rejected": rep.rejected,
@@ -183,7 +183,7 @@ def _play(st: _State, opt: RunOptions, notify: Callable[[Progress], None]) -> No
     _apply_window(st, 0)
     st.t0 = time.time()
     notify(WindowApplied(window=0, t0_unix=st.t0, n_windows=len(plan.windows)))
-    st.traffic.start_clients()
+    st.traffic.start_clients(st.t0)
     for ev in schedule(plan):
         target = st.t0 + ev.t_s
         time.sleep(max(0.0, target - time.time()))

@@ -3,7 +3,9 @@
 Rules, in the order they are applied:
 1. Key. `5tuple`: the unordered pair of endpoints (address, port) plus the IP protocol, so both
    directions of a conversation share a key. `hostpair` (the authors' key, offered for parity):
-   the unordered address pair, ports and protocol ignored.
+   the unordered address pair, ports and protocol ignored. `window-hostpair` (the paper's
+   granularity): the host pair per plan window, window k = floor((t - t0) / window_s), so one
+   flow per host pair per window (needs `window_t0_unix` and `window_s`).
 2. Vantage point (de-duplication). A packet crossing several switches is captured once per
    switch. For each key we keep the packets of ONE capture point: the point that saw the most
    packets of that key, ties broken by the point name (alphabetically first). Counts and bytes
@@ -17,7 +19,8 @@ Rules, in the order they are applied:
    except that a TCP flow whose first packet is a SYN-ACK (the SYN was missed) is turned around so
    the SYN sender is forward. In `hostpair` the same rule applies to addresses.
 7. Minimum size. Flows with fewer than `min_packets` packets are dropped (default 1 for `5tuple`,
-   because hping3 floods change source port every packet; 10 for `hostpair`, as in the paper).
+   because hping3 floods change source port every packet; 10 for `hostpair` and
+   `window-hostpair`, as in the paper).
 """
 
 from __future__ import annotations
@@ -30,10 +33,11 @@ import pandas as pd
 
 from .packets import PacketTable
 
-View = Literal["5tuple", "hostpair"]
-VIEWS: tuple[str, ...] = ("5tuple", "hostpair")
+View = Literal["5tuple", "hostpair", "window-hostpair"]
+VIEWS: tuple[str, ...] = ("5tuple", "hostpair", "window-hostpair")
+HOST_VIEWS: tuple[str, ...] = ("hostpair", "window-hostpair")  # keys without ports and protocol
 MAX_PACKETS_PER_FLOW = 100_000
-DEFAULT_MIN_PACKETS: dict[str, int] = {"5tuple": 1, "hostpair": 10}
+DEFAULT_MIN_PACKETS: dict[str, int] = {"5tuple": 1, "hostpair": 10, "window-hostpair": 10}
 TCP_SYN, TCP_ACK = 0x02, 0x10
 
 
@@ -45,10 +49,14 @@ class FlowConfig:
     idle_timeout_s: float | None = None
     active_timeout_s: float | None = None
     dedup: bool = True  # one vantage point per flow
+    window_t0_unix: float | None = None  # window-hostpair: the plan's t = 0 ...
+    window_s: float | None = None  # ... and its window length
 
     def __post_init__(self) -> None:
         if self.view not in VIEWS:
             raise ValueError(f"unknown flow view {self.view!r}; known: {', '.join(VIEWS)}")
+        if self.view == "window-hostpair" and (self.window_t0_unix is None or not (self.window_s or 0) > 0):
+            raise ValueError("the window-hostpair view needs the run's t0 and window length")
         if self.min_packets is not None and self.min_packets < 1:
             raise ValueError("min_packets must be >= 1")
 
@@ -95,10 +103,10 @@ def _segments(key: np.ndarray) -> np.ndarray:
     return np.concatenate(([0], change, [key.shape[0]])).astype(np.int64)
 
 
-def _key_codes(p: PacketTable, view: str) -> tuple[np.ndarray, np.ndarray]:
+def _key_codes(p: PacketTable, view: str, cfg: FlowConfig | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Dense key code per packet and whether the packet's source is the key's 'a' endpoint."""
     shi, slo, dhi, dlo = p["src_hi"], p["src_lo"], p["dst_hi"], p["dst_lo"]
-    if view == "hostpair":
+    if view in HOST_VIEWS:
         sp = dp = np.zeros(len(p), dtype=np.uint16)
         proto = np.zeros(len(p), dtype=np.uint8)
     else:
@@ -117,6 +125,8 @@ def _key_codes(p: PacketTable, view: str) -> tuple[np.ndarray, np.ndarray]:
     }
     if not (cols["ahi"].any() or cols["bhi"].any()):  # all IPv4: the high words carry nothing
         del cols["ahi"], cols["bhi"]
+    if view == "window-hostpair" and cfg is not None:
+        cols["win"] = np.floor((p["ts_s"] - cfg.window_t0_unix) / cfg.window_s).astype(np.int64)
     codes = pd.DataFrame(cols).groupby(list(cols), sort=False).ngroup().to_numpy(np.int64)
     return codes, src_is_a
 
@@ -157,7 +167,7 @@ def assemble(p: PacketTable, cfg: FlowConfig = FlowConfig()) -> Flows:
     if n == 0:
         z = np.zeros(0, dtype=np.int64)
         return Flows(z, z, np.zeros(0, dtype=bool), np.zeros(1, dtype=np.int64), z, cfg)
-    code, src_is_a = _key_codes(p, cfg.view)
+    code, src_is_a = _key_codes(p, cfg.view, cfg)
     keep = _choose_vantage(code, p["point"], p.points) if cfg.dedup else np.ones(n, dtype=bool)
     idx = np.flatnonzero(keep)
     order = idx[np.lexsort((p["frame_index"][idx], p["point"][idx], p["ts_s"][idx], code[idx]))]

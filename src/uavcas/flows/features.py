@@ -29,7 +29,7 @@ import pyarrow as pa
 
 from uavcas.schema import ACTIVITY_TIMEOUT_S, FEATURES
 
-from .assemble import Flows
+from .assemble import HOST_VIEWS, Flows
 from .packets import PacketTable, addresses_to_str
 
 FLAG_BITS: tuple[tuple[str, int], ...] = (
@@ -163,7 +163,7 @@ def flow_frame(p: PacketTable, fl: Flows, sequences: bool = True) -> pd.DataFram
     sport = np.where(first_fwd, p["sport"][first], p["dport"][first]).astype(np.int32)
     dport = np.where(first_fwd, p["dport"][first], p["sport"][first]).astype(np.int32)
     proto = p["proto"][first].astype(np.int16)
-    if fl.config.view == "hostpair":  # ports and protocol are not part of a host-pair key
+    if fl.config.view in HOST_VIEWS:  # ports and protocol are not part of a host-pair key
         sport, dport, proto = np.zeros_like(sport), np.zeros_like(dport), np.zeros_like(proto)
     cols: dict[str, object] = {
         "flow_id": np.arange(n, dtype=np.int64),

@@ -1,16 +1,23 @@
-"""Ground-truth labels of flows from the run's attack log.
+"""Ground-truth labels of flows from the effects of their packets (`labels.effects`).
+
+Columns added to the flow frame, whatever the mode:
+- `seq_effect`: one effect per packet of the flow, aligned with the other `seq_*` columns;
+- `attack_packets`: packets with an attack effect (not benign, not channel_loss),
+  `attack_fraction` = attack_packets / packets exactly, and `attack_packets_<family>` per family.
 
 Modes:
-- `ours` (default): each family's own ground-truth rule (`AttackFamily.truth` in
-  `uavcas.attacks.<family>`: packet-exact SYN floods, packet-exact replay injections, or flows
-  touching a victim during the attack window); label_source names the rules that fired.
+- `ours` (default): a flow carries family F when at least one of its packets has an effect caused
+  by an attack of F (each family's rule: `AttackFamily.effects` in `uavcas.attacks.<family>`);
+  a victim's flow none of whose packets was affected is Benign. With `min_attack_fraction` X > 0
+  a flow with attack packets but attack_fraction < X is neither a clean attack flow nor a benign
+  one: it is left out of the dataset (and counted). label_source names the rules that fired.
 - `paper` (the authors' IP membership): a flow gets a family when its source or destination IP is
   one of the attack's attacker or victim IPs, over the whole run (no time gating);
-  label_source "ip-membership".
+  label_source "ip-membership". `min_attack_fraction` does not apply.
 
-Columns added: `label_<family>` (bool, multi-hot), `label` (schema.class_name of the set of
-families: 'Benign', 'DoS', 'Blackhole+DoS', ...), `label_source` (the sources that fired, joined
-by '+' in the order of SOURCES, or "none").
+Then `label_<family>` (bool, multi-hot), `label` (schema.class_name of the set of families:
+'Benign', 'DoS', 'Blackhole+DoS', ...) and `label_source` (the sources that fired, joined by '+'
+in the order of SOURCES, or "none").
 """
 
 from __future__ import annotations
@@ -20,71 +27,84 @@ from typing import Literal
 
 import numpy as np
 import pandas as pd
+import pyarrow as pa
 
 from uavcas.attacks import families, family
 from uavcas.flows.assemble import Flows
-from uavcas.flows.packets import PacketTable, address_to_words
 from uavcas.schema import FAMILIES, class_name
+from uavcas.vocabulary import ATTACK_PACKET_COLUMNS, EFFECT_PRECEDENCE, EFFECTS
 
-from .attacklog import AttackLog, AttackWindow
+from .attacklog import AttackLog
+from .effects import PacketTruth
 
 LabelMode = Literal["ours", "paper"]
 LABEL_MODES: tuple[str, ...] = ("ours", "paper")
 PAPER_SOURCE = "ip-membership"
 # Order of the parts of a label_source value (fixed: datasets compare across versions).
-SOURCES: tuple[str, ...] = ("flood-packets", "replay-injections", "victim-window", PAPER_SOURCE)
+SOURCES: tuple[str, ...] = ("flood-packets", "replay-injections", "blackhole-drops", "wormhole-detour", PAPER_SOURCE)
 assert {f.label_source for f in families()} <= set(SOURCES), "a family's label_source is missing from SOURCES"
 
 
-@dataclass
-class TruthContext:
-    """What a family's ground-truth rule may look at: the run's packets, flows and attack log."""
-
-    packets: PacketTable
-    flows: Flows
+@dataclass(frozen=True)
+class Labelled:
     frame: pd.DataFrame
-    log: AttackLog
-
-    def __post_init__(self) -> None:
-        self.n_flows = self.flows.n_flows
-        self._packet_flow = self.flows.packet_flow(len(self.packets))
-
-    def _addr_mask(self, hi: np.ndarray, lo: np.ndarray, ips) -> np.ndarray:
-        mask = np.zeros(hi.shape[0], dtype=bool)
-        for ip in ips:
-            h, l = address_to_words(ip)
-            mask |= (hi == np.uint64(h)) & (lo == np.uint64(l))
-        return mask
-
-    def packets_from(self, ips) -> np.ndarray:
-        return self._addr_mask(self.packets["src_hi"], self.packets["src_lo"], ips)
-
-    def packets_to(self, ips) -> np.ndarray:
-        return self._addr_mask(self.packets["dst_hi"], self.packets["dst_lo"], ips)
-
-    def flows_with(self, packet_mask: np.ndarray) -> np.ndarray:
-        """Flow mask: the flows holding at least one of the masked packets."""
-        f = self._packet_flow[packet_mask]
-        hits = np.zeros(self.n_flows, dtype=bool)
-        hits[np.unique(f[f >= 0])] = True
-        return hits
-
-    def victim_window(self, windows: list[AttackWindow]) -> np.ndarray:
-        """Flows to or from a victim IP whose lifetime [first_ts, last_ts] overlaps [start, stop)."""
-        src = self.frame["src_ip"].to_numpy(dtype=object)
-        dst = self.frame["dst_ip"].to_numpy(dtype=object)
-        first, last = self.frame["first_ts"].to_numpy(), self.frame["last_ts"].to_numpy()
-        hits = np.zeros(len(self.frame), dtype=bool)
-        for w in windows:
-            victims = np.asarray(w.victim_ips, dtype=object)
-            touches = np.isin(src, victims) | np.isin(dst, victims)
-            hits |= touches & (first < w.stop_unix) & (last >= w.start_unix)
-        return hits
+    impure_dropped: int  # flows left out for attack_fraction below min_attack_fraction
 
 
-def _family_flows_ours(p: PacketTable, fl: Flows, frame: pd.DataFrame, log: AttackLog) -> dict[str, np.ndarray]:
-    ctx = TruthContext(p, fl, frame, log)
-    return {f.name: f.truth(ctx, log.of_family(f.name)) for f in families()}
+def rule_text(mode: str, min_attack_fraction: float = 0.0) -> str:
+    """The label rule in words, for the dataset card."""
+    if mode == "paper":
+        return ("paper: a flow carries family F when its source or destination IP is one of the "
+                "attacker or victim IPs of an attack of F, over the whole run")
+    parts = [f"{f.name}: {f.truth_rule}" for f in families()]
+    pure = (f"; flows with 0 < attack_fraction < {min_attack_fraction:g} are left out"
+            if min_attack_fraction > 0 else "")
+    return ("ours: a flow carries family F when at least one of its packets has an effect caused by "
+            f"an attack of F{pure}. Effects per packet: " + " | ".join(parts))
+
+
+def truth_columns(fl: Flows, truth: PacketTruth) -> pd.DataFrame:
+    """seq_effect, attack_packets, attack_fraction and attack_packets_<family>, one row per flow."""
+    n = fl.n_flows
+    rows = fl.order
+    fam = truth.family[rows].astype(np.int64)
+    g = fl.flow
+    counts = np.bincount(g, minlength=n).astype(np.int64)
+    attack = np.bincount(g, weights=(fam >= 0).astype(np.float64), minlength=n).astype(np.int64)
+    out: dict[str, object] = {
+        "attack_packets": attack,
+        "attack_fraction": np.where(counts > 0, attack / np.maximum(counts, 1), 0.0),
+    }
+    for k, f in enumerate(FAMILIES):
+        out[ATTACK_PACKET_COLUMNS[k]] = np.bincount(g, weights=(fam == k).astype(np.float64),
+                                                    minlength=n).astype(np.int64)
+    names = pa.DictionaryArray.from_arrays(pa.array(truth.effect[rows].astype(np.int32)), pa.array(EFFECTS))
+    seq = pa.ListArray.from_arrays(pa.array(fl.starts.astype(np.int32)), names.cast(pa.string()))
+    df = pd.DataFrame(out)
+    df.insert(0, "seq_effect", pd.arrays.ArrowExtensionArray(seq))
+    return df
+
+
+def constructed_truth(frame: pd.DataFrame) -> pd.DataFrame:
+    """The truth columns of generated flows whose labels hold by construction (`label_<family>`
+    set): every packet of an attack flow has the effect of its strongest family
+    (vocabulary.EFFECT_PRECEDENCE), every packet of another flow is benign."""
+    n = len(frame)
+    packets = frame["packets"].to_numpy(dtype=np.int64)
+    code = np.zeros(n, dtype=np.int64)  # index into EFFECTS
+    fam = np.full(n, -1, dtype=np.int64)
+    for k, f in sorted(enumerate(FAMILIES), key=lambda kf: EFFECT_PRECEDENCE.index(family(kf[1]).effect), reverse=True):
+        hit = frame[f"label_{f}"].to_numpy(dtype=bool)
+        code[hit], fam[hit] = EFFECTS.index(family(f).effect), k
+    attack = np.where(fam >= 0, packets, 0)
+    out = {"attack_packets": attack, "attack_fraction": np.where(fam >= 0, 1.0, 0.0)}
+    for k, col in enumerate(ATTACK_PACKET_COLUMNS):
+        out[col] = np.where(fam == k, packets, 0)
+    starts = np.concatenate([[0], np.cumsum(packets)]).astype(np.int32)
+    names = pa.array(np.asarray(EFFECTS, dtype=object)[np.repeat(code, packets)].tolist(), type=pa.string())
+    df = pd.DataFrame(out, index=frame.index)
+    df.insert(0, "seq_effect", pd.arrays.ArrowExtensionArray(pa.ListArray.from_arrays(pa.array(starts), names)))
+    return df
 
 
 def _family_flows_paper(frame: pd.DataFrame, log: AttackLog) -> dict[str, np.ndarray]:
@@ -98,15 +118,22 @@ def _family_flows_paper(frame: pd.DataFrame, log: AttackLog) -> dict[str, np.nda
     return hits
 
 
-def label_flows(
-    p: PacketTable, fl: Flows, frame: pd.DataFrame, log: AttackLog, mode: LabelMode = "ours"
-) -> pd.DataFrame:
-    """Return `frame` with the label columns added (see module docstring)."""
+def label_flows(fl: Flows, frame: pd.DataFrame, log: AttackLog, truth: PacketTruth, mode: LabelMode = "ours",
+                min_attack_fraction: float = 0.0) -> Labelled:
+    """`frame` (one row per flow of `fl`) with the truth and label columns (module docstring)."""
     if mode not in LABEL_MODES:
         raise ValueError(f"unknown label mode {mode!r}; known: {', '.join(LABEL_MODES)}")
-    hits = _family_flows_ours(p, fl, frame, log) if mode == "ours" else _family_flows_paper(frame, log)
-    out = frame.copy()
-    code = np.zeros(len(frame), dtype=np.int64)
+    if not 0.0 <= min_attack_fraction <= 1.0:
+        raise ValueError(f"min_attack_fraction must be in [0, 1], got {min_attack_fraction}")
+    out = pd.concat([frame.reset_index(drop=True), truth_columns(fl, truth)], axis=1)
+    if mode == "paper":
+        hits = _family_flows_paper(frame, log)
+        keep = np.ones(len(out), dtype=bool)
+    else:
+        hits = {f: out[ATTACK_PACKET_COLUMNS[k]].to_numpy() > 0 for k, f in enumerate(FAMILIES)}
+        frac = out["attack_fraction"].to_numpy()
+        keep = (out["attack_packets"].to_numpy() == 0) | (frac >= min_attack_fraction)
+    code = np.zeros(len(out), dtype=np.int64)
     for k, fam in enumerate(FAMILIES):
         out[f"label_{fam}"] = hits[fam]
         code |= hits[fam].astype(np.int64) << k
@@ -123,4 +150,4 @@ def label_flows(
             src_names[c] = "+".join(s for s in SOURCES if s in used)
     out["label"] = pd.Series(code).map(names).to_numpy(dtype=object)
     out["label_source"] = pd.Series(code).map(src_names).to_numpy(dtype=object)
-    return out
+    return Labelled(out[keep].reset_index(drop=True), int((~keep).sum()))

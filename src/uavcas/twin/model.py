@@ -53,14 +53,22 @@ class Link(_Frozen):
     delay_ms: float
     loss: float = Field(ge=0.0, le=1.0)
     los: bool | None = None  # sampled LOS state where the path-loss model has one (3GPP)
+    # A wormhole's detour link: up and shaped like any other, but forwarding uses it only for the
+    # victim's own traffic while the attack is active (emulation.controller).
+    detour: bool = False
 
 
 class Route(_Frozen):
-    """The hop-by-hop path a flow between two nodes takes in one window (node names, ends included)."""
+    """The hop-by-hop path a flow between two nodes takes in one window (node names, ends included).
+
+    `disconnected`: no path over usable links joins the two this window (`hops` is then empty; the
+    runner sends no benign traffic over it).
+    """
 
     src: str
     dst: str
     hops: list[str]
+    disconnected: bool = False
 
 
 class Window(_Frozen):
@@ -70,17 +78,19 @@ class Window(_Frozen):
     positions: dict[str, tuple[float, float, float]]  # metres, x/y in the area, z altitude
     links: list[Link]
     routes: list[Route]  # benign traffic paths (UAV i <-> BS i mod n_bs) and attack paths
-    # Detours of wormholes active during any part of this window; links and routes include them.
-    # The runner switches a detour on and off at the attack's own start_s/stop_s.
+    # Detours of wormholes active during any part of this window (links include their links, routes
+    # do not). The runner switches a detour on and off at the attack's own start_s/stop_s.
     wormholes: list["WormholeOverride"] = Field(default_factory=list)
 
 
 class WormholeOverride(_Frozen):
-    """While active, traffic between `victim` and `bs` is forced through `attacker`'s switch."""
+    """While active, traffic between `victim` and `bs` (both directions) takes `hops`, victim ... bs,
+    through `attacker`'s switch; no other traffic does."""
 
     victim: str
     attacker: str
     bs: str
+    hops: list[str] = Field(default_factory=list)  # empty in plans written before detours had paths
 
 
 class Attack(_Frozen):
@@ -143,6 +153,19 @@ class Plan(_Frozen):
             if n.name == name:
                 return n
         raise KeyError(f"no node named {name!r} in the plan")
+
+    def disconnected_uavs(self, window: Window) -> list[str]:
+        """UAVs whose route to a base station has no usable path in `window`."""
+        kind = {n.name: n.kind for n in self.nodes}
+        return [r.src for r in window.routes
+                if r.disconnected and kind[r.src] == "uav" and kind[r.dst] == "bs"]
+
+    @property
+    def disconnected_fraction(self) -> float:
+        """Share of UAV-windows in which the UAV reaches no base station."""
+        n_uav = sum(n.kind == "uav" for n in self.nodes)
+        total = n_uav * len(self.windows)
+        return sum(len(self.disconnected_uavs(w)) for w in self.windows) / total if total else 0.0
 
     def to_json(self) -> str:
         """Byte-stable JSON: same plan, same bytes."""

@@ -4,10 +4,11 @@ Pure and deterministic: no clock, no environment, no global RNG. Independent see
 base-station placement, mobility, shadowing and the attack schedule, so changing one (say, the
 attack draw) leaves the others as they were.
 
-Per window k (t = k * window_s): mobility gives positions; the routing rule gives the active
-links (plus the detours of traffic-detouring attacks while one is scheduled); the channel chain gives every link its
-rate, delay and loss. The channel is evaluated for every node pair each window, active or not,
-so correlated shadowing evolves with the geometry rather than with the routing.
+Per window k (t = k * window_s): mobility gives positions; the channel chain gives every node pair
+its rate, delay and loss (evaluated for every pair each window, active or not, so correlated
+shadowing evolves with the geometry rather than with the routing); the routing rule
+(`topology.routing`) picks the active links among the usable ones, plus the detours of
+traffic-detouring attacks while one is scheduled, and marks UAVs that reach no BS disconnected.
 """
 
 from __future__ import annotations
@@ -107,29 +108,37 @@ def plan(
     iu, ju = np.triu_indices(n, k=1)
     all_pairs = np.c_[iu, ju]
     pair_index = {(int(a), int(b)): k for k, (a, b) in enumerate(all_pairs)}
+    positions = [np.vstack([uav_tracks[w], bs_pos]) for w in range(windows)]
+    # Every pair, every window, in window order: shadowing evolves with the geometry, and routing
+    # needs every pair's loss to pick usable links.
+    arrs = [channel.evaluate(pos, all_pairs, is_bs) for pos in positions]
+    losses = [_loss_matrix(n, all_pairs, arr.loss) for arr in arrs]
+    bs_of = [n_uav + u % scenario.n_bs for u in range(n_uav)]
 
+    # The routing without attacks, per window (attacks only add detours to it).
+    bases = [nearest_neighbour_topology(positions[w], is_bs, losses[w]) for w in range(windows)]
     # Routes of window 0 pick the blackhole relay and an off-path wormhole attacker.
-    pos0 = np.vstack([uav_tracks[0], bs_pos])
-    topo0 = nearest_neighbour_topology(pos0, is_bs)
-    routes0 = {
-        names[u]: [names[h] for h in route(topo0, n, u, n_uav + u % scenario.n_bs, is_bs)]
-        for u in range(n_uav)
-    }
+    routes0 = {names[u]: [names[h] for h in route(bases[0], n, u, bs_of[u]) or []] for u in range(n_uav)}
+
+    def detour_windows(victim: str, attacker: str, start_s: float, stop_s: float) -> int:
+        """Windows of [start_s, stop_s) in which a wormhole detour victim -> attacker -> BS exists."""
+        v, a = names.index(victim), names.index(attacker)
+        return sum(bool(with_wormholes(bases[w], positions[w], is_bs, [(v, a, bs_of[v])], losses[w]).detours)
+                   for w in range(windows) if w * window_s < stop_s and (w + 1) * window_s > start_s)
+
     attacks = schedule_attacks(
-        scenario, names[:n_uav], windows * window_s, _rng(seed, _ATTACK_STREAM), routes0
+        scenario, names[:n_uav], windows * window_s, _rng(seed, _ATTACK_STREAM), routes0, detour_windows
     )
 
     out_windows = []
     for w in range(windows):
         t0, t1 = w * window_s, (w + 1) * window_s
-        pos = np.vstack([uav_tracks[w], bs_pos])
-        topo = nearest_neighbour_topology(pos, is_bs)
+        pos, base = positions[w], bases[w]
         detours = [a for a in attacks if family(a.family).detours_traffic and a.start_s < t1 and a.stop_s > t0]
-        pairs = [(names.index(v), names.index(a.attackers[0])) for a in detours for v in a.victims]
-        if pairs:
-            topo = with_wormholes(topo, pos, is_bs, pairs)
-        arr = channel.evaluate(pos, all_pairs, is_bs)  # advances shadowing for every pair
-        links = [_link(names, topo, e, arr, pair_index[e], prof) for e in topo.edges]
+        triples = [(names.index(v), names.index(a.attackers[0]), bs_of[names.index(v)])
+                   for a in detours for v in a.victims]
+        topo = with_wormholes(base, pos, is_bs, triples, losses[w]) if triples else base
+        links = [_link(names, topo, e, arrs[w], pair_index[e], prof) for e in topo.edges]
         out_windows.append(
             Window(
                 index=w,
@@ -137,10 +146,11 @@ def plan(
                 duration_s=float(window_s),
                 positions={names[i]: tuple(_round(c, 3) for c in pos[i]) for i in range(n)},
                 links=links,
-                routes=_routes(names, topo, is_bs, n_uav, scenario.n_bs, attacks, t0, t1),
+                routes=_routes(names, base, bs_of, attacks, t0, t1),
                 wormholes=[
-                    WormholeOverride(victim=names[v], attacker=names[a], bs=names[b])
-                    for v, a, b in topo.overrides
+                    WormholeOverride(victim=names[d.victim], attacker=names[d.attacker], bs=names[d.bs],
+                                     hops=[names[h] for h in d.path])
+                    for d in topo.detours
                 ],
             )
         )
@@ -155,6 +165,19 @@ def plan(
         windows=out_windows,
         attacks=attacks,
     )
+
+
+def _loss(x: float) -> float:
+    return min(1.0, max(0.0, _round(x, 8)))
+
+
+def _loss_matrix(n: int, pairs: np.ndarray, loss: np.ndarray) -> np.ndarray:
+    """Symmetric n x n residual loss, rounded as the plan's links carry it."""
+    m = np.zeros((n, n))
+    vals = np.array([_loss(x) for x in loss])
+    m[pairs[:, 0], pairs[:, 1]] = vals
+    m[pairs[:, 1], pairs[:, 0]] = vals
+    return m
 
 
 def _link(names, topo: Topology, edge, arr, k: int, prof: TwinProfile) -> Link:
@@ -177,14 +200,16 @@ def _link(names, topo: Topology, edge, arr, k: int, prof: TwinProfile) -> Link:
         mcs=int(arr.mcs[k]),
         rate_mbps=_round(arr.rate_mbps[k], 4),
         delay_ms=_round(arr.delay_ms[k], 4),
-        loss=min(1.0, max(0.0, _round(arr.loss[k], 8))),
+        loss=_loss(arr.loss[k]),
         los=los,
+        detour=reason == "detour",
     )
 
 
-def _routes(names, topo, is_bs, n_uav, n_bs, attacks: list[Attack], t0, t1) -> list[Route]:
+def _routes(names, topo: Topology, bs_of: list[int], attacks: list[Attack], t0, t1) -> list[Route]:
+    """Benign routes (UAV i <-> BS i mod n_bs) and the attack paths of families that route them."""
     n = len(names)
-    wanted: list[tuple[int, int]] = [(u, n_uav + u % n_bs) for u in range(n_uav)]
+    wanted: list[tuple[int, int]] = [(u, b) for u, b in enumerate(bs_of)]
     for a in attacks:
         if a.start_s < t1 and a.stop_s > t0 and family(a.family).routes_attack_traffic:
             wanted += [(names.index(x), names.index(v)) for x in a.attackers for v in a.victims]
@@ -192,5 +217,7 @@ def _routes(names, topo, is_bs, n_uav, n_bs, attacks: list[Attack], t0, t1) -> l
     for s, d in wanted:
         if (s, d) not in seen:
             seen.add((s, d))
-            out.append(Route(src=names[s], dst=names[d], hops=[names[h] for h in route(topo, n, s, d, is_bs)]))
+            hops = route(topo, n, s, d)
+            out.append(Route(src=names[s], dst=names[d], hops=[names[h] for h in hops or []],
+                             disconnected=hops is None))
     return out

@@ -12,6 +12,8 @@ Rules (paper, section 'Attack Implementation', and what its code should have don
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 
 from uavcas.attacks import ScheduleDraw, family
@@ -29,8 +31,11 @@ def schedule_attacks(
     duration_s: float,
     rng: np.random.Generator,
     routes0: dict[str, list[str]] | None = None,
+    detour_windows: Callable[[str, str, float, float], int] | None = None,
 ) -> list[Attack]:
-    """Draw the schedule. `routes0` maps a UAV to its route towards its BS at t = 0.
+    """Draw the schedule. `routes0` maps a UAV to its route towards its BS at t = 0 (empty when
+    disconnected); `detour_windows(victim, attacker, start_s, stop_s)` counts the windows of an
+    attack interval in which a wormhole detour victim -> attacker -> BS exists.
 
     Shared here: the interval and the victim; each family's module picks its attackers.
     """
@@ -45,7 +50,8 @@ def schedule_attacks(
     order = [int(i) for i in rng.permutation(n)]
     victim = uav_names[order[0]]
     pool = [uav_names[i] for i in order[1:]]  # candidate attackers, in seeded order
-    draw = ScheduleDraw(uav_names, victim, pool, routes0, rng)
+    detours = (lambda v, a: detour_windows(v, a, start, stop)) if detour_windows else None
+    draw = ScheduleDraw(uav_names, victim, pool, routes0, rng, detours)
     attacks = []
     for k, spec in enumerate(scenario.attacks):
         fam = family(spec.family)

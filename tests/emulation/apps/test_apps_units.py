@@ -49,9 +49,27 @@ def test_client_assignment_and_script(tmp_path):
 
 
 def test_client_log_parse():
-    text = "1700000000.5\t200\t1234\t0.05\timg001.jpg\n1700000001.0\t000\t0\t2.0\timg002.jpg\ngarbage\n"
+    text = ("1700000000.5\t200\t1234\t0.05\timg001.jpg\n1700000001.0\t000\t0\t2.0\timg002.jpg\ngarbage\n"
+            "1700000002.0\tskip\t0\t0\t3\n")
     f = client.parse_log(text)
     assert [x.ok for x in f] == [True, False] and f[0].size_bytes == 1234 and f[1].image == "img002.jpg"
+    assert client.skipped_windows(text) == [3]
+
+
+def test_client_skips_the_windows_its_uav_is_disconnected(tmp_path):
+    import time
+
+    # nothing listens on 127.0.0.1:9: every fetch fails at once, so the loop runs freely; bash's
+    # SECONDS ticks in whole seconds, so a 2 s budget lasts between 1 and 2 s: windows 0-3 always run
+    t0 = time.time()
+    spec = client.ClientSpec("bs0", "uav0", "127.0.0.1", ("a.jpg",), 2.0, tmp_path / "log.tsv", seed=1,
+                             think_mean_s=0.02, port=9, t0_unix=t0, window_s=0.25, offline_windows=(1, 2))
+    spec.log_path.write_text("")
+    subprocess.run(["bash", str(client.write_script(spec, tmp_path / "c.sh"))], timeout=10, check=True)
+    text = spec.log_path.read_text()
+    assert client.skipped_windows(text) == [1, 2]  # one line per skipped window
+    fetched = [int((f.t_unix - t0) // 0.25) for f in client.parse_log(text)]
+    assert fetched and 0 in fetched and 3 in fetched and not {1, 2} & set(fetched)
 
 
 def test_flood_calibration_math_and_ruleset():

@@ -6,7 +6,13 @@ A new TCP connection per image, as a ground station pulling frames would, so eve
 its own flow. Bounded three ways: the loop's own deadline (bash `SECONDS`), curl's
 `--max-time`, and the `timeout` the core wraps around the whole script.
 
-Log line (tab separated): epoch start, HTTP code (000 = no answer), bytes, seconds, image.
+While the plan marks the UAV disconnected (no usable path to any BS, `Route.disconnected`) the
+loop fetches nothing: it logs one `skip` line and sleeps to the end of that window, so no benign
+traffic is sent into the void (it would vanish exactly as a blackhole's does). Windows are
+counted from the run's t0 (`ClientSpec.t0_unix`), with bash's microsecond clock.
+
+Log line (tab separated): epoch start, HTTP code (000 = no answer), bytes, seconds, image; or
+epoch, `skip`, 0, 0, the window index for a window skipped while disconnected.
 """
 
 from __future__ import annotations
@@ -34,6 +40,9 @@ class ClientSpec:
     seed: int
     think_mean_s: float = THINK_MEAN_S
     port: int = 80
+    t0_unix: float = 0.0  # plan t = 0 (the windows below count from it)
+    window_s: float = 5.0
+    offline_windows: tuple[int, ...] = ()  # windows in which the UAV reaches no BS
 
 
 @dataclass(frozen=True)
@@ -63,16 +72,31 @@ def render_script(spec: ClientSpec) -> str:
     thinks = np.clip(rng.exponential(spec.think_mean_s, SEQUENCE_LEN), 0.05, 4 * spec.think_mean_s)
     url = f"http://{spec.uav_ip}:{spec.port}/"
     fmt = r"%{http_code}\t%{size_download}\t%{time_total}"
+    offline = ""
+    if spec.offline_windows:
+        # ${EPOCHREALTIME/./}: the epoch in microseconds (bash 5 prints 6 decimals)
+        offline = f"""  now=${{t/./}}
+  w=$(( (now - t0us) / wus ))
+  if [[ "$off" == *" $w "* ]]; then
+    printf '%s\\tskip\\t0\\t0\\t%s\\n' "$t" "$w" >> "$log"
+    rest=$(( t0us + (w + 1) * wus - now ))
+    sleep "$(( rest / 1000000 )).$(printf '%06d' $(( rest % 1000000 )))"
+    continue
+  fi
+"""
     return f"""#!/bin/bash
 # uavcas: {spec.bs} fetching images from {spec.uav} (generated)
 imgs=({' '.join(shlex.quote(i) for i in order)})
 thinks=({' '.join(f'{t:.3f}' for t in thinks)})
 log={shlex.quote(str(spec.log_path))}
+t0us={round(spec.t0_unix * 1e6)}
+wus={round(spec.window_s * 1e6)}
+off=" {' '.join(str(w) for w in spec.offline_windows)} "
 end=$((SECONDS + {int(np.ceil(spec.duration_s))}))
 i=0
 while (( SECONDS < end )); do
-  img=${{imgs[i % {SEQUENCE_LEN}]}}
   t=$EPOCHREALTIME
+{offline}  img=${{imgs[i % {SEQUENCE_LEN}]}}
   r=$(curl -s -o /dev/null --connect-timeout {CONNECT_TIMEOUT_S:g} --max-time {MAX_TIME_S:g} -w '{fmt}' "{url}$img")
   printf '%s\\t%s\\t%s\\n' "$t" "$r" "$img" >> "$log"
   sleep "${{thinks[i % {SEQUENCE_LEN}]}}"
@@ -89,13 +113,24 @@ def write_script(spec: ClientSpec, path: Path) -> Path:
 
 
 def parse_log(text: str) -> list[Fetch]:
+    """The fetches of a client log (skipped windows are not fetches: see `skipped_windows`)."""
     out = []
     for line in text.splitlines():
         parts = line.split("\t")
-        if len(parts) != 5:
+        if len(parts) != 5 or parts[1] == "skip":
             continue
         try:
             out.append(Fetch(float(parts[0]), int(parts[1]), int(float(parts[2])), float(parts[3]), parts[4]))
         except ValueError:
             continue
+    return out
+
+
+def skipped_windows(text: str) -> list[int]:
+    """Windows the client skipped because its UAV was disconnected, in log order."""
+    out = []
+    for line in text.splitlines():
+        parts = line.split("\t")
+        if len(parts) == 5 and parts[1] == "skip" and parts[4].isdigit():
+            out.append(int(parts[4]))
     return out

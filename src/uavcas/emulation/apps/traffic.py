@@ -1,7 +1,7 @@
 """Benign traffic of a run: nginx on every UAV, curl loops on the BSs, optional telemetry.
 
 `BenignTraffic.start_servers()` runs before t0 (servers must be listening when the clock
-starts); `start_clients()` right at t0; `stop()` at the end, returning a per-client summary.
+starts); `start_clients(t0)` right at t0 (a client skips the windows its UAV is disconnected); `stop()` at the end, returning a per-client summary.
 """
 
 from __future__ import annotations
@@ -27,6 +27,7 @@ class ClientSummary:
     ok: int
     failed: int
     bytes: int
+    skipped_windows: list[int]  # windows with no fetch: the UAV was disconnected (plan)
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -74,12 +75,17 @@ class BenignTraffic:
             why = dead[0].stderr().strip()[-300:] if dead else "not listening"
             raise RuntimeError(f"nginx did not start: {why}")
 
-    def start_clients(self) -> None:
+    def start_clients(self, t0_unix: float) -> None:
         names = [img.name for img in self.images]
+        offline: dict[str, list[int]] = {}
+        for w in self.plan.windows:
+            for u in self.plan.disconnected_uavs(w):
+                offline.setdefault(u, []).append(w.index)
         for k, (bs, uav) in enumerate(client.assignments([u.name for u in self.uavs], [b.name for b in self.bss])):
             spec = client.ClientSpec(bs, uav, self.plan.node(uav).ip, tuple(names), self.duration_s,
                                      self.log_dir / f"http-{bs}-{uav}.tsv", seed=self.plan.seed * 1000 + k,
-                                     think_mean_s=self.think_mean_s)
+                                     think_mean_s=self.think_mean_s, t0_unix=t0_unix,
+                                     window_s=self.plan.window_s, offline_windows=tuple(offline.get(uav, ())))
             spec.log_path.parent.mkdir(parents=True, exist_ok=True)
             spec.log_path.write_text("")
             script = client.write_script(spec, self.work / "clients" / f"{bs}-{uav}.sh")
@@ -108,5 +114,5 @@ class BenignTraffic:
             fetches = client.parse_log(text)
             ok = [f for f in fetches if f.ok]
             out.append(ClientSummary(spec.bs, spec.uav, len(fetches), len(ok), len(fetches) - len(ok),
-                                     sum(f.size_bytes for f in ok)))
+                                     sum(f.size_bytes for f in ok), client.skipped_windows(text)))
         return out

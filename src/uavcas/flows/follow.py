@@ -1,0 +1,363 @@
+"""The packet follower: one id per transmitted packet across every capture point it crossed.
+
+A run captures every switch (`s-<node>` points), so one IP packet crossing k switches appears k
+times in the packet table. `follow(table, timeline)` tells those observations apart:
+
+* **Identity.** Observations are candidates for the same packet only when everything a switch
+  cannot change is equal: addresses, protocol, ports, IP id, TCP sequence number and flags, TTL
+  (bridges do not decrement it) and frame length (`KEY_COLUMNS`).
+* **Chains.** Candidates are ordered by time and strung into chains, one per transmission: a
+  chain visits a point at most once (forwarding is loop-free), each step lasts at most
+  `max_hop_s` and goes where the forwarding in force sent the packet. Candidates that meet all
+  three in one sequence (nearly all packets) are chained at once, vectorised; the rest (two
+  identical-looking packets in flight together, e.g. unconnected UDP with DF and IP id 0) go
+  through a greedy matcher that attaches each observation to the open chain it fits best:
+  expected there by the forwarding, step closest to the link's planned delay, oldest first.
+  Two observations at one point are never merged into one packet.
+* **Loss.** A packet whose last observation is not its destination's switch left that switch
+  towards the next hop of the forwarding in force then and never arrived: it is lost on that
+  hop (`Losses`; `to_point` -1 when the switch had no way to the destination at all).
+
+The forwarding comes from a `Timeline`: the tables the run installed (`forwarding.jsonl`,
+exact, attacks included) or, for runs made before they were logged, the plan's windows
+(`Timeline.from_plan`: each window's routes for the whole window; a wormhole detour travels on alias
+MACs outside these tables, so its steps are chained by the planned link delays).
+
+Output per packet-table row: `pid` (int64, equal across a transmission's observations, numbered
+in order of first observation) and `hop` (0 at its first switch). Pure numpy; no root.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from .packets import PacketTable, address_to_words, read_packets
+
+if TYPE_CHECKING:
+    from uavcas.rundir import ForwardingEpoch
+    from uavcas.twin.model import Plan
+
+KEY_COLUMNS: tuple[str, ...] = (
+    "src_hi", "src_lo", "dst_hi", "dst_lo", "proto", "sport", "dport", "ip_id", "tcp_seq", "tcp_flags",
+    "ttl", "frame_len",
+)  # fmt: skip
+MAX_HOP_S = 1.0  # planned delay + a full queue + scheduling lateness stays far below this
+POINT_PREFIX = "s-"  # capture point of node X's switch: s-X (docs/formats.md)
+
+
+def node_of_point(point: str) -> str | None:
+    return point[len(POINT_PREFIX):] if point.startswith(POINT_PREFIX) else None
+
+
+class Timeline:
+    """The forwarding in force over a run: next-hop tables by time, as arrays.
+
+    `next_hop[e, i, d]` is the node index a frame for node d leaves node i's switch towards in
+    epoch e (-1: none); epoch e holds from `t_unix[e]` on, and during `[t_begin_unix[e],
+    t_unix[e])` the previous table may still hold for some destinations.
+    """
+
+    def __init__(self, nodes: Sequence[str], ips: Sequence[str], epochs: Sequence["ForwardingEpoch"],
+                 link_delay_ms: dict[tuple[int, int, int], float] | None = None) -> None:
+        if not epochs:
+            raise ValueError("a forwarding timeline needs at least one epoch")
+        self.nodes = tuple(nodes)
+        index = {n: i for i, n in enumerate(self.nodes)}
+        epochs = sorted(epochs, key=lambda e: e.t_unix)
+        n = len(self.nodes)
+        self.next_hop = np.full((len(epochs), n, n), -1, dtype=np.int32)
+        for e, ep in enumerate(epochs):
+            for sw, table in ep.next_hop.items():
+                for dst, nh in table.items():
+                    self.next_hop[e, index[sw], index[dst]] = index[nh]
+        self.t_unix = np.array([e.t_unix for e in epochs], dtype=np.float64)
+        self.t_begin_unix = np.array([e.t_begin_unix for e in epochs], dtype=np.float64)
+        self.window = np.array([e.window for e in epochs], dtype=np.int32)
+        words = [address_to_words(ip) for ip in ips]
+        self._ip_hi = np.array([w[0] for w in words], dtype=np.uint64)
+        self._ip_lo = np.array([w[1] for w in words], dtype=np.uint64)
+        self.link_delay_ms = link_delay_ms or {}  # (window, i, j) -> planned delay of link i-j
+
+    @classmethod
+    def from_epochs(cls, plan: "Plan", epochs: Sequence["ForwardingEpoch"]) -> "Timeline":
+        return cls([n.name for n in plan.nodes], [n.ip for n in plan.nodes], epochs, _link_delays(plan))
+
+    @classmethod
+    def from_plan(cls, plan: "Plan", t0_unix: float,
+                  applied_unix: Sequence[tuple[float, float]] | None = None) -> "Timeline":
+        """The plan's forwarding per window (what `Emulation.apply_window` installs).
+
+        `applied_unix`: per window, when its apply began and ended (default: at the planned
+        start). Attacks that change forwarding for part of a window are not modelled here.
+        """
+        from uavcas.emulation.controller import compute
+        from uavcas.rundir import ForwardingEpoch
+
+        names = [n.name for n in plan.nodes]
+        epochs = []
+        for w in plan.windows:
+            fwd = compute(names, [(lk.a, lk.b) for lk in w.links], [r.hops for r in w.routes],
+                          detour_links=[(lk.a, lk.b) for lk in w.links if lk.detour])
+            t = t0_unix + w.t_s
+            begin, end = applied_unix[w.index] if applied_unix is not None and w.index < len(applied_unix) else (t, t)
+            epochs.append(ForwardingEpoch(t_begin_unix=begin, t_unix=end, window=w.index, next_hop=fwd.next_hop))
+        return cls.from_epochs(plan, epochs)
+
+    def node_of_ip(self, hi: np.ndarray, lo: np.ndarray) -> np.ndarray:
+        """Node index of each address (-1: not a node of the plan)."""
+        by_lo = np.argsort(self._ip_lo, kind="stable")
+        sorted_lo = self._ip_lo[by_lo]
+        k = np.minimum(np.searchsorted(sorted_lo, lo), max(sorted_lo.shape[0] - 1, 0))
+        if sorted_lo.shape[0] == 0:
+            return np.full(hi.shape[0], -1, dtype=np.int32)
+        cand = by_lo[k]
+        hit = (sorted_lo[k] == lo) & (self._ip_hi[cand] == hi)
+        return np.where(hit, cand, -1).astype(np.int32)
+
+    def epoch_at(self, t_unix: np.ndarray) -> np.ndarray:
+        """The epoch in force at each time (before the first epoch: the first)."""
+        return np.maximum(np.searchsorted(self.t_unix, t_unix, side="right") - 1, 0)
+
+    def window_at(self, t_unix: np.ndarray) -> np.ndarray:
+        return self.window[self.epoch_at(t_unix)]
+
+    def hops(self, t_unix: np.ndarray, node: np.ndarray, dst: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(next hop in force, next hop of the table being installed) at each time; equal outside
+        a change-over. -1 where the node or destination is unknown or has no way there."""
+        e = self.epoch_at(t_unix)
+        ok = (node >= 0) & (dst >= 0)
+        ni, di = np.where(ok, node, 0), np.where(ok, dst, 0)
+        now = np.where(ok, self.next_hop[e, ni, di], -1)
+        e2 = np.minimum(e + 1, self.next_hop.shape[0] - 1)
+        switching = (t_unix >= self.t_begin_unix[e2]) & (t_unix < self.t_unix[e2])
+        nxt = np.where(ok & switching, self.next_hop[e2, ni, di], now)
+        return now, nxt
+
+    def planned_delay_s(self, window: int, i: int, j: int) -> float | None:
+        d = self.link_delay_ms.get((window, min(i, j), max(i, j)))
+        return None if d is None else d / 1000.0
+
+
+def _link_delays(plan: "Plan") -> dict[tuple[int, int, int], float]:
+    idx = {n.name: n.index for n in plan.nodes}
+    out = {}
+    for w in plan.windows:
+        for lk in w.links:
+            i, j = idx[lk.a], idx[lk.b]
+            out[(w.index, min(i, j), max(i, j))] = lk.delay_ms
+    return out
+
+
+@dataclass(frozen=True)
+class Losses:
+    """Packets that left a switch and never reached the next one (one entry per lost packet)."""
+
+    pid: np.ndarray  # int64
+    from_point: np.ndarray  # int16, index into the table's points
+    to_point: np.ndarray  # int16; -1: the switch had no forwarding entry for the destination
+    window: np.ndarray  # int32, window in force at the from point
+    t_s: np.ndarray  # float64, time seen at the from point
+
+    def __len__(self) -> int:
+        return int(self.pid.shape[0])
+
+
+@dataclass(frozen=True)
+class Crossings:
+    """Hop crossings: consecutive observations of one packet (from one switch to the next)."""
+
+    pid: np.ndarray  # int64
+    row_from: np.ndarray  # int64, packet-table rows
+    row_to: np.ndarray
+    from_point: np.ndarray  # int16
+    to_point: np.ndarray
+    t_from: np.ndarray  # float64, Unix seconds
+    t_to: np.ndarray
+    window: np.ndarray  # int32, window in force at the from point
+
+    def __len__(self) -> int:
+        return int(self.pid.shape[0])
+
+
+@dataclass(frozen=True)
+class Followed:
+    """The follower's answer for one packet table (see the module docstring)."""
+
+    pid: np.ndarray  # per row, int64
+    hop: np.ndarray  # per row, int16
+    order: np.ndarray  # rows sorted by (pid, hop)
+    offsets: np.ndarray  # pid p's rows are order[offsets[p]:offsets[p + 1]]
+    points: tuple[str, ...]
+    dst_node: np.ndarray  # per pid, node index of the destination (-1: not a node)
+    delivered: np.ndarray  # per pid: last seen at its destination's switch
+    losses: Losses
+    _ts: np.ndarray
+    _point: np.ndarray
+    _window: np.ndarray  # per row
+
+    @property
+    def n_packets(self) -> int:
+        return int(self.offsets.shape[0] - 1)
+
+    def path(self, pid: int) -> tuple[list[str], np.ndarray]:
+        """The points (names) one packet was seen at, in order, and the times (Unix s)."""
+        rows = self.order[self.offsets[pid]:self.offsets[pid + 1]]
+        return [self.points[p] for p in self._point[rows]], self._ts[rows]
+
+    def crossings(self) -> Crossings:
+        o = self.order
+        if o.shape[0] < 2:
+            e = np.zeros(0, dtype=np.int64)
+            return Crossings(e, e, e, e.astype(np.int16), e.astype(np.int16), e.astype(float), e.astype(float),
+                             e.astype(np.int32))
+        same = self.pid[o[1:]] == self.pid[o[:-1]]
+        a, b = o[:-1][same], o[1:][same]
+        return Crossings(self.pid[a], a, b, self._point[a], self._point[b], self._ts[a], self._ts[b],
+                         self._window[a])
+
+
+def follow(table: PacketTable, timeline: Timeline, max_hop_s: float = MAX_HOP_S) -> Followed:
+    """Follow every packet of `table` (all capture points of one run); see the module docstring."""
+    n = len(table)
+    ts = np.asarray(table["ts_s"], dtype=np.float64)
+    point = np.asarray(table["point"], dtype=np.int16)
+    index = {name: i for i, name in enumerate(timeline.nodes)}
+    point_node = np.array([index.get(node_of_point(p) or "", -1) for p in table.points] or [-1], dtype=np.int32)
+    node = point_node[point] if n else np.zeros(0, dtype=np.int32)
+    dst = timeline.node_of_ip(table["dst_hi"], table["dst_lo"]) if n else np.zeros(0, dtype=np.int32)
+    window = timeline.window_at(ts) if n else np.zeros(0, dtype=np.int32)
+
+    keys = [np.asarray(table[c]) for c in KEY_COLUMNS]
+    order = np.lexsort((ts, *reversed(keys)))
+    new_group = np.ones(n, dtype=bool)
+    if n > 1:
+        new_group[1:] = np.zeros(n - 1, dtype=bool)
+        for k in keys:
+            ks = k[order]
+            new_group[1:] |= ks[1:] != ks[:-1]
+    t_s, nd, ds = ts[order], node[order], dst[order]
+    gap = np.diff(t_s, prepend=-np.inf)
+    new_seg = new_group | (gap > max_hop_s)
+    seg = np.cumsum(new_seg) - 1
+
+    # A segment is one packet when its points are distinct and each step is a forwarding step.
+    suspect = np.zeros(int(seg[-1]) + 1 if n else 0, dtype=bool)
+    if n > 1:
+        by_point = np.lexsort((point[order], seg))
+        dup = (seg[by_point][1:] == seg[by_point][:-1]) & (point[order][by_point][1:] == point[order][by_point][:-1])
+        suspect[seg[by_point][1:][dup]] = True
+        step = ~new_seg[1:]
+        now, nxt = timeline.hops(t_s[:-1], nd[:-1], ds[:-1])
+        known = (nd[:-1] >= 0) & (ds[:-1] >= 0)
+        off_path = step & known & (now != nd[1:]) & (nxt != nd[1:])
+        suspect[seg[1:][off_path]] = True
+
+    chain = seg.copy()
+    slow = suspect[seg]
+    if slow.any():
+        rows = np.flatnonzero(slow)
+        chain[rows] = _match(seg[rows], t_s[rows], nd[rows], ds[rows], window[order][rows], timeline,
+                             max_hop_s, first_id=int(seg[-1]) + 1)
+    return _assemble(order, chain, ts, point, node, dst, window, table.points, point_node, timeline)
+
+
+def _match(seg: np.ndarray, t: np.ndarray, node: np.ndarray, dst: np.ndarray, window: np.ndarray,
+           timeline: Timeline, max_hop_s: float, first_id: int) -> np.ndarray:
+    """Greedy chaining of ambiguous segments (rows in time order within each segment)."""
+    out = np.empty(seg.shape[0], dtype=np.int64)
+    now, nxt = timeline.hops(t, node, dst)
+    next_id = first_id
+    last_seg = -1
+    chains: list[list] = []  # [id, last node, last time, window, visited nodes, expected next nodes]
+    for r in range(seg.shape[0]):
+        if seg[r] != last_seg:
+            last_seg, chains = seg[r], []
+        p, tr = int(node[r]), float(t[r])
+        best, best_cost = None, None
+        for c in chains:
+            dt = tr - c[2]
+            if dt < 0 or dt > max_hop_s or p in c[4] or c[1] == p:
+                continue
+            expected = p in c[5]
+            plan_d = timeline.planned_delay_s(c[3], c[1], p) if p >= 0 and c[1] >= 0 else None
+            if not expected and c[5] and plan_d is None:
+                continue  # forwarding sends it elsewhere and no link joins the two switches
+            cost = (0 if expected else 1, abs(dt - (plan_d or 0.0)), c[2])
+            if best_cost is None or cost < best_cost:
+                best, best_cost = c, cost
+        if best is None:
+            best = [next_id, p, tr, int(window[r]), set(), set()]
+            next_id += 1
+            chains.append(best)
+        best[1], best[2], best[3] = p, tr, int(window[r])
+        best[4].add(p)
+        best[5] = {int(h) for h in (now[r], nxt[r]) if h >= 0}
+        out[r] = best[0]
+    return out
+
+
+def _assemble(order, chain, ts, point, node, dst, window, points, point_node, timeline) -> Followed:
+    n = ts.shape[0]
+    chain_row = np.empty(n, dtype=np.int64)
+    chain_row[order] = chain
+    # number packets by first observation (time, then row): stable across identical inputs
+    by_time = np.lexsort((np.arange(n), ts, chain_row)) if n else np.zeros(0, dtype=np.int64)
+    c_sorted = chain_row[by_time]
+    starts = np.flatnonzero(np.diff(c_sorted, prepend=-1) != 0) if n else np.zeros(0, dtype=np.int64)
+    first_rows = by_time[starts]
+    rank = np.argsort(np.lexsort((first_rows, ts[first_rows])), kind="stable")
+    pid_of_chain_pos = rank  # chain (in sorted order) -> pid
+    seg_index = np.cumsum(np.diff(c_sorted, prepend=-1) != 0) - 1 if n else np.zeros(0, dtype=np.int64)
+    pid = np.empty(n, dtype=np.int64)
+    pid[by_time] = pid_of_chain_pos[seg_index]
+    hop = np.empty(n, dtype=np.int16)
+    hop[by_time] = (np.arange(n) - starts[seg_index]).astype(np.int16)
+    order_ph = np.lexsort((hop, pid)) if n else np.zeros(0, dtype=np.int64)
+    n_pid = int(starts.shape[0])
+    counts = np.bincount(pid, minlength=n_pid) if n else np.zeros(0, dtype=np.int64)
+    offsets = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
+
+    last = order_ph[offsets[1:] - 1] if n_pid else np.zeros(0, dtype=np.int64)
+    dst_node = dst[last]
+    delivered = (dst_node >= 0) & (node[last] == dst_node)
+    now, _ = timeline.hops(ts[last], node[last], dst_node)
+    node_point = np.full(len(timeline.nodes), -1, dtype=np.int16)
+    for k, nd in enumerate(point_node[: len(points)]):
+        if nd >= 0:
+            node_point[nd] = k
+    lost = ~delivered & (dst_node >= 0) & (node[last] >= 0)
+    lost_pid = np.flatnonzero(lost)
+    lr = last[lost]
+    to_point = np.where(now[lost] >= 0, node_point[np.maximum(now[lost], 0)], -1).astype(np.int16)
+    losses = Losses(lost_pid.astype(np.int64), point[lr], to_point, window[lr].astype(np.int32), ts[lr])
+    return Followed(pid, hop, order_ph, offsets, tuple(points), dst_node, delivered, losses, ts, point,
+                    window.astype(np.int32))
+
+
+def follow_run(run_dir: str | Path, max_hop_s: float = MAX_HOP_S, table: PacketTable | None = None,
+               allow_truncated: bool = True) -> tuple[PacketTable, Followed]:
+    """Read a run directory's captures (unless `table` is given) and follow its packets.
+
+    The forwarding is the run's own log (forwarding.jsonl) when present, else the plan's.
+    """
+    from uavcas.rundir import RunDir, RunDirError
+
+    rd = RunDir(Path(run_dir))
+    plan = rd.read_plan()
+    if table is None:
+        table = read_packets(rd.pcaps(), allow_truncated=allow_truncated)
+    epochs = rd.read_forwarding()
+    if epochs:
+        timeline = Timeline.from_epochs(plan, epochs)
+    else:
+        info = rd.read_info()
+        if info is None or info.t0_unix is None:
+            raise RunDirError(f"{rd.root}: no forwarding.jsonl and no t0 in run.json: cannot place windows in time")
+        applied = [(a.t_unix - a.timings_s.get("total_s", 0.0), a.t_unix) for a in info.window_applies]
+        timeline = Timeline.from_plan(plan, info.t0_unix, applied or None)
+    return table, follow(table, timeline, max_hop_s)

@@ -1,0 +1,220 @@
+"""The packet follower on hand-built packet tables and a four-switch plan.
+
+Topology (window 0): uav0 - uav1 - bs0, uav0 - uav2, uav2 - bs0; routes send uav0 <-> bs0
+through uav1. Window 1 drops uav0 - uav1, so the same traffic goes through uav2.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from pcapgen import T0, udp, write
+
+from uavcas.flows.follow import Timeline, follow, follow_run
+from uavcas.flows.packets import COLUMNS, PacketTable, address_to_words
+from uavcas.rundir import ForwardingEpoch, RunDir
+from uavcas.twin.model import Link, Node, Plan, Route, Window
+
+NAMES = ["uav0", "uav1", "uav2", "bs0"]
+IPS = {n: f"10.9.0.{i + 1}" for i, n in enumerate(NAMES)}
+POINTS = tuple(f"s-{n}" for n in NAMES)
+D_MS = 5.0
+
+
+def _link(a, b, delay_ms=D_MS):
+    return Link(a=a, b=b, kind="air", distance_m=50.0, pathloss_db=70.0, snr_db=25.0, mcs=4, rate_mbps=24.0,
+                delay_ms=delay_ms, loss=0.0)
+
+
+def _plan() -> Plan:
+    nodes = [Node(name=n, kind="bs" if n.startswith("bs") else "uav", index=i, ip=IPS[n],
+                  mac=f"02:00:00:00:00:{i:02x}") for i, n in enumerate(NAMES)]
+    w0 = Window(index=0, t_s=0.0, duration_s=5.0, positions={},
+                links=[_link("uav0", "uav1"), _link("uav1", "bs0"), _link("uav0", "uav2"), _link("uav2", "bs0")],
+                routes=[Route(src="uav0", dst="bs0", hops=["uav0", "uav1", "bs0"])])
+    w1 = Window(index=1, t_s=5.0, duration_s=5.0, positions={},
+                links=[_link("uav0", "uav2"), _link("uav2", "bs0"), _link("uav1", "bs0")], routes=[])
+    return Plan(config="test", seed=0, window_s=5.0, profile="test", area_m=(100.0, 100.0, 10.0, 50.0),
+                nodes=nodes, windows=[w0, w1], attacks=[])
+
+
+PLAN = _plan()
+TL = Timeline.from_plan(PLAN, T0)
+
+
+def _table(rows: list[dict]) -> PacketTable:
+    """rows: t (s from T0), at (node), src, dst (nodes), and optional header fields."""
+    cols = {c: [] for c in COLUMNS}
+    for k, r in enumerate(rows):
+        shi, slo = address_to_words(IPS.get(r["src"], r["src"]))
+        dhi, dlo = address_to_words(IPS.get(r["dst"], r["dst"]))
+        vals = {"ts_s": T0 + r["t"], "frame_len": r.get("len", 142), "cap_len": r.get("len", 142), "ip_version": 4,
+                "src_hi": shi, "src_lo": slo, "dst_hi": dhi, "dst_lo": dlo, "sport": r.get("sport", 5000),
+                "dport": r.get("dport", 6000), "proto": r.get("proto", 17), "tcp_flags": r.get("flags", 0),
+                "ttl": r.get("ttl", 64), "ip_id": r.get("id", 0), "tcp_seq": r.get("seq", 0), "ip_hdr_len": 20,
+                "l4_hdr_len": 8, "frame_index": k, "point": NAMES.index(r["at"])}
+        for c in COLUMNS:
+            cols[c].append(vals[c])
+    dtypes = {"ts_s": np.float64, "frame_len": np.uint32, "cap_len": np.uint32, "ip_version": np.uint8,
+              "src_hi": np.uint64, "src_lo": np.uint64, "dst_hi": np.uint64, "dst_lo": np.uint64,
+              "sport": np.uint16, "dport": np.uint16, "proto": np.uint8, "tcp_flags": np.uint16, "ttl": np.uint8,
+              "ip_id": np.uint32, "tcp_seq": np.uint32, "ip_hdr_len": np.uint16, "l4_hdr_len": np.uint16,
+              "frame_index": np.int64, "point": np.int16}
+    return PacketTable({c: np.array(v, dtype=dtypes[c]) for c, v in cols.items()}, POINTS)
+
+
+def _send(t, path, d_s=D_MS / 1000, **hdr):
+    """Observations of one packet along `path` (nodes), one planned delay per hop."""
+    return [{"t": t + k * d_s, "at": n, "src": path[0], "dst": path[-1], **hdr} for k, n in enumerate(path)]
+
+
+def _paths(f, table):
+    return {p: f.path(p)[0] for p in range(f.n_packets)}
+
+
+def test_multi_hop_delivery_one_pid_hops_in_order():
+    rows = _send(0.5, ["uav0", "uav1", "bs0"]) + _send(0.7, ["bs0", "uav1", "uav0"], id=9)
+    rows.reverse()  # the table's row order must not matter
+    t = _table(rows)
+    f = follow(t, TL)
+    assert f.n_packets == 2
+    assert f.path(0)[0] == ["s-uav0", "s-uav1", "s-bs0"] and f.path(1)[0] == ["s-bs0", "s-uav1", "s-uav0"]
+    for p in range(2):
+        rows_p = np.flatnonzero(f.pid == p)
+        assert sorted(f.hop[rows_p].tolist()) == [0, 1, 2]
+        assert f.hop[rows_p][np.argsort(t["ts_s"][rows_p])].tolist() == [0, 1, 2]
+    assert f.delivered.all() and len(f.losses) == 0
+    c = f.crossings()
+    assert len(c) == 4 and np.allclose(c.t_to - c.t_from, D_MS / 1000, atol=1e-6)
+
+
+def test_loss_on_a_given_hop_is_located():
+    rows = _send(1.0, ["uav0", "uav1", "bs0"], id=1)[:2] + _send(1.2, ["uav0", "uav1", "bs0"], id=2)[:1]
+    rows += _send(6.0, ["uav0", "uav2", "bs0"], id=3)[:2]  # window 1: the route goes through uav2
+    f = follow(_table(rows), TL)
+    assert f.n_packets == 3 and not f.delivered.any()
+    got = sorted((POINTS[a], POINTS[b], int(w)) for a, b, w in
+                 zip(f.losses.from_point, f.losses.to_point, f.losses.window))
+    assert got == [("s-uav0", "s-uav1", 0), ("s-uav1", "s-bs0", 0), ("s-uav2", "s-bs0", 1)]
+
+
+def test_identical_looking_packets_never_merge():
+    # Unconnected UDP with DF carries IP id 0: same header, same length, 1 ms apart, 5 ms hops,
+    # so both are in flight on the same hop at once.
+    a = _send(2.0, ["uav0", "uav1", "bs0"])
+    b = _send(2.001, ["uav0", "uav1", "bs0"])
+    f = follow(_table(a + b), TL)
+    assert f.n_packets == 2
+    for p in range(2):
+        pts, times = f.path(p)
+        assert pts == ["s-uav0", "s-uav1", "s-bs0"]
+        assert np.allclose(np.diff(times), D_MS / 1000, atol=1e-6)
+    assert f.delivered.all()
+
+
+def test_identical_packets_first_lost_second_not_taken_for_it():
+    a = _send(2.0, ["uav0", "uav1", "bs0"])[:2]  # lost on uav1 -> bs0
+    b = _send(2.1, ["uav0", "uav1", "bs0"])
+    f = follow(_table(a + b), TL)
+    assert f.n_packets == 2
+    assert f.path(0)[0] == ["s-uav0", "s-uav1"] and f.path(1)[0] == ["s-uav0", "s-uav1", "s-bs0"]
+    assert np.allclose(np.diff(f.path(1)[1]), D_MS / 1000, atol=1e-6)
+    assert [(POINTS[x], POINTS[y]) for x, y in zip(f.losses.from_point, f.losses.to_point)] == [("s-uav1", "s-bs0")]
+
+
+def test_retransmissions_are_separate_packets():
+    seg = {"proto": 6, "sport": 40000, "dport": 80, "seq": 1000, "flags": 0x18, "len": 1514}
+    rows = _send(3.0, ["uav0", "uav1", "bs0"], id=11, **seg)[:2]  # the original, lost on the last hop
+    rows += _send(3.2, ["uav0", "uav1", "bs0"], id=12, **seg)  # the retransmission: new IP id
+    rows += _send(3.5, ["uav0", "uav1", "bs0"], id=12, **seg)  # identical header again (worst case)
+    f = follow(_table(rows), TL)
+    assert f.n_packets == 3
+    assert [len(f.path(p)[0]) for p in range(3)] == [2, 3, 3]
+    assert f.delivered.tolist() == [False, True, True]
+
+
+def test_flood_with_reused_ports_and_ids_keeps_every_packet():
+    rng = np.random.default_rng(7)
+    syn = {"proto": 6, "sport": 3000, "dport": 80, "seq": 42, "flags": 0x02, "id": 7, "len": 54}
+    rows, lost = [], []
+    for k in range(60):  # 1 ms apart, 5 ms hops: five packets in flight per hop, all alike
+        obs = _send(4.0 + k * 0.001, ["uav2", "bs0", "uav1"], **syn)
+        late = 0.0
+        for o in obs[1:]:
+            late += float(rng.uniform(0, 0.0002))  # scheduling jitter, order kept
+            o["t"] += late
+        if k % 7 == 3:
+            obs = obs[:2]
+            lost.append(k)
+        rows += obs
+    f = follow(_table(rows), TL)
+    assert f.n_packets == 60
+    for p in range(60):
+        pts, times = f.path(p)
+        assert len(set(pts)) == len(pts) and np.all(np.diff(times) < 0.0053) and np.all(np.diff(times) > 0.00499)
+    assert sorted(f.losses.pid.tolist()) == lost  # pids follow first-seen order: pid k is the k-th SYN
+    assert {(POINTS[a], POINTS[b]) for a, b in zip(f.losses.from_point, f.losses.to_point)} == {("s-bs0", "s-uav1")}
+
+
+def test_unknown_destination_and_disconnected_switch():
+    rows = _send(1.0, ["uav0", "uav1"])
+    for r in rows:
+        r["dst"] = "10.200.0.1"  # not a node: no destination, no loss claimed
+    rows += [{"t": 6.0, "at": "uav1", "src": "uav1", "dst": "uav0"}]  # window 1: uav1 reaches uav0 via bs0
+    rows += [{"t": 6.5, "at": "uav0", "src": "uav0", "dst": "uav1", "id": 5}]
+    f = follow(_table(rows), TL)
+    assert f.n_packets == 3
+    by_from = {POINTS[a]: int(b) for a, b in zip(f.losses.from_point, f.losses.to_point)}
+    assert by_from == {"s-uav1": POINTS.index("s-bs0"), "s-uav0": POINTS.index("s-uav2")}
+
+
+def test_logged_forwarding_overrides_the_plan():
+    # The run logged a detour (as a wormhole would install): uav0 -> bs0 via uav2 in window 0.
+    nh = {"uav0": {"bs0": "uav2", "uav1": "uav1", "uav2": "uav2"}, "uav2": {"bs0": "bs0", "uav0": "uav0"},
+          "bs0": {"uav0": "uav2"}, "uav1": {"uav0": "uav0"}}
+    tl = Timeline.from_epochs(PLAN, [ForwardingEpoch(t_begin_unix=T0, t_unix=T0, window=0, next_hop=nh)])
+    rows = _send(1.0, ["uav0", "uav2", "bs0"], id=1)[:2]
+    f_log, f_plan = follow(_table(rows), tl), follow(_table(rows), TL)
+    assert f_log.n_packets == 1 and f_log.losses.to_point.tolist() == [POINTS.index("s-bs0")]
+    assert f_plan.n_packets == 1 and f_plan.losses.to_point.tolist() == [POINTS.index("s-bs0")]
+    rows = _send(1.0, ["uav0", "uav1", "bs0"], id=2)[:2]  # uav1 held no entry for bs0: dropped there, no next hop
+    f = follow(_table(rows), tl)
+    assert f.n_packets == 1 and f.losses.to_point.tolist() == [-1] and f.losses.from_point.tolist() == [1]
+
+
+def test_follow_run_reads_captures_and_forwarding(tmp_path):
+    rd = RunDir(tmp_path)
+    (tmp_path / "pcap").mkdir()
+    rd.plan_json.write_text(PLAN.to_json())
+    epochs = [ForwardingEpoch(t_begin_unix=T0 + w.t_s, t_unix=T0 + w.t_s, window=w.index,
+                              next_hop=TL_NH[w.index]) for w in PLAN.windows]
+    rd.forwarding_jsonl.write_text("".join(e.model_dump_json() + "\n" for e in epochs))
+    for k, node in enumerate(["uav0", "uav1", "bs0"]):
+        pk = [udp(0.2 + 0.005 * k, IPS["uav0"], IPS["bs0"], 5000, 6000, size=50),
+              udp(0.4 + 0.005 * k, IPS["uav0"], IPS["bs0"], 5000, 6000, size=50)]
+        write(tmp_path / "pcap" / f"s-{node}.pcap", pk)
+    table, f = follow_run(tmp_path)
+    assert len(table) == 6 and f.n_packets == 2 and f.delivered.all()
+    assert [f.path(p)[0] for p in range(2)] == [["s-uav0", "s-uav1", "s-bs0"]] * 2
+
+
+def test_empty_table():
+    f = follow(_table([]), TL)
+    assert f.n_packets == 0 and len(f.losses) == 0 and len(f.crossings()) == 0
+
+
+def _nh(w):
+    from uavcas.emulation.controller import compute
+
+    win = PLAN.windows[w]
+    return compute(NAMES, [(lk.a, lk.b) for lk in win.links], [r.hops for r in win.routes]).next_hop
+
+
+TL_NH = [_nh(0), _nh(1)]
+
+
+@pytest.mark.parametrize("max_hop_s", [0.5, 2.0])
+def test_gap_longer_than_a_hop_splits(max_hop_s):
+    rows = _send(1.0, ["uav0", "uav1", "bs0"])[:1] + [{"t": 1.0 + 1.0, "at": "uav1", "src": "uav0", "dst": "bs0"}]
+    f = follow(_table(rows), TL, max_hop_s=max_hop_s)
+    assert f.n_packets == (2 if max_hop_s < 1.0 else 1)
