@@ -26,31 +26,55 @@ attempt and `retry_limit` R retransmissions:
 
     loss      = p^(R + 1)                                   (residual loss after ARQ)
     E[T]      = sum_{k=0..R} p^k T_k                        (expected MAC time per packet)
-    delay_ms  = d / c + processing_delay_ms + E[T]          (one-way latency of a packet)
     rate_mbps = 8 packet_bytes / E[T]                       (rate_model "dcf")
               = PHY rate of the MCS                         (rate_model "phy", the paper's)
+    delay_ms  = d / c + processing_delay_ms                 (what the shaper adds as latency)
+
+The MAC time is counted once: the shaper serialises every packet at rate_mbps, so a 1500-byte
+packet already spends 8 * 1500 / rate = E[T] in the link's queue (`uavcas.emulation.shaping`,
+HTB); adding E[T] to delay_ms as well counted it twice (0.4-24 ms too much per full frame).
+`mac_time_us` = E[T] is returned for the airtime sharing (`uavcas.channel.airtime`), which
+divides the capacity among links that hear each other; the shaper's rate is the shared one.
+
+Fading. With small-scale fading the per-attempt PER is p(SNR g) for the fading power gain g of
+the moment, and retransmissions of one packet come within the channel's coherence time (a few
+ms), so they see the same g: loss = E_g[p^(R+1)], E[T] = sum_k E_g[p^k] T_k, over the Rician
+distribution of `uavcas.channel.fading` (pass `k_db`; None = no fading, the formulas above).
+
+PER: the coded PER of `uavcas.channel.mcs` (802.11 BCC, union bound) at SNR minus the 5 dB
+implementation loss the 802.11 sensitivities assume (`implementation_loss_db`), on the whole
+MPDU, as the FCS covers it. `coding="uncoded"` keeps the paper's uncoded BER.
+
+MCS choice (`link_chain`). Fixed: the scenario's level. Adaptive, selection "throughput" (the
+default): the level with the highest expected goodput (1 - loss) 8 L / E[T] under the window's
+fading - the criterion of 802.11 rate control as deployed (Linux mac80211 Minstrel, ns-3
+`MinstrelWifiManager`: pick the rate whose measured success probability times bits per
+transmission time is highest). Selection "threshold": the paper's rule, the highest level whose
+SNR threshold + margin is met (`McsTable.select`); without fading both agree closely, with
+fading the threshold rule keeps levels whose deep fades lose 10-40 % of the frames.
 
 "dcf" is the default: the emulated link should carry what an 802.11a link carries, which at
 54 Mbit/s with 1500-byte packets is about 30 Mbit/s (cf. Jun, Peddabachagari & Sichitiu,
 "Theoretical maximum throughput of IEEE 802.11 and its applications", NCA 2003), and a lossy
-link spends channel time on retries. The shaper applies rate_mbps as the link's capacity and
-delay_ms as its latency. `retry_limit` defaults to 6: dot11ShortRetryLimit = 7 counts
-transmission *attempts* (802.11-2020 Annex C; ns-3's FrameRetryLimit likewise), i.e. one
-transmission and 6 retries. retry_limit=0 with rate_model="phy" reproduces the paper's raw
-chain (loss = PER, rate = PHY rate). PER is computed on the whole MPDU, as the FCS covers it.
-`processing_delay_ms` (0.1 ms) stands for the radio's driver/firmware hand-off per hop; the
-emulated kernel adds its own real forwarding cost on top.
+link spends channel time on retries. `retry_limit` defaults to 6: dot11ShortRetryLimit = 7
+counts transmission *attempts* (802.11-2020 Annex C; ns-3's FrameRetryLimit likewise), i.e.
+one transmission and 6 retries. retry_limit=0, rate_model="phy", coding="uncoded",
+implementation_loss_db=0 and no fading reproduce the paper's raw chain (loss = PER, rate = PHY
+rate). `processing_delay_ms` (0.1 ms) stands for the radio's driver/firmware hand-off per hop;
+the emulated kernel adds its own real forwarding cost on top.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import lru_cache
 from typing import Literal
 
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field
 from scipy.constants import c as SPEED_OF_LIGHT_M_S
 
+from .fading import fading_nodes
 from .mcs import MCS_80211AG, McsTable, per
 
 # IEEE 802.11-2020 Clause 17 OFDM PHY characteristics (20 MHz) and Clause 10 DCF timing.
@@ -95,6 +119,8 @@ class LinkLayer(BaseModel):
     retry_limit: int = Field(6, ge=0)  # retransmissions; dot11ShortRetryLimit 7 = 7 attempts
     rate_model: Literal["dcf", "phy"] = "dcf"
     processing_delay_ms: float = Field(0.1, ge=0)
+    coding: Literal["bcc", "uncoded"] = "bcc"
+    implementation_loss_db: float = Field(5.0, ge=0)
 
     @property
     def mpdu_bits(self) -> int:
@@ -111,6 +137,10 @@ class LinkParams:
     rate_mbps: np.ndarray
     delay_ms: np.ndarray
     loss: np.ndarray
+    mac_time_us: np.ndarray  # E[T]: expected channel time per packet, retries included
+
+
+_LP_FIELDS = ("rate_mbps", "delay_ms", "loss", "mac_time_us")
 
 
 def ppdu_airtime_us(payload_bits, n_dbps) -> np.ndarray:
@@ -142,32 +172,129 @@ def link_params(
     distance_m,
     table: McsTable = MCS_80211AG,
     link: LinkLayer = DEFAULT_LINK_LAYER,
+    k_db=None,
 ) -> LinkParams:
-    """Rate, delay and residual loss per link from its SNR and MCS (formulas: module docstring)."""
+    """Rate, delay and residual loss per link from its SNR and MCS (formulas: module docstring);
+    `k_db`: Rician K factor per link (None: no fading)."""
     mcs = np.asarray(mcs, dtype=np.int64)
-    return link_params_from_per(mpdu_per(snr_db, mcs, table, link), mcs, distance_m, table, link)
+    moments = per_moments(snr_db, mcs, link.retry_limit + 1, table, link, k_db)
+    return link_params_from_moments(moments, mcs, distance_m, table, link)
+
+
+def link_chain(
+    snr_db,
+    distance_m,
+    table: McsTable = MCS_80211AG,
+    link: LinkLayer = DEFAULT_LINK_LAYER,
+    k_db=None,
+    fixed_mcs: int | None = None,
+    selection: Literal["throughput", "threshold"] = "throughput",
+    margin_db: float = 3.0,
+) -> tuple[np.ndarray, np.ndarray, LinkParams]:
+    """(mcs, E[p^j] moments, LinkParams) per link: the MCS choice of the module docstring, then
+    the link layer at that MCS."""
+    snr = np.atleast_1d(np.asarray(snr_db, dtype=float))
+    k_max = link.retry_limit + 1
+    if fixed_mcs is not None or selection == "threshold":
+        mcs = np.full(snr.shape, fixed_mcs, dtype=np.int64) if fixed_mcs is not None else table.select(snr, margin_db)
+        mom = per_moments(snr, mcs, k_max, table, link, k_db)
+        return mcs, mom, link_params_from_moments(mom, mcs, distance_m, table, link)
+    best = None
+    for m in range(len(table)):
+        mcs = np.full(snr.shape, m, dtype=np.int64)
+        mom = per_moments(snr, mcs, k_max, table, link, k_db)
+        lp = link_params_from_moments(mom, mcs, distance_m, table, link)
+        goodput = (1.0 - lp.loss) / lp.mac_time_us
+        if best is None:
+            best = (goodput, mcs, mom, lp)
+            continue
+        better = goodput > best[0]  # ties keep the more robust level
+        best = (
+            np.where(better, goodput, best[0]),
+            np.where(better, mcs, best[1]),
+            np.where(better[:, None], mom, best[2]),
+            LinkParams(*(np.where(better, getattr(lp, f), getattr(best[3], f)) for f in _LP_FIELDS)),
+        )
+    return best[1], best[2], best[3]
 
 
 def mpdu_per(snr_db, mcs, table: McsTable = MCS_80211AG, link: LinkLayer = DEFAULT_LINK_LAYER) -> np.ndarray:
-    """Per-attempt error rate of the MPDU: 1 - (1 - BER)^L with L = link.mpdu_bits."""
-    return per(table.ber(snr_db, mcs), link.mpdu_bits)
+    """Per-attempt error rate of the MPDU: 1 - (1 - BER)^L with L = link.mpdu_bits, BER coded
+    (or not, `link.coding`) at SNR - link.implementation_loss_db."""
+    eff = np.asarray(snr_db, dtype=float) - link.implementation_loss_db
+    m = np.asarray(mcs, dtype=np.int64)
+    b = table.coded_ber(eff, m) if link.coding == "bcc" else table.ber(eff, m)
+    return per(b, link.mpdu_bits)
+
+
+_PER_GRID_DB = (-40.0, 80.0, 0.005)  # SNR span and step of the tabulated PER (see per_moments)
+
+
+@lru_cache(maxsize=32)
+def _log_per_table(table: McsTable, link: LinkLayer) -> np.ndarray:
+    """ln PER of every level on the SNR grid (levels x grid), floored at ln 1e-300."""
+    lo, hi, step = _PER_GRID_DB
+    grid = np.linspace(lo, hi, int(round((hi - lo) / step)) + 1)
+    rows = [mpdu_per(grid, np.full(grid.shape, m), table, link) for m in range(len(table))]
+    out = np.log(np.maximum(np.array(rows), 1e-300))
+    out.setflags(write=False)
+    return out
+
+
+def tabulated_per(snr_db, mcs, table: McsTable = MCS_80211AG, link: LinkLayer = DEFAULT_LINK_LAYER) -> np.ndarray:
+    """`mpdu_per` from a 0.005 dB table, interpolated in ln PER (relative error < 1e-4 where
+    PER > 1e-12; the fading quadrature evaluates hundreds of SNRs per link, the exact bound
+    is ~20x slower). SNRs outside -40..80 dB are clamped to the table."""
+    lo, hi, step = _PER_GRID_DB
+    logp = _log_per_table(table, link)
+    x = (np.clip(np.asarray(snr_db, dtype=float), lo, hi) - lo) / step
+    i = np.minimum(x.astype(np.int64), logp.shape[1] - 2)
+    f = x - i
+    m = np.broadcast_to(np.asarray(mcs, dtype=np.int64), x.shape)
+    return np.exp((1.0 - f) * logp[m, i] + f * logp[m, i + 1])
+
+
+def per_moments(snr_db, mcs, k_max: int, table: McsTable = MCS_80211AG, link: LinkLayer = DEFAULT_LINK_LAYER,
+                k_db=None) -> np.ndarray:
+    """E[p^j] for j = 0..k_max per link (shape (k, k_max + 1)); over Rician fading when `k_db`
+    is given (`fading.fading_nodes`, PER from `tabulated_per`), else p^j of the mean SNR."""
+    snr = np.atleast_1d(np.asarray(snr_db, dtype=float))
+    m = np.broadcast_to(np.asarray(mcs, dtype=np.int64), snr.shape)
+    powers = np.arange(k_max + 1)
+    if k_db is None:
+        return mpdu_per(snr, m, table, link)[:, None] ** powers
+    gain, weight = fading_nodes(np.broadcast_to(np.asarray(k_db, dtype=float), snr.shape))
+    p = tabulated_per(snr[:, None] + gain, m[:, None], table, link)
+    out = np.empty((snr.size, k_max + 1))
+    pj = np.ones_like(p)
+    for j in powers:
+        out[:, j] = np.sum(weight * pj, axis=1)
+        pj = pj * p
+    return out
 
 
 def link_params_from_per(
     per_, mcs, distance_m, table: McsTable = MCS_80211AG, link: LinkLayer = DEFAULT_LINK_LAYER
 ) -> LinkParams:
-    """`link_params` for an already computed per-attempt PER."""
-    p = np.asarray(per_, dtype=float)
-    mcs = np.asarray(mcs, dtype=np.int64)
-    expected_us = np.zeros(p.shape)
-    reach = np.ones(p.shape)  # probability that attempt k happens: p^k
-    for k in range(link.retry_limit + 1):
-        expected_us += reach * attempt_time_us(mcs, table, link, k)
-        reach = reach * p
-    loss = reach  # p^(R+1): every attempt failed
+    """`link_params` for an already computed per-attempt PER (no fading)."""
+    p = np.atleast_1d(np.asarray(per_, dtype=float))
+    return link_params_from_moments(p[:, None] ** np.arange(link.retry_limit + 2), mcs, distance_m, table, link)
+
+
+def link_params_from_moments(
+    moments, mcs, distance_m, table: McsTable = MCS_80211AG, link: LinkLayer = DEFAULT_LINK_LAYER
+) -> LinkParams:
+    """LinkParams from E[p^j], j = 0..retry_limit + 1 (columns of `moments`)."""
+    mom = np.asarray(moments, dtype=float)
+    mcs = np.broadcast_to(np.asarray(mcs, dtype=np.int64), mom.shape[:1])
+    expected_us = np.zeros(mom.shape[0])
+    for k in range(link.retry_limit + 1):  # attempt k happens with probability E[p^k]
+        expected_us += mom[:, k] * attempt_time_us(mcs, table, link, k)
+    loss = np.clip(mom[:, link.retry_limit + 1], 0.0, 1.0)  # every attempt failed
     if link.rate_model == "dcf":
         rate = 8.0 * link.packet_bytes / expected_us
     else:
         rate = table.rate_mbps[mcs].astype(float)
-    delay = np.asarray(distance_m, dtype=float) / SPEED_OF_LIGHT_M_S * 1e3 + link.processing_delay_ms
-    return LinkParams(rate_mbps=rate, delay_ms=delay + expected_us / 1e3, loss=loss)
+    delay = np.broadcast_to(np.asarray(distance_m, dtype=float) / SPEED_OF_LIGHT_M_S * 1e3 + link.processing_delay_ms,
+                            mom.shape[:1]).astype(float)
+    return LinkParams(rate_mbps=rate, delay_ms=delay, loss=loss, mac_time_us=expected_us)
