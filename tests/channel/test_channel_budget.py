@@ -12,11 +12,19 @@ from uavcas.channel.budget import (
     link_chain,
     link_params,
     link_params_from_per,
-    mpdu_per,
     ppdu_airtime_us,
-    tabulated_per,
 )
+from uavcas.channel.frames import mpdu_per as _mpdu_per
+from uavcas.channel.frames import tabulated_per as _tabulated_per
 from uavcas.channel.mcs import MCS_80211AG as T
+
+
+def mpdu_per(snr, mcs, link=LinkLayer()):
+    return _mpdu_per(snr, mcs, T, link)
+
+
+def tabulated_per(snr, mcs, link=LinkLayer()):
+    return _tabulated_per(snr, mcs, T, link)
 
 
 def test_snr_budget():
@@ -120,12 +128,18 @@ def test_link_chain_selects_by_goodput_or_by_threshold():
     snr = np.arange(0.0, 40.0, 0.5)
     mcs_t, _, lp_t = link_chain(snr, np.zeros(snr.size), selection="threshold")
     np.testing.assert_array_equal(mcs_t, T.select(snr, 3.0))
-    mcs_g, _, lp_g = link_chain(snr, np.zeros(snr.size), k_db=np.full(snr.size, 5.5))
-    # Goodput selection never does worse than any fixed level, which the threshold rule can.
+    mcs_g, reach_g, lp_g = link_chain(snr, np.zeros(snr.size), k_db=np.full(snr.size, 5.5))
+    # Minstrel's metric: no fixed level has a better single-attempt throughput.
+    best = (1 - reach_g[:, 1]) / attempt_time_us(mcs_g, T, LinkLayer(), 0)
     for m in range(7):
-        _, _, lp = link_chain(snr, np.zeros(snr.size), k_db=np.full(snr.size, 5.5), fixed_mcs=m)
-        assert np.all((1 - lp_g.loss) / lp_g.mac_time_us >= (1 - lp.loss) / lp.mac_time_us - 1e-15)
-    assert np.all(np.diff(mcs_g) >= 0)
+        _, reach, _ = link_chain(snr, np.zeros(snr.size), k_db=np.full(snr.size, 5.5), fixed_mcs=m)
+        assert np.all(best >= (1 - reach[:, 1]) / attempt_time_us(m, T, LinkLayer(), 0) - 1e-15)
+    assert np.all(np.diff(mcs_g) >= 0) and mcs_g[0] == 0 and mcs_g[-1] == 6
+    # The retry chain ends at the base rate: far less residual loss than retrying at the chosen level.
+    no_fb = LinkLayer(fallback_after=None)
+    _, _, lp_same = link_chain(snr, np.zeros(snr.size), link=no_fb, k_db=np.full(snr.size, 5.5))
+    assert np.all(lp_g.loss <= lp_same.loss + 1e-12) and lp_g.loss[snr > 20].max() < 0.02 and lp_g.loss[-1] < 2e-4
+    assert np.all(np.diff(lp_g.loss[snr > 10]) < 0)  # only the deep fades below MCS0 remain
     fixed, _, _ = link_chain(snr, np.zeros(snr.size), fixed_mcs=4)
     assert np.all(fixed == 4)
 

@@ -7,7 +7,13 @@ import pytest
 from scipy.stats import ncx2
 
 from uavcas.channel import TR36777_UMA_AV_K, KFactorProfile
-from uavcas.channel.budget import link_params, mpdu_per
+from uavcas.channel.budget import LinkLayer, link_params
+from uavcas.channel.frames import mpdu_per as _mpdu_per
+from uavcas.channel.mcs import MCS_80211AG as T
+
+
+def mpdu_per(snr, mcs, link=LinkLayer()):
+    return _mpdu_per(snr, mcs, T, link)
 from uavcas.channel.fading import expect, fading_nodes, tr36777_uma_av_k_db
 
 

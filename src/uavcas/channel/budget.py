@@ -36,22 +36,25 @@ HTB); adding E[T] to delay_ms as well counted it twice (0.4-24 ms too much per f
 `mac_time_us` = E[T] is returned for the airtime sharing (`uavcas.channel.airtime`), which
 divides the capacity among links that hear each other; the shaper's rate is the shared one.
 
-Fading. With small-scale fading the per-attempt PER is p(SNR g) for the fading power gain g of
-the moment, and retransmissions of one packet come within the channel's coherence time (a few
-ms), so they see the same g: loss = E_g[p^(R+1)], E[T] = sum_k E_g[p^k] T_k, over the Rician
-distribution of `uavcas.channel.fading` (pass `k_db`; None = no fading, the formulas above).
+Retry chain and fading (`uavcas.channel.frames`): attempt k happens with probability reach_k
+(= p^k above when every attempt uses one level and there is no fading); attempts after
+`fallback_after` (4) use the lowest level, as 802.11 rate control's retry chain ends at the base
+rate; with small-scale fading the retries of a packet see one fading gain and reach_k is
+averaged over the window's Rician distribution (pass `k_db`; None = no fading). In general
+
+    loss = reach_{R+1},   E[T] = sum_{k=0..R} reach_k T_k(c_k),   rate = 8 L / E[T].
 
 PER: the coded PER of `uavcas.channel.mcs` (802.11 BCC, union bound) at SNR minus the 5 dB
 implementation loss the 802.11 sensitivities assume (`implementation_loss_db`), on the whole
 MPDU, as the FCS covers it. `coding="uncoded"` keeps the paper's uncoded BER.
 
 MCS choice (`link_chain`). Fixed: the scenario's level. Adaptive, selection "throughput" (the
-default): the level with the highest expected goodput (1 - loss) 8 L / E[T] under the window's
-fading - the criterion of 802.11 rate control as deployed (Linux mac80211 Minstrel, ns-3
-`MinstrelWifiManager`: pick the rate whose measured success probability times bits per
-transmission time is highest). Selection "threshold": the paper's rule, the highest level whose
-SNR threshold + margin is met (`McsTable.select`); without fading both agree closely, with
-fading the threshold rule keeps levels whose deep fades lose 10-40 % of the frames.
+default): the level with the highest expected throughput of one attempt, (1 - E[p_m]) 8 L /
+T_0(m) under the window's fading - the metric of 802.11 rate control as deployed (Linux
+mac80211 Minstrel, ns-3 `MinstrelWifiManager`: a rate's success probability times the bits it
+carries per transmission time; the retry chain then handles the failures). Selection
+"threshold": the paper's rule, the highest level whose SNR threshold + margin is met
+(`McsTable.select`); with fading it keeps levels whose deep fades lose many frames.
 
 "dcf" is the default: the emulated link should carry what an 802.11a link carries, which at
 54 Mbit/s with 1500-byte packets is about 30 Mbit/s (cf. Jun, Peddabachagari & Sichitiu,
@@ -59,7 +62,7 @@ fading the threshold rule keeps levels whose deep fades lose 10-40 % of the fram
 link spends channel time on retries. `retry_limit` defaults to 6: dot11ShortRetryLimit = 7
 counts transmission *attempts* (802.11-2020 Annex C; ns-3's FrameRetryLimit likewise), i.e.
 one transmission and 6 retries. retry_limit=0, rate_model="phy", coding="uncoded",
-implementation_loss_db=0 and no fading reproduce the paper's raw chain (loss = PER, rate = PHY
+implementation_loss_db=0, fallback_after=None and no fading reproduce the paper's raw chain (loss = PER, rate = PHY
 rate). `processing_delay_ms` (0.1 ms) stands for the radio's driver/firmware hand-off per hop;
 the emulated kernel adds its own real forwarding cost on top.
 """
@@ -67,15 +70,14 @@ the emulated kernel adds its own real forwarding cost on top.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import lru_cache
 from typing import Literal
 
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field
 from scipy.constants import c as SPEED_OF_LIGHT_M_S
 
-from .fading import fading_nodes
-from .mcs import MCS_80211AG, McsTable, per
+from .frames import attempt_levels, attempt_reach
+from .mcs import MCS_80211AG, McsTable
 
 # IEEE 802.11-2020 Clause 17 OFDM PHY characteristics (20 MHz) and Clause 10 DCF timing.
 SLOT_US = 9.0
@@ -121,6 +123,7 @@ class LinkLayer(BaseModel):
     processing_delay_ms: float = Field(0.1, ge=0)
     coding: Literal["bcc", "uncoded"] = "bcc"
     implementation_loss_db: float = Field(5.0, ge=0)
+    fallback_after: int | None = Field(4, ge=1)  # attempts at the chosen level before the base rate
 
     @property
     def mpdu_bits(self) -> int:
@@ -138,9 +141,6 @@ class LinkParams:
     delay_ms: np.ndarray
     loss: np.ndarray
     mac_time_us: np.ndarray  # E[T]: expected channel time per packet, retries included
-
-
-_LP_FIELDS = ("rate_mbps", "delay_ms", "loss", "mac_time_us")
 
 
 def ppdu_airtime_us(payload_bits, n_dbps) -> np.ndarray:
@@ -177,8 +177,7 @@ def link_params(
     """Rate, delay and residual loss per link from its SNR and MCS (formulas: module docstring);
     `k_db`: Rician K factor per link (None: no fading)."""
     mcs = np.asarray(mcs, dtype=np.int64)
-    moments = per_moments(snr_db, mcs, link.retry_limit + 1, table, link, k_db)
-    return link_params_from_moments(moments, mcs, distance_m, table, link)
+    return link_params_from_reach(attempt_reach(snr_db, mcs, table, link, k_db), mcs, distance_m, table, link)
 
 
 def link_chain(
@@ -191,110 +190,50 @@ def link_chain(
     selection: Literal["throughput", "threshold"] = "throughput",
     margin_db: float = 3.0,
 ) -> tuple[np.ndarray, np.ndarray, LinkParams]:
-    """(mcs, E[p^j] moments, LinkParams) per link: the MCS choice of the module docstring, then
-    the link layer at that MCS."""
+    """(mcs, reach, LinkParams) per link: the MCS choice of the module docstring, then the link
+    layer at that MCS (`reach[:, 1]` is the first attempt's PER)."""
     snr = np.atleast_1d(np.asarray(snr_db, dtype=float))
-    k_max = link.retry_limit + 1
     if fixed_mcs is not None or selection == "threshold":
         mcs = np.full(snr.shape, fixed_mcs, dtype=np.int64) if fixed_mcs is not None else table.select(snr, margin_db)
-        mom = per_moments(snr, mcs, k_max, table, link, k_db)
-        return mcs, mom, link_params_from_moments(mom, mcs, distance_m, table, link)
+        reach = attempt_reach(snr, mcs, table, link, k_db)
+        return mcs, reach, link_params_from_reach(reach, mcs, distance_m, table, link)
     best = None
     for m in range(len(table)):
         mcs = np.full(snr.shape, m, dtype=np.int64)
-        mom = per_moments(snr, mcs, k_max, table, link, k_db)
-        lp = link_params_from_moments(mom, mcs, distance_m, table, link)
-        goodput = (1.0 - lp.loss) / lp.mac_time_us
+        reach = attempt_reach(snr, mcs, table, link, k_db)
+        tput = (1.0 - reach[:, 1]) / attempt_time_us(mcs, table, link, 0)
         if best is None:
-            best = (goodput, mcs, mom, lp)
+            best = (tput, mcs, reach)
             continue
-        better = goodput > best[0]  # ties keep the more robust level
-        best = (
-            np.where(better, goodput, best[0]),
-            np.where(better, mcs, best[1]),
-            np.where(better[:, None], mom, best[2]),
-            LinkParams(*(np.where(better, getattr(lp, f), getattr(best[3], f)) for f in _LP_FIELDS)),
-        )
-    return best[1], best[2], best[3]
-
-
-def mpdu_per(snr_db, mcs, table: McsTable = MCS_80211AG, link: LinkLayer = DEFAULT_LINK_LAYER) -> np.ndarray:
-    """Per-attempt error rate of the MPDU: 1 - (1 - BER)^L with L = link.mpdu_bits, BER coded
-    (or not, `link.coding`) at SNR - link.implementation_loss_db."""
-    eff = np.asarray(snr_db, dtype=float) - link.implementation_loss_db
-    m = np.asarray(mcs, dtype=np.int64)
-    b = table.coded_ber(eff, m) if link.coding == "bcc" else table.ber(eff, m)
-    return per(b, link.mpdu_bits)
-
-
-_PER_GRID_DB = (-40.0, 80.0, 0.005)  # SNR span and step of the tabulated PER (see per_moments)
-
-
-@lru_cache(maxsize=32)
-def _log_per_table(table: McsTable, link: LinkLayer) -> np.ndarray:
-    """ln PER of every level on the SNR grid (levels x grid), floored at ln 1e-300."""
-    lo, hi, step = _PER_GRID_DB
-    grid = np.linspace(lo, hi, int(round((hi - lo) / step)) + 1)
-    rows = [mpdu_per(grid, np.full(grid.shape, m), table, link) for m in range(len(table))]
-    out = np.log(np.maximum(np.array(rows), 1e-300))
-    out.setflags(write=False)
-    return out
-
-
-def tabulated_per(snr_db, mcs, table: McsTable = MCS_80211AG, link: LinkLayer = DEFAULT_LINK_LAYER) -> np.ndarray:
-    """`mpdu_per` from a 0.005 dB table, interpolated in ln PER (relative error < 1e-4 where
-    PER > 1e-12; the fading quadrature evaluates hundreds of SNRs per link, the exact bound
-    is ~20x slower). SNRs outside -40..80 dB are clamped to the table."""
-    lo, hi, step = _PER_GRID_DB
-    logp = _log_per_table(table, link)
-    x = (np.clip(np.asarray(snr_db, dtype=float), lo, hi) - lo) / step
-    i = np.minimum(x.astype(np.int64), logp.shape[1] - 2)
-    f = x - i
-    m = np.broadcast_to(np.asarray(mcs, dtype=np.int64), x.shape)
-    return np.exp((1.0 - f) * logp[m, i] + f * logp[m, i + 1])
-
-
-def per_moments(snr_db, mcs, k_max: int, table: McsTable = MCS_80211AG, link: LinkLayer = DEFAULT_LINK_LAYER,
-                k_db=None) -> np.ndarray:
-    """E[p^j] for j = 0..k_max per link (shape (k, k_max + 1)); over Rician fading when `k_db`
-    is given (`fading.fading_nodes`, PER from `tabulated_per`), else p^j of the mean SNR."""
-    snr = np.atleast_1d(np.asarray(snr_db, dtype=float))
-    m = np.broadcast_to(np.asarray(mcs, dtype=np.int64), snr.shape)
-    powers = np.arange(k_max + 1)
-    if k_db is None:
-        return mpdu_per(snr, m, table, link)[:, None] ** powers
-    gain, weight = fading_nodes(np.broadcast_to(np.asarray(k_db, dtype=float), snr.shape))
-    p = tabulated_per(snr[:, None] + gain, m[:, None], table, link)
-    out = np.empty((snr.size, k_max + 1))
-    pj = np.ones_like(p)
-    for j in powers:
-        out[:, j] = np.sum(weight * pj, axis=1)
-        pj = pj * p
-    return out
+        better = tput > best[0]  # ties keep the more robust level
+        best = (np.where(better, tput, best[0]), np.where(better, mcs, best[1]), np.where(better[:, None], reach, best[2]))
+    mcs, reach = best[1], best[2]
+    return mcs, reach, link_params_from_reach(reach, mcs, distance_m, table, link)
 
 
 def link_params_from_per(
     per_, mcs, distance_m, table: McsTable = MCS_80211AG, link: LinkLayer = DEFAULT_LINK_LAYER
 ) -> LinkParams:
-    """`link_params` for an already computed per-attempt PER (no fading)."""
+    """`link_params` for one given per-attempt PER used by every attempt (no fading, no fallback)."""
     p = np.atleast_1d(np.asarray(per_, dtype=float))
-    return link_params_from_moments(p[:, None] ** np.arange(link.retry_limit + 2), mcs, distance_m, table, link)
+    reach = p[:, None] ** np.arange(link.retry_limit + 2)
+    return link_params_from_reach(reach, mcs, distance_m, table, link.model_copy(update={"fallback_after": None}))
 
 
-def link_params_from_moments(
-    moments, mcs, distance_m, table: McsTable = MCS_80211AG, link: LinkLayer = DEFAULT_LINK_LAYER
+def link_params_from_reach(
+    reach, mcs, distance_m, table: McsTable = MCS_80211AG, link: LinkLayer = DEFAULT_LINK_LAYER
 ) -> LinkParams:
-    """LinkParams from E[p^j], j = 0..retry_limit + 1 (columns of `moments`)."""
-    mom = np.asarray(moments, dtype=float)
-    mcs = np.broadcast_to(np.asarray(mcs, dtype=np.int64), mom.shape[:1])
-    expected_us = np.zeros(mom.shape[0])
-    for k in range(link.retry_limit + 1):  # attempt k happens with probability E[p^k]
-        expected_us += mom[:, k] * attempt_time_us(mcs, table, link, k)
-    loss = np.clip(mom[:, link.retry_limit + 1], 0.0, 1.0)  # every attempt failed
+    """LinkParams from the attempt probabilities reach_k, k = 0..retry_limit + 1."""
+    r = np.asarray(reach, dtype=float)
+    levels = attempt_levels(np.broadcast_to(np.asarray(mcs, dtype=np.int64), r.shape[:1]), link)
+    expected_us = np.zeros(r.shape[0])
+    for k in range(link.retry_limit + 1):
+        expected_us += r[:, k] * attempt_time_us(levels[:, k], table, link, k)
+    loss = np.clip(r[:, link.retry_limit + 1], 0.0, 1.0)  # every attempt failed
     if link.rate_model == "dcf":
         rate = 8.0 * link.packet_bytes / expected_us
     else:
-        rate = table.rate_mbps[mcs].astype(float)
+        rate = table.rate_mbps[levels[:, 0]].astype(float)
     delay = np.broadcast_to(np.asarray(distance_m, dtype=float) / SPEED_OF_LIGHT_M_S * 1e3 + link.processing_delay_ms,
-                            mom.shape[:1]).astype(float)
+                            r.shape[:1]).astype(float)
     return LinkParams(rate_mbps=rate, delay_ms=delay, loss=loss, mac_time_us=expected_us)

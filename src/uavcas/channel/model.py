@@ -64,7 +64,7 @@ class LinkArrays:
     shadow_db: np.ndarray
     snr_db: np.ndarray
     mcs: np.ndarray  # int
-    per: np.ndarray  # per-attempt frame error rate of the MPDU at that MCS (fading-averaged)
+    per: np.ndarray  # first attempt's frame error rate at that MCS (fading-averaged)
     rate_mbps: np.ndarray  # the link alone on the channel; `airtime` divides it among contenders
     delay_ms: np.ndarray  # propagation + processing (the MAC time is in the rate)
     loss: np.ndarray  # residual after ARQ
@@ -176,8 +176,8 @@ class Channel:
         total = res.loss_db + shadow
         snr = self.budget.snr_db(total)
         k_db = None if self.fading is None else self.fading.at(geom.h_air_m)
-        mcs, moments, lp = link_chain(snr, geom.d3d_m, self.table, self.link_layer, k_db, self.fixed_mcs,
-                                      self.selection, self.margin_db)
+        mcs, reach, lp = link_chain(snr, geom.d3d_m, self.table, self.link_layer, k_db, self.fixed_mcs,
+                                    self.selection, self.margin_db)
         return LinkArrays(
             pairs=pairs,
             distance_m=geom.d3d_m,
@@ -186,7 +186,7 @@ class Channel:
             shadow_db=shadow,
             snr_db=snr,
             mcs=mcs,
-            per=moments[:, 1],
+            per=reach[:, 1],
             rate_mbps=lp.rate_mbps,
             delay_ms=lp.delay_ms,
             loss=lp.loss,
