@@ -34,9 +34,10 @@ layer expects):
 K(h): Greenstein's moment method on the training samples in 1 s windows (`segments`).
 
 Shadowing decorrelation distance (Gudmundson's exp(-d / d_corr), the twin's shadowing process):
-the autocorrelation of the 1 s local-mean residuals along the flown path (training runs only),
-corr(d) = c0 exp(-d / d_corr) fitted on lags of 5-100 m (c0 < 1 absorbs the fading left in a
-1 s mean); the median over the files.
+the empirical semivariogram of the 1 s local-mean residuals along the flown path (pairs within
+one training run), gamma(d) = nugget + s^2 (1 - exp(-d / d_corr)) fitted by least squares on
+lags up to 200 m (the nugget absorbs the fading left in a 1 s mean; a variogram does not need
+the residuals' mean, which biases short-run autocorrelations low); the median over the files.
 """
 
 from __future__ import annotations
@@ -202,14 +203,18 @@ def logdist_loss_db(profile: PathLossProfile, g: Group, mask=slice(None), at_pro
     return LogDistance(profile, g.fc_ghz).loss_db(s.d3d_m[mask], h)
 
 
-def fit_decorrelation_m(groups: list[Group], fit: LogDistanceFit, max_lag_m: float = 100.0) -> float:
+def fit_decorrelation_m(groups: list[Group], fit: LogDistanceFit, max_lag_m: float = 200.0) -> float:
     """Median over files of the fitted Gudmundson decorrelation distance (module docstring)."""
+    from scipy.optimize import curve_fit
+
     out = []
     for i, g in enumerate(groups):
         s = g.samples
         if s.azim_rad is None:
             continue
         w = g.wins(g.train, K_WINDOW_S)
+        if len(w) < 10:
+            continue
         resid = power_mean_db(g.pl_db - fit.correction_db(g), w) - power_mean_db(logdist_loss_db(fit.profile, g, slice(None), i), w)
         xy = window_mean(np.c_[s.d2d_m * np.cos(s.azim_rad), s.d2d_m * np.sin(s.azim_rad)], w)
         joined = np.array([w[j + 1][0] == w[j][-1] + 1 for j in range(len(w) - 1)], dtype=bool)
@@ -218,21 +223,25 @@ def fit_decorrelation_m(groups: list[Group], fit: LogDistanceFit, max_lag_m: flo
         med = float(np.median(step)) if step.size else 0.0
         if med <= 0:
             continue
-        r = resid - resid.mean()
-        lags, corr = [], []
+        lags, gam = [], []
         for lag in range(1, int(max_lag_m / med) + 1):
             same = run_id[lag:] == run_id[:-lag]
             if same.sum() < 20:
                 break
-            c = np.corrcoef(r[lag:][same], r[:-lag][same])[0, 1]
-            if c <= 0.05:
-                break
             lags.append(lag * med)
-            corr.append(c)
-        if len(lags) >= 3:
-            slope = np.polyfit(lags, np.log(corr), 1)[0]
-            if slope < 0:
-                out.append(-1.0 / slope)
+            gam.append(0.5 * float(np.mean((resid[lag:][same] - resid[:-lag][same]) ** 2)))
+        if len(lags) < 5:
+            continue
+
+        def model(d, nugget, sill, dc):
+            return nugget + sill * (1.0 - np.exp(-d / dc))
+
+        try:
+            p, _ = curve_fit(model, np.array(lags), np.array(gam), p0=[gam[0] / 2, max(gam), 50.0],
+                             bounds=([0.0, 0.0, 1.0], [np.inf, np.inf, 1000.0]))
+            out.append(float(p[2]))
+        except RuntimeError:
+            continue
     return float(np.median(out)) if out else float("nan")
 
 
