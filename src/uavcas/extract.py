@@ -31,6 +31,8 @@ class ShardInfo:
     class_counts: dict[str, int]
     truncations: list[str]
     extracted_unix: float
+    profile: str | None = None  # twin profile the run's plan was made with, and its SHA-256
+    profile_sha256: str | None = None
 
 
 @dataclass(frozen=True)
@@ -88,5 +90,7 @@ def extract(
             class_counts=counts,
             truncations=[f"{t.path}@{t.offset}" for t in ex.packets.truncations],
             extracted_unix=time.time(),
+            profile=plan.profile,
+            profile_sha256=plan.profile_sha256,
         ),
     )

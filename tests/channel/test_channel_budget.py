@@ -129,16 +129,22 @@ def test_link_chain_selects_by_goodput_or_by_threshold():
     mcs_t, _, lp_t = link_chain(snr, np.zeros(snr.size), selection="threshold")
     np.testing.assert_array_equal(mcs_t, T.select(snr, 3.0))
     mcs_g, reach_g, lp_g = link_chain(snr, np.zeros(snr.size), k_db=np.full(snr.size, 5.5))
-    # Minstrel's metric: no fixed level has a better single-attempt throughput.
-    best = (1 - reach_g[:, 1]) / attempt_time_us(mcs_g, T, LinkLayer(), 0)
+
+    def minstrel(reach, m):  # success ratio over the attempts at the chosen level x bits per time
+        return (1 - reach[:, 4]) / reach[:, :4].sum(axis=1) / attempt_time_us(m, T, LinkLayer(), 0)
+
+    best = minstrel(reach_g, mcs_g)
     for m in range(7):
         _, reach, _ = link_chain(snr, np.zeros(snr.size), k_db=np.full(snr.size, 5.5), fixed_mcs=m)
-        assert np.all(best >= (1 - reach[:, 1]) / attempt_time_us(m, T, LinkLayer(), 0) - 1e-15)
+        assert np.all(best >= minstrel(reach, m) - 1e-15)
     assert np.all(np.diff(mcs_g) >= 0) and mcs_g[0] == 0 and mcs_g[-1] == 6
     # The retry chain ends at the base rate: far less residual loss than retrying at the chosen level.
-    no_fb = LinkLayer(fallback_after=None)
-    _, _, lp_same = link_chain(snr, np.zeros(snr.size), link=no_fb, k_db=np.full(snr.size, 5.5))
-    assert np.all(lp_g.loss <= lp_same.loss + 1e-12) and lp_g.loss[snr > 20].max() < 0.02 and lp_g.loss[-1] < 2e-4
+    k = np.full(snr.size, 5.5)
+    for m in (3, 6):
+        _, _, fb = link_chain(snr, np.zeros(snr.size), k_db=k, fixed_mcs=m)
+        _, _, same = link_chain(snr, np.zeros(snr.size), link=LinkLayer(fallback_after=None), k_db=k, fixed_mcs=m)
+        assert np.all(fb.loss <= same.loss + 1e-12) and np.all(fb.loss[snr > 20] < 0.5 * same.loss[snr > 20])
+    assert lp_g.loss[snr > 20].max() < 0.02 and lp_g.loss[-1] < 2e-4
     assert np.all(np.diff(lp_g.loss[snr > 10]) < 0)  # only the deep fades below MCS0 remain
     fixed, _, _ = link_chain(snr, np.zeros(snr.size), fixed_mcs=4)
     assert np.all(fixed == 4)

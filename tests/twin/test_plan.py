@@ -145,3 +145,33 @@ def test_wormhole_attacker_is_off_the_victims_initial_route():
         v = names.index(atk.victims[0])
         hops = route(nearest_neighbour_topology(pos, is_bs), len(names), v, 8 + v % 2, is_bs)
         assert names.index(atk.attackers[0]) not in hops  # the detour adds a hop
+
+
+def test_plans_record_the_calibrated_profile_by_default_and_paper_on_request():
+    from uavcas.twin.profile import PAPER_PROFILE, load_profile, profile_sha256
+
+    cfg = "benign-5-2-image-logdist-adaptive-grid-10-95"
+    default, paper = plan(cfg, seed=2), plan(cfg, seed=2, profile="paper")
+    cal = load_profile(None)
+    assert default.profile == "calibrated" and default.profile_sha256 == profile_sha256(cal)
+    assert paper.profile == "paper" and paper.profile_sha256 == profile_sha256(PAPER_PROFILE)
+    assert cal.provenance is not None and cal.provenance.data_files  # shipped with its provenance
+    # seed + config + profile -> the same plan, bit for bit.
+    assert plan(cfg, seed=2).to_json() == default.to_json() and default.to_json() != paper.to_json()
+    # BS masts: the AERPAW LW1 tower (10 m) in the calibrated profile, 25 m in the paper's.
+    bs = lambda p: {p.windows[0].positions[n.name][2] for n in p.nodes if n.kind == "bs"}  # noqa: E731
+    assert bs(default) == {cal.bs_mast_m} and 9.0 < cal.bs_mast_m < 12.5 and bs(paper) == {25.0}
+
+
+def test_air_links_share_airtime_and_count_the_mac_time_once():
+    from scipy.constants import c
+
+    def rates(n):
+        p = plan(f"benign-{n}-2-image-logdist-adaptive-random-30-95", seed=1, windows=4)
+        air = [lk for w in p.windows for lk in w.links if lk.kind == "air"]
+        for lk in air:  # the MAC time is in the rate only: delay = propagation + processing
+            assert lk.delay_ms == pytest.approx(lk.distance_m / c * 1e3 + 0.1, abs=1e-4)
+        return np.mean([lk.rate_mbps for lk in air])
+
+    # At 30 dBm everyone hears everyone over 1 km: 20 UAVs' links share one channel, 5 UAVs' fewer.
+    assert rates(20) < 0.8 * rates(5)

@@ -49,12 +49,13 @@ implementation loss the 802.11 sensitivities assume (`implementation_loss_db`), 
 MPDU, as the FCS covers it. `coding="uncoded"` keeps the paper's uncoded BER.
 
 MCS choice (`link_chain`). Fixed: the scenario's level. Adaptive, selection "throughput" (the
-default): the level with the highest expected throughput of one attempt, (1 - E[p_m]) 8 L /
-T_0(m) under the window's fading - the metric of 802.11 rate control as deployed (Linux
-mac80211 Minstrel, ns-3 `MinstrelWifiManager`: a rate's success probability times the bits it
-carries per transmission time; the retry chain then handles the failures). Selection
-"threshold": the paper's rule, the highest level whose SNR threshold + margin is met
-(`McsTable.select`); with fading it keeps levels whose deep fades lose many frames.
+default): the level with the highest expected throughput as 802.11 rate control measures it
+(Linux mac80211 Minstrel, ns-3 `MinstrelWifiManager`): the level's success ratio (frames
+delivered at it / attempts made at it, its retries included) times the bits it carries per
+transmission time 8 L / T_0(m), under the window's fading; the retry chain then handles the
+failures. Selection "threshold": the paper's rule, the highest level whose SNR threshold +
+margin is met (`McsTable.select`); with fading it keeps levels whose deep fades lose many
+frames.
 
 "dcf" is the default: the emulated link should carry what an 802.11a link carries, which at
 54 Mbit/s with 1500-byte packets is about 30 Mbit/s (cf. Jun, Peddabachagari & Sichitiu,
@@ -201,7 +202,11 @@ def link_chain(
     for m in range(len(table)):
         mcs = np.full(snr.shape, m, dtype=np.int64)
         reach = attempt_reach(snr, mcs, table, link, k_db)
-        tput = (1.0 - reach[:, 1]) / attempt_time_us(mcs, table, link, 0)
+        # Minstrel's success ratio of a rate: frames delivered at it / attempts made at it (its
+        # retries sit in the same fade, so an aggressive rate also pays for its failed retries).
+        n_at = link.retry_limit + 1 if link.fallback_after is None else min(link.fallback_after, link.retry_limit + 1)
+        ratio = (1.0 - reach[:, n_at]) / reach[:, :n_at].sum(axis=1)
+        tput = ratio / attempt_time_us(mcs, table, link, 0)
         if best is None:
             best = (tput, mcs, reach)
             continue

@@ -3,7 +3,7 @@
     DATASET_DIR/shards/<run_id>.parquet   one run (re-extracting the run replaces it)
     DATASET_DIR/flows.parquet             union of all shards, rewritten after every extract
     DATASET_DIR/dataset.json              schema version, views, label modes, class counts,
-                                          seeds, runs, library versions
+                                          seeds, twin profiles (name + SHA-256), runs, library versions
 
 Extraction itself is `uavcas.extract`. A run is identified by run.json's `run_id` when present,
 else by the run directory's name; one shard per run id, so a run appears once whatever view or labels it was last extracted with.
@@ -91,6 +91,9 @@ def rebuild(out_dir: Path) -> dict:
         "label_modes": sorted({r.get("labels") for r in runs if r.get("labels")}),
         "class_counts": counts,
         "seeds": sorted({int(r["seed"]) for r in runs if "seed" in r}),
+        # Twin profiles the runs were planned with: name -> the SHA-256s of their JSON.
+        "profiles": {name: sorted({r.get("profile_sha256") for r in runs if r.get("profile") == name} - {None})
+                     for name in sorted({r["profile"] for r in runs if r.get("profile")})},
         "runs": runs,
         "versions": package_versions("numpy", "pandas", "pyarrow"),
     }
