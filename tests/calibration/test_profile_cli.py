@@ -129,5 +129,6 @@ def test_profile_json_roundtrip_of_fitted_pathloss():
     l1 = SimpleNamespace(profile=p, tx_height_m=10.04, k_factor=k, decorrelation_m=55.4)
     prof = build_profile("rt", l1, None, data="d", seed=0)
     assert prof.pathloss.n == (2.1, 2.0) and prof.name == "rt" and prof.bs_mast_m == 10.04
+    assert prof.area.z_min_m == 26.7 and prof.area.z_max_m == 110.0  # down to the lowest calibrated altitude
     assert prof.channel.fading == k and prof.channel.d_corr_m == 55.4
     assert type(prof).model_validate_json(prof.to_json()) == prof

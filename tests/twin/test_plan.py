@@ -175,3 +175,16 @@ def test_air_links_share_airtime_and_count_the_mac_time_once():
 
     # At 30 dBm everyone hears everyone over 1 km: 20 UAVs' links share one channel, 5 UAVs' fewer.
     assert rates(20) < 0.8 * rates(5)
+
+
+def test_loss_rises_smoothly_at_10_dbm():
+    # Fading-averaged loss: the links between "clean" and "dead" outnumber half the dead ones
+    # (issue #13; with the on/off loss of an unfaded chain the middle band was nearly empty).
+    mid = dead = 0
+    for mission in MISSIONS:
+        for pl in ("logdist", "3gpp"):
+            p = plan(f"benign-10-2-image-{pl}-adaptive-{mission}-10-95", seed=0, windows=4)
+            loss = np.array([lk.loss for w in p.windows for lk in w.links if lk.kind == "air"])
+            mid += int(np.count_nonzero((loss > 0.01) & (loss < 0.99)))
+            dead += int(np.count_nonzero(loss >= 0.99))
+    assert mid >= 0.5 * dead and mid > 0

@@ -5,7 +5,10 @@ path-loss profile fitted here (layer 1 is cheap), fidelity uses the link replay.
 asked for are *written*. With `write_profile` (a name for the profile directory, or a path
 ending in .json), a `TwinProfile` is saved: the fitted path loss (with the carrier anchor),
 K(h), shadowing decorrelation distance and BS mast height of layer 1, the fitted missions of
-layer 2, the built-in paper values for a layer that did not run; its `provenance` lists every
+layer 2, the built-in paper values for a layer that did not run. The area's lowest altitude
+becomes the lowest altitude the path loss was calibrated at (the paper's band starts at 30 m
+to avoid extrapolating its fit; the Maeng 30 m file flies at a median 26.7 m, and AFAR grid
+flights at 27.5 m, which the twin then flies as flown). Its `provenance` lists every
 data file the run read with its SHA-256, the fit date (UTC), the uavcas version and the seed.
 The profile shipped with uavcas (``uavcas/twin/profiles/calibrated.json``) is written this way
 (`uavcas calibrate all --data DIR --out DIR --write-profile src/uavcas/twin/profiles/calibrated.json`).
@@ -68,6 +71,7 @@ def build_profile(name: str, l1: Layer1Result | None, l2: Layer2Result | None, d
     if l1 is not None:
         update["pathloss"] = l1.profile.model_copy(update={"name": f"{name}-pathloss"})
         update["bs_mast_m"] = round(l1.tx_height_m, 2)
+        update["area"] = PAPER_PROFILE.area.model_copy(update={"z_min_m": round(min(l1.profile.altitude_m), 1)})
         channel = PAPER_PROFILE.channel.model_copy(update={"fading": l1.k_factor, "d_corr_m": round(l1.decorrelation_m, 1)})
         update["channel"] = channel
         parts.append("path loss, K(h), shadowing decorrelation and mast height (layer 1)")

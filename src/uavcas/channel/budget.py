@@ -33,6 +33,8 @@ attempt and `retry_limit` R retransmissions:
 The MAC time is counted once: the shaper serialises every packet at rate_mbps, so a 1500-byte
 packet already spends 8 * 1500 / rate = E[T] in the link's queue (`uavcas.emulation.shaping`,
 HTB); adding E[T] to delay_ms as well counted it twice (0.4-24 ms too much per full frame).
+Small packets (TCP ACKs) pass faster than their real MAC time, as the shaper has no fixed
+per-packet cost; full frames, which carry the traffic, are exact.
 `mac_time_us` = E[T] is returned for the airtime sharing (`uavcas.channel.airtime`), which
 divides the capacity among links that hear each other; the shaper's rate is the shared one.
 
