@@ -10,11 +10,16 @@ over `K_WINDOW_S` (1 s, 40 wavelengths: the fast fading averaged out, the shadow
 per-sample dB fit would sit E[10 log10 g] ~ 1 dB above the power-mean loss the twin's fading
 layer expects):
 
-    PL_lm = FSPL(1 m, fc) + dPL0 + 10 n(h) log10(d3D / 1 m) + c . f(angles)
+    PL_lm = FSPL(1 m, fc) + dPL0 + 10 n(h) log10(d3D / 1 m) + c . f(angles),   dPL0 = 0
 
-* carrier anchor: the 1 m loss is free space at the carrier plus one excess dPL0 shared by all
-  altitudes (the distance span at one altitude is under one decade, so a per-altitude intercept
-  trades slope for intercept; ``logdistance_free`` reports that fit too);
+* carrier anchor: the close-in (CI) free-space reference model, dPL0 = 0 - the 1 m loss is
+  free space at the carrier, so the model moves to another carrier by Friis and only n(h) is
+  fitted (Sun et al., "Investigation of prediction accuracy, sensitivity, and parameter
+  stability of large-scale propagation path loss models for 5G wireless communications", IEEE
+  Trans. Veh. Technol. 65(5), 2016: CI is stable across frequencies and distance spans where a
+  floating intercept is not). The distance span at one altitude is under one decade, so a
+  fitted intercept trades slope for intercept (1 m excess +0.3..+5 dB between seeds here);
+  ``logdistance_free`` reports the per-altitude-intercept fit beside it;
 * per-altitude exponent n(h) and, from the residuals of the 5 s training local means (the
   twin's window, `LOCAL_MEAN_S`), per-altitude shadowing sigma(h);
 * effective antenna pattern (in-flight pattern calibration, as Rahman et al. 2026, arXiv
