@@ -40,6 +40,8 @@ class ShardInfo:
     label_rule: str
     truncations: list[str]
     extracted_unix: float
+    profile: str | None = None  # twin profile the run's plan was made with, and its SHA-256
+    profile_sha256: str | None = None
 
 
 @dataclass(frozen=True)
@@ -127,6 +129,8 @@ def extract_detailed(
             label_rule=rule_text(labels, min_attack_fraction),
             truncations=[f"{t.path}@{t.offset}" for t in ex.packets.truncations],
             extracted_unix=time.time(),
+            profile=plan.profile,
+            profile_sha256=plan.profile_sha256,
         ),
     )
     return Extracted(shard, ex.packets, ex.flows, followed, truth)

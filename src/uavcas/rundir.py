@@ -128,6 +128,8 @@ class RunInfo(_Strict):
     attack_errors: list[str]
     wind_down_errors: list[str]
     run_id: str | None = None  # set by whoever names runs (e.g. a campaign); else the dir's name
+    profile: str | None = None  # twin profile of the plan (plan.json has it too) and its SHA-256
+    profile_sha256: str | None = None
 
     def to_json(self) -> str:
         return self.model_dump_json(indent=1, exclude_none=False) + "\n"

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import hashlib
 import json
 from types import SimpleNamespace
 
@@ -9,12 +10,13 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
+from uavcas import __version__
 from uavcas.calibration.pipeline import build_profile
-from uavcas.channel import DEFAULT_PROFILE, LogDistance, PathLossProfile
+from uavcas.channel import PAPER_ANCHORED_PROFILE, KFactorProfile, LogDistance, PathLossProfile
 from uavcas.cli import app
 from uavcas.mobility import GridParams, MobilityProfile
 from uavcas.twin import plan as make_plan
-from uavcas.twin.profile import load_profile
+from uavcas.twin.profile import PAPER_PROFILE, ProfileError, load_profile, profile_sha256, save_profile
 
 from .synthetic import write_maeng, write_multibw
 
@@ -43,9 +45,9 @@ def _air_links(p):
                 yield (w.index, lk.a, lk.b), lk, h
 
 
-def test_calibrate_pathloss_cli_writes_outputs_and_profile_that_changes_the_plan(tmp_path, profile_dir):
+def test_calibrate_pathloss_cli_writes_outputs_and_a_profile_with_provenance(tmp_path, profile_dir):
     data = tmp_path / "data"
-    write_maeng(data, n=800)
+    write_maeng(data, n=3000)
     write_multibw(data)
     out = tmp_path / "out"
     r = CliRunner().invoke(app, ["calibrate", "pathloss", "--data", str(data), "--out", str(out), "--write-profile", "synthcal", "--seed", "1"])
@@ -54,15 +56,28 @@ def test_calibrate_pathloss_cli_writes_outputs_and_profile_that_changes_the_plan
         assert (out / name).stat().st_size > 0
     j = json.loads((out / "pathloss.json").read_text())
     assert set(j["models"]) >= {"logdistance", "two_ray", "uma_av"}
-    assert j["models"]["logdistance"]["heldout"]["rmse_db"] > 0
     prof = load_profile("synthcal")
-    fitted = prof.pathloss
-    assert list(fitted.n) == pytest.approx(j["logdistance_params"]["n"])
-    assert prof.mobility == MobilityProfile()  # mobility did not run: built-in kept
+    assert list(prof.pathloss.n) == pytest.approx(j["logdistance_params"]["n"])
+    assert prof.mobility == MobilityProfile()  # mobility did not run: the paper's kept
+    assert prof.bs_mast_m == pytest.approx(10.0)  # the synthetic tower
+    assert list(prof.channel.fading.k_db) == pytest.approx(j["k_factor_db"]["k_db"])
+    assert prof.channel.d_corr_m == pytest.approx(j["shadowing_decorrelation_m"], abs=0.05)
+    pv = prof.provenance
+    assert pv.uavcas_version == __version__ and pv.seed == 1 and pv.fit_date_utc.endswith("+00:00")
+    files = {f.path: f for f in pv.data_files}
+    mat = next(p for p in files if p.endswith("filtererd_data_with_dist_ori_30_meas_rad.mat"))
+    assert files[mat].sha256 == hashlib.sha256((data / mat).read_bytes()).hexdigest()
+    assert any(p.endswith("rad_pat.mat") for p in files) and any("alt_70m" in p for p in files)
+    # The profile drives the plan and is recorded in it by name and hash.
+    p = make_plan(CONFIG, seed=5, profile="synthcal")
+    assert p.profile == "synthcal" and p.profile_sha256 == profile_sha256(prof)
 
-    base = make_plan(CONFIG, seed=5)
-    cal = make_plan(CONFIG, seed=5, profile="synthcal")
-    assert cal.profile == "synthcal"
+
+def test_fitted_pathloss_changes_the_links_as_its_numbers_say(tmp_path):
+    fitted = PathLossProfile(name="f", altitude_m=(30.0, 110.0), n=(2.3, 2.0), pl0_db=(43.35, 43.35), sigma_db=(3.0, 5.0))
+    base_prof = PAPER_PROFILE.model_copy(update={"name": "a"})
+    cal_prof = PAPER_PROFILE.model_copy(update={"name": "b", "pathloss": fitted})
+    base, cal = make_plan(CONFIG, seed=5, profile=base_prof), make_plan(CONFIG, seed=5, profile=cal_prof)
     links_b = {k: (lk, h) for k, lk, h in _air_links(base)}
     links_c = {k: (lk, h) for k, lk, h in _air_links(cal)}
     assert links_b.keys() == links_c.keys() and links_b  # same geometry and routing
@@ -71,7 +86,7 @@ def test_calibrate_pathloss_cli_writes_outputs_and_profile_that_changes_the_plan
         lc = links_c[k][0]
         # Same seed -> same unit shadowing Z; each profile scales it by its own sigma(h).
         d = lb.distance_m
-        z = (lb.pathloss_db - LogDistance(DEFAULT_PROFILE).loss_db(d, h)) / DEFAULT_PROFILE.at(h)[2]
+        z = (lb.pathloss_db - LogDistance(PAPER_ANCHORED_PROFILE).loss_db(d, h)) / PAPER_ANCHORED_PROFILE.at(h)[2]
         expected = LogDistance(fitted).loss_db(d, h) + fitted.at(h)[2] * z
         assert lc.pathloss_db == pytest.approx(float(expected), abs=0.02)
         diffs.append(lc.snr_db - lb.snr_db)
@@ -79,16 +94,26 @@ def test_calibrate_pathloss_cli_writes_outputs_and_profile_that_changes_the_plan
 
 
 def test_written_mobility_profile_changes_the_plan(profile_dir):
-    from uavcas.twin.profile import save_profile
-
     l2 = SimpleNamespace(profile=MobilityProfile(grid=GridParams(speed_mps=1.0, altitude_m=80.0)))
     prof = build_profile("mobcal", None, l2, data="synthetic", seed=0)
-    assert prof.pathloss == DEFAULT_PROFILE
+    assert prof.pathloss == PAPER_ANCHORED_PROFILE and prof.provenance is None
     save_profile(prof, "mobcal")
-    base = make_plan(CONFIG, seed=2)
+    base = make_plan(CONFIG, seed=2, profile="paper")
     cal = make_plan(CONFIG, seed=2, profile="mobcal")
     assert all(p[2] == 80.0 for w in cal.windows for n, p in w.positions.items() if n.startswith("uav"))
     assert base.windows[3].positions != cal.windows[3].positions
+
+
+def test_built_in_names_and_hashes(profile_dir, tmp_path):
+    default, cal, paper = load_profile(None), load_profile("calibrated"), load_profile("paper")
+    assert default is cal and paper is PAPER_PROFILE and default.name == "calibrated"
+    assert profile_sha256(cal) == hashlib.sha256(cal.to_json().encode()).hexdigest() != profile_sha256(paper)
+    with pytest.raises(ProfileError, match="built in"):
+        save_profile(paper, "paper")
+    path = save_profile(paper.model_copy(update={"name": "x"}), str(tmp_path / "mine.json"))
+    assert load_profile(str(path)).name == "mine"
+    with pytest.raises(ProfileError, match="not found"):
+        load_profile("nope")
 
 
 def test_cli_refuses_bad_input_with_one_line(tmp_path):
@@ -100,5 +125,10 @@ def test_cli_refuses_bad_input_with_one_line(tmp_path):
 
 def test_profile_json_roundtrip_of_fitted_pathloss():
     p = PathLossProfile(name="x", altitude_m=(26.7, 105.6), n=(2.1, 2.0), pl0_db=(43.5, 43.5), sigma_db=(6.7, 6.6))
-    prof = build_profile("rt", SimpleNamespace(profile=p), None, data="d", seed=0)
-    assert prof.pathloss.n == (2.1, 2.0) and prof.name == "rt"
+    k = KFactorProfile(name="k", altitude_m=(26.7, 105.6), k_db=(5.4, 5.6))
+    l1 = SimpleNamespace(profile=p, tx_height_m=10.04, k_factor=k, decorrelation_m=55.4)
+    prof = build_profile("rt", l1, None, data="d", seed=0)
+    assert prof.pathloss.n == (2.1, 2.0) and prof.name == "rt" and prof.bs_mast_m == 10.04
+    assert prof.area.z_min_m == 26.7 and prof.area.z_max_m == 110.0  # down to the lowest calibrated altitude
+    assert prof.channel.fading == k and prof.channel.d_corr_m == 55.4
+    assert type(prof).model_validate_json(prof.to_json()) == prof

@@ -1,6 +1,6 @@
 """The calibration on the real AERPAW data (skipped when ../shared is absent).
 
-One end-to-end run of `calibrate all` (about 25 s) feeds every assertion."""
+One end-to-end run of `calibrate all` (about 1 min) feeds every assertion."""
 
 from __future__ import annotations
 
@@ -60,21 +60,31 @@ def test_real_outputs_written(calibrated):
 
 def test_real_pathloss_physical_and_beats_uma(calibrated):
     j = json.loads((calibrated[0] / "pathloss.json").read_text())
-    assert abs(j["pl_at_1m_db"] - FSPL_1M_DB) <= 10.0
+    assert j["pl_at_1m_db"] == pytest.approx(FSPL_1M_DB)  # close-in: anchored at the carrier
     ld, uma = j["models"]["logdistance"], j["models"]["uma_av"]
-    assert ld["heldout"]["rmse_db"] < uma["heldout"]["rmse_db"]
+    for key in ("heldout_sample", "heldout_local_mean"):
+        assert ld[key]["rmse_db"] < uma[key]["rmse_db"] and ld[key]["rmse_db"] < j["models"]["two_ray"][key]["rmse_db"]
     for model in ("logdistance", "two_ray", "uma_av"):
-        for split in ("heldout", "crossval"):
-            assert set(j["models"][model][split]) >= {"rmse_db", "mae_db", "median_ae_db", "bias_db", "r"}
+        for key in ("heldout_sample", "heldout_local_mean", "crossval_sample", "crossval_local_mean"):
+            assert set(j["models"][model][key]) >= {"rmse_db", "mae_db", "median_ae_db", "bias_db", "r"}
     assert all(1.5 < n < 3.0 for n in j["logdistance_params"]["n"])
+    # Issue #13 targets on the absolute scale (paper: 4.40 held-out, 7.04 cross-validation), met on
+    # the 5 s local mean the twin's path loss stands for; per sample the fast fading alone is ~4.5 dB.
+    assert ld["heldout_local_mean"]["rmse_db"] < 4.40 and ld["crossval_local_mean"]["rmse_db"] < 7.04
+    assert 9.0 < j["tx_height_m"] < 12.5  # the AERPAW LW1 tower is 10-12 m
+    assert all(3.0 < k < 9.0 for k in j["k_factor_db"]["k_db"])
+    assert 20.0 < j["shadowing_decorrelation_m"] < 150.0
 
 
 def test_real_mobility_and_fidelity_bounded(calibrated):
     out = calibrated[0]
     m = json.loads((out / "mobility.json").read_text())
     assert set(m["missions"]) == {"spiral", "grid", "hover_transit", "random"}
-    for v in m["missions"].values():
+    paper = {"spiral": 0.32, "grid": 0.65, "hover_transit": 0.26, "random": 0.16}
+    for k, v in m["missions"].items():
         assert 0.0 <= v["heldout"]["jsd_speed"] <= 1.0 and v["params"]
+        assert v["heldout"]["jsd_speed"] <= v["heldout"]["js_distance_speed"] <= 1.0  # distance = sqrt(divergence)
+        assert v["heldout"]["jsd_speed"] <= paper[k]  # issue #13: divergence at or below the paper's figures
     f = json.loads((out / "fidelity.json").read_text())
     assert all(0.0 <= h <= 1.0 for h in f["hellinger"].values())
     link = json.loads((out / "link.json").read_text())

@@ -62,8 +62,8 @@ def test_physics_matters_across_the_paper_campaign(pathloss):
     assert high.rate_mbps.mean() > 1.2 * low.rate_mbps.mean()
     assert np.all(high.mcs >= low.mcs)
     np.testing.assert_allclose(high.snr_db - low.snr_db, 20.0)
-    # And loss/delay respond too: the weak links at 10 dBm are worse.
-    assert low.loss.mean() > high.loss.mean() and low.delay_ms.mean() > high.delay_ms.mean()
+    # And loss and channel time respond too: the weak links at 10 dBm are worse.
+    assert low.loss.mean() > high.loss.mean() and low.mac_time_us.mean() > high.mac_time_us.mean()
 
 
 def test_rate_falls_with_distance():
@@ -76,11 +76,11 @@ def test_rate_falls_with_distance():
     assert np.all(np.diff(arr.pathloss_db) > 0) and np.all(np.diff(arr.snr_db) < 0)
     assert np.all(np.diff(arr.mcs) <= 0) and arr.mcs[0] == 6 and arr.mcs[-1] < 6
     assert np.all(np.diff(arr.rate_mbps) <= 0)
-    # Adaptive MCS makes loss a saw-tooth at level switches, but only at negligible levels.
-    assert np.all(np.diff(arr.loss) >= -1e-12) and arr.loss[-1] > 0.5
+    # Without fading the loss is a step: negligible in range, ~1 beyond (500 m at 10 dBm: SNR 7.7 dB).
+    assert np.all(arr.loss[:3] < 1e-6) and np.all(arr.loss[3:] > 0.5)
     fixed = Channel(n_nodes=6, pathloss="freespace", tx_power_dbm=10.0, modulation=0).evaluate(
         pos, pairs, np.r_[True, np.zeros(5, bool)])
-    assert np.all(np.diff(fixed.per) > 0) and np.all(np.diff(fixed.delay_ms) > 0)
+    assert np.all(np.diff(fixed.per) > 0) and np.all(np.diff(fixed.mac_time_us) >= 0) and fixed.mac_time_us[-1] > fixed.mac_time_us[0]
 
 
 def test_link_arrays_are_consistent():
@@ -168,3 +168,18 @@ def test_fixed_mcs_and_inputs_validated():
         Channel(["a", "b"], n_nodes=3)
     with pytest.raises(ValueError):
         Channel(n_nodes=3, modulation="mcs9")
+
+
+def test_fading_makes_loss_rise_smoothly_with_distance():
+    from uavcas.channel import TR36777_UMA_AV_K
+
+    d = np.linspace(50.0, 3000.0, 300)
+    pos = np.vstack([[[0, 0, BS_MAST_M]], np.c_[d, np.zeros(d.size), np.full(d.size, 60.0)]])
+    pairs = np.c_[np.zeros(d.size, int), np.arange(1, d.size + 1)]
+    is_bs = np.r_[True, np.zeros(d.size, bool)]
+    flat = Channel(n_nodes=d.size + 1, pathloss="freespace", tx_power_dbm=0.0).evaluate(pos, pairs, is_bs)
+    faded = Channel(n_nodes=d.size + 1, pathloss="freespace", tx_power_dbm=0.0, fading=TR36777_UMA_AV_K).evaluate(pos, pairs, is_bs)
+    mid = lambda a: np.count_nonzero((a.loss > 0.01) & (a.loss < 0.99))  # noqa: E731
+    assert mid(faded) > 5 * max(mid(flat), 1)  # a transition zone instead of a cliff
+    np.testing.assert_allclose(faded.k_db, 4.217 * np.log10(60.0) + 5.787)
+    assert faded.loss[-1] > 0.99 and faded.loss[0] < 0.01

@@ -11,7 +11,7 @@ from hypothesis import strategies as st
 
 from uavcas.channel.geometry import LinkGeometry
 from uavcas.channel.pathloss import (
-    DEFAULT_PROFILE,
+    PAPER_ANCHORED_PROFILE,
     PAPER_RELATIVE_PROFILE,
     FreeSpace,
     LogDistance,
@@ -150,16 +150,16 @@ def test_air_to_air_links_are_los_in_3gpp():
 def test_default_profile_is_anchored_at_free_space():
     fspl_1m = float(free_space_loss_db(1.0, 3.51))
     assert fspl_1m == pytest.approx(43.35, abs=0.01)
-    assert min(DEFAULT_PROFILE.pl0_db) == pytest.approx(fspl_1m, abs=1e-3)
+    assert min(PAPER_ANCHORED_PROFILE.pl0_db) == pytest.approx(fspl_1m, abs=1e-3)
     # The paper's per-altitude differences are kept (one common offset).
-    diff = np.array(DEFAULT_PROFILE.pl0_db) - np.array(PAPER_RELATIVE_PROFILE.pl0_db)
+    diff = np.array(PAPER_ANCHORED_PROFILE.pl0_db) - np.array(PAPER_RELATIVE_PROFILE.pl0_db)
     np.testing.assert_allclose(diff, diff[0], atol=1e-3)
-    assert DEFAULT_PROFILE.n == (1.541, 1.593, 1.849, 1.881, 1.860)
-    assert DEFAULT_PROFILE.sigma_db == (3.70, 3.73, 4.08, 4.48, 4.46)
+    assert PAPER_ANCHORED_PROFILE.n == (1.541, 1.593, 1.849, 1.881, 1.860)
+    assert PAPER_ANCHORED_PROFILE.sigma_db == (3.70, 3.73, 4.08, 4.48, 4.46)
 
 
 def test_profile_interpolates_and_clamps():
-    n, pl0, sig = DEFAULT_PROFILE.at(np.array([40.0, 10.0, 30.0, 110.0, 500.0]))
+    n, pl0, sig = PAPER_ANCHORED_PROFILE.at(np.array([40.0, 10.0, 30.0, 110.0, 500.0]))
     assert n[0] == pytest.approx((1.541 + 1.593) / 2)
     assert sig[0] == pytest.approx((3.70 + 3.73) / 2)
     assert n[1] == n[2] == 1.541 and pl0[1] == pl0[2]  # clamped below 30 m
@@ -170,14 +170,14 @@ def test_logdistance_formula_and_monotone():
     m = LogDistance()
     d = np.array([1.0, 10.0, 100.0, 700.0])
     loss = m.loss_db(d, 70.0)
-    np.testing.assert_allclose(loss, DEFAULT_PROFILE.pl0_db[2] + 18.49 * np.log10(d))
+    np.testing.assert_allclose(loss, PAPER_ANCHORED_PROFILE.pl0_db[2] + 18.49 * np.log10(d))
     assert np.all(np.diff(m.loss_db(np.geomspace(1, 2000, 100), 55.0)) > 0)
     assert float(m.loss_db(0.2, 70.0)) == float(m.loss_db(1.0, 70.0))  # floored at d0
 
 
 def test_profile_json_round_trip_and_validation():
-    text = DEFAULT_PROFILE.model_dump_json()
-    assert PathLossProfile.model_validate_json(text) == DEFAULT_PROFILE
+    text = PAPER_ANCHORED_PROFILE.model_dump_json()
+    assert PathLossProfile.model_validate_json(text) == PAPER_ANCHORED_PROFILE
     assert json.loads(text)["name"] == "paper-anchored"
     with pytest.raises(ValueError):
         PathLossProfile(name="x", altitude_m=(50.0, 30.0), n=(2, 2), pl0_db=(40, 40), sigma_db=(1, 1))
@@ -220,3 +220,16 @@ def test_make_pathloss_names():
         make_pathloss("okumura")
     with pytest.raises(ValueError, match="unknown path-loss profile"):
         make_pathloss("logdist", profile="nope")
+
+
+def test_logdistance_carrier_anchor_moves_the_curve_by_friis():
+    # Close-in model at 3.51 GHz: PL(d) = 43.354 + 10 n log10 d; at 3.3 GHz the whole curve
+    # moves by 20 log10(3.3 / 3.51) = -0.5359 dB (hand-computed), the slope unchanged.
+    p = PathLossProfile(name="ci", altitude_m=(50.0,), n=(2.1,), pl0_db=(43.3539,), sigma_db=(4.0,), fc_ghz=3.51)
+    d = np.array([10.0, 100.0, 500.0])
+    at_351 = LogDistance(p).loss_db(d, 50.0)
+    np.testing.assert_allclose(at_351, 43.3539 + 21.0 * np.log10(d))
+    at_33 = LogDistance(p, fc_ghz=3.3).loss_db(d, 50.0)
+    np.testing.assert_allclose(at_33 - at_351, -0.53586, atol=1e-4)
+    assert make_pathloss("logdist", profile=p, fc_ghz=3.3).carrier_shift_db == pytest.approx(-0.53586, abs=1e-4)
+    assert make_pathloss("logdist", profile=p).carrier_shift_db == 0.0  # None: the profile's own carrier

@@ -33,6 +33,8 @@ def test_extract_info_idempotent(synth_run_dir, tmp_path):
     assert card["n_flows"] == table.num_rows == N_FLOOD + 14
     assert card["class_counts"]["DoS"] == N_FLOOD and set(CLASSES) <= set(card["class_counts"])
     assert card["views"] == ["5tuple"] and card["seeds"] == [7] and card["runs"][0]["run_id"] == "run-synth"
+    # The twin profile the run was planned with is on the card (name -> SHA-256s; None when unrecorded).
+    assert card["profiles"] == {"test": []} and card["runs"][0]["profile"] == "test"
     # re-extracting replaces the shard (here with another view), never duplicates
     assert _run("extract", synth_run_dir, "--out", ds, "--view", "hostpair").exit_code == 0
     card2 = json.loads((ds / "dataset.json").read_text())

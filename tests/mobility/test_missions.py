@@ -149,18 +149,42 @@ def test_spiral_flies_at_constant_ground_speed(speed):
     assert np.median(v) == pytest.approx(speed, rel=1e-6)
 
 
-def test_spiral_geometry_is_archimedean():
-    m = make_mission("spiral", 1, 0, params=SpiralParams(r0_m=5, pitch_m=30, r_max_m=100, speed_mps=20))
-    t = np.arange(0.0, 60.0, 0.01)
-    p = m.positions(t)[:, 0, :2] - m.centres_m[0]
-    r = np.hypot(p[:, 0], p[:, 1])
-    assert r.min() >= 5 - 1e-6 and r.max() <= 100 + 1e-6
-    # r - r0 = b * (unwrapped angle change): one loop adds exactly `pitch` metres of radius.
-    theta = np.unwrap(np.arctan2(p[:, 1], p[:, 0]))
-    b = 30 / (2 * np.pi)
-    dtheta, dr = np.diff(theta), np.diff(r)
-    ok = np.abs(dr) > 1e-3  # skip the turn-around samples
-    assert np.allclose(np.abs(dr[ok]), b * np.abs(dtheta[ok]), rtol=2e-3, atol=1e-4)
+def test_spiral_is_an_expanding_rectangle_of_axis_aligned_legs():
+    from uavcas.mobility.spiral import rectangular_spiral
+
+    v = rectangular_spiral(300.0, 200.0, 50.0)  # R = 2 rings: units 75 m along x, 50 m along y
+    legs = np.diff(v, axis=0)
+    assert np.all((legs[:, 0] == 0) ^ (legs[:, 1] == 0))  # every leg along one axis
+    lengths = np.abs(legs).sum(axis=1)
+    assert lengths.tolist() == [75, 50, 150, 100, 225, 150, 300, 200]
+    assert np.ptp(v[:, 0]) == 300 and np.ptp(v[:, 1]) == 200
+    m = make_mission("spiral", 1, 0, params=SpiralParams(width_m=300, height_m=200, ring_spacing_m=50, speed_mps=20))
+    p = m.positions(np.arange(0.0, 200.0, 0.01))[:, 0, :2]
+    ext = np.ptp(p, axis=0)
+    assert sorted(ext.round(6).tolist()) == [200.0, 300.0]  # the whole footprint is flown
+    k = kinematics(np.c_[p, np.zeros(len(p))], np.arange(0.0, 200.0, 0.01))
+    h = np.mod(k.heading_rad[k.horizontal_speed_mps > 1], np.pi / 2)
+    assert np.all(np.minimum(h, np.pi / 2 - h) < 1e-6)  # axis-aligned flight
+
+
+def test_legs_draw_speeds_per_leg_and_accelerate():
+    from uavcas.mobility.legs import distance_along_m, leg_duration_s
+
+    # Trapezoid: 100 m at 10 m/s, 2 m/s^2 -> 5 s up, 5 s cruise, 5 s down = 15 s; triangle if short.
+    assert float(leg_duration_s(100.0, 10.0, 2.0)) == pytest.approx(15.0)
+    assert float(leg_duration_s(16.0, 10.0, 1.0)) == pytest.approx(8.0)  # peak sqrt(16) = 4 m/s
+    s = distance_along_m(np.array([0.0, 5.0, 10.0, 15.0]), 100.0, 10.0, 2.0)
+    np.testing.assert_allclose(s, [0.0, 25.0, 75.0, 100.0])
+    params = GridParams(speed_mps=5.0, speed_cv=0.4, accel_mps2=1.0, altitude_m=60.0, altitude_sd_m=3.0,
+                        box_width_m=400, box_height_m=400, lane_spacing_m=40)
+    m, t, k = _speeds("grid", params, n=4, dt=0.1, horizon=3000.0)
+    v = k.horizontal_speed_mps
+    assert v.max() > 6.0 and np.percentile(v, 5) < 2.0  # fast legs, and the ramps at each corner
+    assert np.abs(np.diff(v, axis=0)).max() <= 1.0 * 0.1 + 1e-6  # |dv| <= a dt: no speed jumps
+    z = m.positions(t)[..., 2]
+    assert 1.5 < np.std(z) < 4.5 and np.all(np.abs(np.diff(z, axis=0)) < 1.0)  # altitude varies smoothly
+    cruise = np.concatenate([f.v[:40] for f in m.flights])
+    assert np.mean(cruise) == pytest.approx(5.0, rel=0.15) and np.std(cruise) / np.mean(cruise) == pytest.approx(0.4, rel=0.3)
 
 
 @pytest.mark.parametrize("params", [GridParams(), GridParams(speed_mps=4.0, lane_spacing_m=20.0), GridParams(box_m=(100, 100, 500, 300))])
@@ -222,7 +246,7 @@ def test_hover_transit_alternates_hover_and_transit():
 def test_hover_transit_shared_waypoints_are_visited():
     wps = [(100.0, 100.0), (400.0, 100.0), (400.0, 400.0)]
     m = make_mission("hover_transit", 2, 0, params=HoverTransitParams(waypoints_m=wps, hover_s=5.0))
-    t = np.arange(0.0, m.period_s[0], 0.1)
+    t = np.arange(0.0, 200.0, 0.1)
     p = m.positions(t)[:, 0, :2]
     for w in wps:
         assert np.min(np.linalg.norm(p - np.array(w), axis=1)) < 1e-6
@@ -232,4 +256,6 @@ def test_gauss_markov_params_validation():
     with pytest.raises(ValueError):
         GaussMarkovParams(alpha=1.0)
     with pytest.raises(ValueError):
-        SpiralParams(r0_m=50, r_max_m=40)
+        SpiralParams(ring_spacing_m=0)
+    with pytest.raises(ValueError):
+        GridParams(accel_mps2=0.0)

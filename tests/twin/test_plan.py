@@ -179,3 +179,46 @@ def test_wormhole_attacker_is_off_the_victims_initial_route():
         assert atk.attackers[0] not in r.hops  # the detour adds a hop
         detoured += any(w.wormholes for w in p.windows)
     assert detoured >= 15  # the attacker is drawn among UAVs that have a detour at t = 0
+
+
+def test_plans_record_the_calibrated_profile_by_default_and_paper_on_request():
+    from uavcas.twin.profile import PAPER_PROFILE, load_profile, profile_sha256
+
+    cfg = "benign-5-2-image-logdist-adaptive-grid-10-95"
+    default, paper = plan(cfg, seed=2), plan(cfg, seed=2, profile="paper")
+    cal = load_profile(None)
+    assert default.profile == "calibrated" and default.profile_sha256 == profile_sha256(cal)
+    assert paper.profile == "paper" and paper.profile_sha256 == profile_sha256(PAPER_PROFILE)
+    assert cal.provenance is not None and cal.provenance.data_files  # shipped with its provenance
+    # seed + config + profile -> the same plan, bit for bit.
+    assert plan(cfg, seed=2).to_json() == default.to_json() and default.to_json() != paper.to_json()
+    # BS masts: the AERPAW LW1 tower (10 m) in the calibrated profile, 25 m in the paper's.
+    bs = lambda p: {p.windows[0].positions[n.name][2] for n in p.nodes if n.kind == "bs"}  # noqa: E731
+    assert bs(default) == {cal.bs_mast_m} and 9.0 < cal.bs_mast_m < 12.5 and bs(paper) == {25.0}
+
+
+def test_air_links_share_airtime_and_count_the_mac_time_once():
+    from scipy.constants import c
+
+    def rates(n):
+        p = plan(f"benign-{n}-2-image-logdist-adaptive-random-30-95", seed=1, windows=4)
+        air = [lk for w in p.windows for lk in w.links if lk.kind == "air"]
+        for lk in air:  # the MAC time is in the rate only: delay = propagation + processing
+            assert lk.delay_ms == pytest.approx(lk.distance_m / c * 1e3 + 0.1, abs=1e-4)
+        return np.mean([lk.rate_mbps for lk in air])
+
+    # At 30 dBm everyone hears everyone over 1 km: 20 UAVs' links share one channel, 5 UAVs' fewer.
+    assert rates(20) < 0.8 * rates(5)
+
+
+def test_loss_rises_smoothly_at_10_dbm():
+    # Fading-averaged loss: the links between "clean" and "dead" outnumber half the dead ones
+    # (issue #13; with the on/off loss of an unfaded chain the middle band was nearly empty).
+    mid = dead = 0
+    for mission in MISSIONS:
+        for pl in ("logdist", "3gpp"):
+            p = plan(f"benign-10-2-image-{pl}-adaptive-{mission}-10-95", seed=0, windows=4)
+            loss = np.array([lk.loss for w in p.windows for lk in w.links if lk.kind == "air"])
+            mid += int(np.count_nonzero((loss > 0.01) & (loss < 0.99)))
+            dead += int(np.count_nonzero(loss >= 0.99))
+    assert mid >= 0.5 * dead and mid > 0

@@ -34,8 +34,8 @@ def pathloss_figure(res: Layer1Result, path: Path, seed: int = 0) -> Path:
     k = len(res.groups)
     fig, axes = plt.subplots(2, k, figsize=(3.3 * k, 6), sharex="col", gridspec_kw={"height_ratios": [3, 1.3]}, squeeze=False)
     for i, g in enumerate(res.groups):
-        test = ~g.train
-        d, y = g.samples.d3d_m[test], g.pl_db[test]
+        test = g.test
+        d, y = g.samples.d3d_m[test], g.target_db[test]
         pick = rng.choice(d.size, size=min(_MAX_POINTS, d.size), replace=False)
         ax = axes[0, i]
         ax.scatter(d[pick], y[pick], s=2, alpha=0.25, color="0.5", label="measured (held-out)")
@@ -57,7 +57,7 @@ def pathloss_figure(res: Layer1Result, path: Path, seed: int = 0) -> Path:
     axes[0, 0].set_ylabel("path loss (dB)")
     axes[1, 0].set_ylabel("residual (dB)")
     axes[0, 0].legend(fontsize=7, loc="lower right")
-    fig.suptitle("Layer 1: Maeng LTE 3.51 GHz held-out path loss vs models")
+    fig.suptitle("Layer 1: Maeng LTE 3.51 GHz held-out segments, path loss vs models (+-sigma: 5 s local-mean spread)")
     return save_png(fig, path, dpi=_DPI)
 
 

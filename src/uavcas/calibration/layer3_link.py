@@ -7,8 +7,8 @@ step). Measured power is averaged per 1 s step in linear units (mW) and converte
 so both series live on the same time grid.
 
 Chain: the twin's `Channel` (2 nodes: rover as BS, UAV), evaluated once per step in time order
-so Gudmundson shadowing and the LOS state evolve with the UAV's displacement, exactly as in a
-plan. Budget: TX_DBM = 20 dBm, 0 dBi, noise -95 dBm (the twin's defaults); simulated RSS =
+so Gudmundson shadowing (layer 1's decorrelation distance) and the LOS state evolve with the
+UAV's displacement, exactly as in a plan, with layer 1's Rician K(h) in its link layer. Budget: TX_DBM = 20 dBm, 0 dBi, noise -95 dBm (the twin's defaults); simulated RSS =
 TX_DBM - total path loss. Variants: the calibrated log-distance profile (layer 1; the built-in
 paper-anchored profile when layer 1 did not run) and TR 36.777 UMa-AV.
 
@@ -27,7 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.stats import pearsonr
 
-from uavcas.channel import Channel, PathLossProfile
+from uavcas.channel import Channel, KFactorProfile, PathLossProfile
 from uavcas.mobility import TraceMission
 
 from .layer2_mobility import STEP_S, cruise_slice, flight_xyz_m, split_flights
@@ -63,7 +63,8 @@ def measured_per_step(f: AfarFlight, sl: slice, t0: float, n: int) -> np.ndarray
         return np.where(cnt > 0, 10.0 * np.log10(mw / np.maximum(cnt, 1)), np.nan)
 
 
-def replay_flight(f: AfarFlight, profile: PathLossProfile | None, seed: int, fc_ghz: float = 3.51) -> Replay:
+def replay_flight(f: AfarFlight, profile: PathLossProfile | None, seed: int, fc_ghz: float = 3.51,
+                  fading: KFactorProfile | None = None, d_corr_m: float = 50.0) -> Replay:
     xyz = flight_xyz_m(f)
     sl = cruise_slice(xyz[:, 2])
     t_raw, p_raw = f.t_s[sl], xyz[sl]
@@ -76,7 +77,7 @@ def replay_flight(f: AfarFlight, profile: PathLossProfile | None, seed: int, fc_
     out: dict = {"chain": {}, "median": {}, "snr": {}, "rate": {}}
     for variant in VARIANTS:
         ch = Channel(n_nodes=2, pathloss="logdist" if variant == "logdistance" else "uma", profile=profile,
-                     seed=seed, tx_power_dbm=TX_DBM, noise_dbm=NOISE_DBM, fc_ghz=fc_ghz)
+                     seed=seed, tx_power_dbm=TX_DBM, noise_dbm=NOISE_DBM, fc_ghz=fc_ghz, fading=fading, d_corr_m=d_corr_m)
         total, shadow, snr, rate = (np.empty(len(t)) for _ in range(4))
         pairs, is_bs = np.array([[0, 1]]), np.array([True, False])
         for k in range(len(t)):
@@ -107,13 +108,14 @@ def _r(a, b) -> float:
     return float(pearsonr(a, b)[0]) if len(a) > 2 and np.std(a) > 0 and np.std(b) > 0 else float("nan")
 
 
-def run_layer3(flights: list[AfarFlight], profile: PathLossProfile | None, seed: int = 0) -> Layer3Result:
+def run_layer3(flights: list[AfarFlight], profile: PathLossProfile | None, seed: int = 0,
+               fading: KFactorProfile | None = None, d_corr_m: float = 50.0) -> Layer3Result:
     usable = [f for f in flights if f.rover_lon_lat is not None]
     if len(usable) < 2:
         raise CalibrationDataError(
             "layer 3 needs >= 2 AFAR flights with a processed file (results_useful_with_tworay_tilt_src_exp_*) to locate the rover"
         )
-    replays = [replay_flight(f, profile, seed + i) for i, f in enumerate(usable)]
+    replays = [replay_flight(f, profile, seed + i, fading=fading, d_corr_m=d_corr_m) for i, f in enumerate(usable)]
     tr_i, te_i = split_flights([r.name for r in replays], seed, 99)
     train, test = [replays[i] for i in tr_i], [replays[i] for i in te_i]
     offsets, results = {}, {}

@@ -13,6 +13,13 @@ of a measurement is then
 
     PL_i = EIRP_eff + G_i - P_rx,i = K_i - P_rx,i = FSPL(d3D_i) + (P_free,i - P_rx,i).
 
+The target the fit uses is computed with OUR pattern evaluation, not the authors' column:
+
+    PL_i = EIRP_eff + G_t(elev_i, azim_i + 90) + G_r(elev_i, azim_i - ori_i) - P_rx,i
+
+(`absolute_pathloss_db` with a pattern), so the antenna gains come from ``rad_pat.mat`` at each
+sample's elevation, azimuth and UAV orientation; K_i only fixes the one constant EIRP_eff.
+
 To split K_i into EIRP_eff and G_i we evaluate the measured pattern (``rad_pat.mat``) ourselves:
 G_i = G_t(elev_i, azim_i + 90 deg) + G_r(elev_i, azim_i - ori_i), bilinear on the 3-degree grid
 (azimuth periodic). That angle convention is the one, among the natural candidates (azimuth
@@ -92,9 +99,17 @@ def budget_term_db(s: PathLossSamples) -> np.ndarray:
     return s.pred_free_dbm + free_space_loss_db(s.d3d_m, carrier_ghz(s.campaign))
 
 
-def absolute_pathloss_db(s: PathLossSamples) -> np.ndarray:
-    """PL_i = EIRP_eff + G_i - P_rx,i: antenna-compensated, absolute path loss (dB)."""
+def absolute_pathloss_db(s: PathLossSamples, budget: BudgetFit | None = None, pattern: PatternGain | None = None) -> np.ndarray:
+    """Antenna-compensated absolute path loss (dB) per sample: EIRP_eff + G_pattern - P_rx with
+    our pattern gains when `pattern` and the sample angles are there, else K_i - P_rx with the
+    file's own budget term (the multi-band files: no angles for the Maeng pattern)."""
+    if budget is not None and pattern is not None and _has_angles(s):
+        return budget.eirp_eff_dbm + pattern.gain_db(s.elev_rad, s.azim_rad, s.ori_rad) - s.rx_dbm
     return budget_term_db(s) - s.rx_dbm
+
+
+def _has_angles(s: PathLossSamples) -> bool:
+    return s.elev_rad is not None and s.azim_rad is not None and s.ori_rad is not None
 
 
 def tx_height_m(s: PathLossSamples) -> float:
@@ -106,7 +121,7 @@ def tx_height_m(s: PathLossSamples) -> float:
 def recover_budget(s: PathLossSamples, pattern: PatternGain | None) -> BudgetFit:
     k = budget_term_db(s)
     residual = None
-    if pattern is not None and s.elev_rad is not None and s.azim_rad is not None and s.ori_rad is not None:
+    if pattern is not None and _has_angles(s):
         g = pattern.gain_db(s.elev_rad, s.azim_rad, s.ori_rad)
         eirp = float(np.mean(k - g))
         residual = float(np.std(k - eirp - g))

@@ -212,6 +212,7 @@ class AfarFlight:
     power_db: np.ndarray  # uncalibrated channel-sounder power
     rover_lon_lat: tuple[float, float] | None = None
     rover_height_m: float = 1.5
+    processed: Path | None = None  # the processed file the rover position came from
     extra: dict = field(default_factory=dict)
 
     @property
@@ -317,6 +318,6 @@ def load_afar(root: str | Path) -> list[AfarFlight]:
         out.append(AfarFlight(
             source=p, team=int(key[0]), location=int(key[1]), t_s=c["timestamp_power"][sel],
             lon_deg=c["mX"][sel], lat_deg=c["mY"][sel], alt_m=c["mZ"][sel], power_db=c["mpower"][sel],
-            rover_lon_lat=rover, rover_height_m=h_rover,
+            rover_lon_lat=rover, rover_height_m=h_rover, processed=proc.get(key),
         ))
     return out

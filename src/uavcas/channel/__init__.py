@@ -1,16 +1,20 @@
 """Wireless channel of the twin, vectorised over links with numpy.
 
-positions -> path loss (log-distance per altitude, TR 36.777 aerial UMa/RMa/UMi, two-ray, free
-space) -> Gudmundson-correlated shadowing -> SNR (link budget) -> 802.11a/g MCS -> BER -> PER ->
-802.11 ARQ -> LinkParams(rate_mbps, delay_ms, loss). `Channel` runs the chain once per window.
+positions -> path loss (log-distance per altitude with a carrier anchor, TR 36.777 aerial
+UMa/RMa/UMi, two-ray, free space) -> Gudmundson-correlated shadowing -> SNR (link budget) ->
+802.11a/g MCS -> coded BER/PER (BCC union bound) averaged over Rician fading -> 802.11 ARQ ->
+LinkParams(rate_mbps, delay_ms, loss, mac_time_us) -> airtime sharing among links in carrier
+sense range. `Channel` runs the chain once per window; `airtime` shares the rates.
 """
 
+from .airtime import CCA_DBM, hears_matrix, shared_rate_mbps
 from .budget import LinkBudget, LinkLayer, LinkParams, link_params
+from .fading import TR36777_UMA_AV_K, KFactorProfile
 from .geometry import LinkGeometry, PathLossResult
 from .mcs import MCS_80211AG, McsTable, ber, parse_modulation, per
 from .model import Channel, LinkArrays
 from .pathloss import (
-    DEFAULT_PROFILE,
+    PAPER_ANCHORED_PROFILE,
     PAPER_RELATIVE_PROFILE,
     PATHLOSS_NAMES,
     PROFILES,
@@ -29,7 +33,8 @@ from .pathloss import (
 from .shadowing import GudmundsonShadowing
 
 __all__ = [
-    "DEFAULT_PROFILE", "MCS_80211AG", "PAPER_RELATIVE_PROFILE", "PATHLOSS_NAMES", "PROFILES",
+    "CCA_DBM", "KFactorProfile", "PAPER_ANCHORED_PROFILE", "TR36777_UMA_AV_K", "hears_matrix", "shared_rate_mbps",
+    "MCS_80211AG", "PAPER_RELATIVE_PROFILE", "PATHLOSS_NAMES", "PROFILES",
     "Channel", "FreeSpace", "GudmundsonShadowing", "LinkArrays", "LinkBudget", "LinkGeometry",
     "LinkLayer", "LinkParams", "LogDistance", "McsTable", "PathLossModel", "PathLossProfile",
     "PathLossResult", "RMaAV", "TwoRay", "UMaAV", "UMiAV", "ber", "free_space_loss_db",

@@ -26,20 +26,48 @@ attempt and `retry_limit` R retransmissions:
 
     loss      = p^(R + 1)                                   (residual loss after ARQ)
     E[T]      = sum_{k=0..R} p^k T_k                        (expected MAC time per packet)
-    delay_ms  = d / c + processing_delay_ms + E[T]          (one-way latency of a packet)
     rate_mbps = 8 packet_bytes / E[T]                       (rate_model "dcf")
               = PHY rate of the MCS                         (rate_model "phy", the paper's)
+    delay_ms  = d / c + processing_delay_ms                 (what the shaper adds as latency)
+
+The MAC time is counted once: the shaper serialises every packet at rate_mbps, so a 1500-byte
+packet already spends 8 * 1500 / rate = E[T] in the link's queue (`uavcas.emulation.shaping`,
+HTB); adding E[T] to delay_ms as well counted it twice (0.4-24 ms too much per full frame).
+Small packets (TCP ACKs) pass faster than their real MAC time, as the shaper has no fixed
+per-packet cost; full frames, which carry the traffic, are exact.
+`mac_time_us` = E[T] is returned for the airtime sharing (`uavcas.channel.airtime`), which
+divides the capacity among links that hear each other; the shaper's rate is the shared one.
+
+Retry chain and fading (`uavcas.channel.frames`): attempt k happens with probability reach_k
+(= p^k above when every attempt uses one level and there is no fading); attempts after
+`fallback_after` (4) use the lowest level, as 802.11 rate control's retry chain ends at the base
+rate; with small-scale fading the retries of a packet see one fading gain and reach_k is
+averaged over the window's Rician distribution (pass `k_db`; None = no fading). In general
+
+    loss = reach_{R+1},   E[T] = sum_{k=0..R} reach_k T_k(c_k),   rate = 8 L / E[T].
+
+PER: the coded PER of `uavcas.channel.mcs` (802.11 BCC, union bound) at SNR minus the 5 dB
+implementation loss the 802.11 sensitivities assume (`implementation_loss_db`), on the whole
+MPDU, as the FCS covers it. `coding="uncoded"` keeps the paper's uncoded BER.
+
+MCS choice (`link_chain`). Fixed: the scenario's level. Adaptive, selection "throughput" (the
+default): the level with the highest expected throughput as 802.11 rate control measures it
+(Linux mac80211 Minstrel, ns-3 `MinstrelWifiManager`): the level's success ratio (frames
+delivered at it / attempts made at it, its retries included) times the bits it carries per
+transmission time 8 L / T_0(m), under the window's fading; the retry chain then handles the
+failures. Selection "threshold": the paper's rule, the highest level whose SNR threshold +
+margin is met (`McsTable.select`); with fading it keeps levels whose deep fades lose many
+frames.
 
 "dcf" is the default: the emulated link should carry what an 802.11a link carries, which at
 54 Mbit/s with 1500-byte packets is about 30 Mbit/s (cf. Jun, Peddabachagari & Sichitiu,
 "Theoretical maximum throughput of IEEE 802.11 and its applications", NCA 2003), and a lossy
-link spends channel time on retries. The shaper applies rate_mbps as the link's capacity and
-delay_ms as its latency. `retry_limit` defaults to 6: dot11ShortRetryLimit = 7 counts
-transmission *attempts* (802.11-2020 Annex C; ns-3's FrameRetryLimit likewise), i.e. one
-transmission and 6 retries. retry_limit=0 with rate_model="phy" reproduces the paper's raw
-chain (loss = PER, rate = PHY rate). PER is computed on the whole MPDU, as the FCS covers it.
-`processing_delay_ms` (0.1 ms) stands for the radio's driver/firmware hand-off per hop; the
-emulated kernel adds its own real forwarding cost on top.
+link spends channel time on retries. `retry_limit` defaults to 6: dot11ShortRetryLimit = 7
+counts transmission *attempts* (802.11-2020 Annex C; ns-3's FrameRetryLimit likewise), i.e.
+one transmission and 6 retries. retry_limit=0, rate_model="phy", coding="uncoded",
+implementation_loss_db=0, fallback_after=None and no fading reproduce the paper's raw chain (loss = PER, rate = PHY
+rate). `processing_delay_ms` (0.1 ms) stands for the radio's driver/firmware hand-off per hop;
+the emulated kernel adds its own real forwarding cost on top.
 """
 
 from __future__ import annotations
@@ -51,7 +79,8 @@ import numpy as np
 from pydantic import BaseModel, ConfigDict, Field
 from scipy.constants import c as SPEED_OF_LIGHT_M_S
 
-from .mcs import MCS_80211AG, McsTable, per
+from .frames import attempt_levels, attempt_reach
+from .mcs import MCS_80211AG, McsTable
 
 # IEEE 802.11-2020 Clause 17 OFDM PHY characteristics (20 MHz) and Clause 10 DCF timing.
 SLOT_US = 9.0
@@ -95,6 +124,9 @@ class LinkLayer(BaseModel):
     retry_limit: int = Field(6, ge=0)  # retransmissions; dot11ShortRetryLimit 7 = 7 attempts
     rate_model: Literal["dcf", "phy"] = "dcf"
     processing_delay_ms: float = Field(0.1, ge=0)
+    coding: Literal["bcc", "uncoded"] = "bcc"
+    implementation_loss_db: float = Field(5.0, ge=0)
+    fallback_after: int | None = Field(4, ge=1)  # attempts at the chosen level before the base rate
 
     @property
     def mpdu_bits(self) -> int:
@@ -111,6 +143,7 @@ class LinkParams:
     rate_mbps: np.ndarray
     delay_ms: np.ndarray
     loss: np.ndarray
+    mac_time_us: np.ndarray  # E[T]: expected channel time per packet, retries included
 
 
 def ppdu_airtime_us(payload_bits, n_dbps) -> np.ndarray:
@@ -142,32 +175,72 @@ def link_params(
     distance_m,
     table: McsTable = MCS_80211AG,
     link: LinkLayer = DEFAULT_LINK_LAYER,
+    k_db=None,
 ) -> LinkParams:
-    """Rate, delay and residual loss per link from its SNR and MCS (formulas: module docstring)."""
+    """Rate, delay and residual loss per link from its SNR and MCS (formulas: module docstring);
+    `k_db`: Rician K factor per link (None: no fading)."""
     mcs = np.asarray(mcs, dtype=np.int64)
-    return link_params_from_per(mpdu_per(snr_db, mcs, table, link), mcs, distance_m, table, link)
+    return link_params_from_reach(attempt_reach(snr_db, mcs, table, link, k_db), mcs, distance_m, table, link)
 
 
-def mpdu_per(snr_db, mcs, table: McsTable = MCS_80211AG, link: LinkLayer = DEFAULT_LINK_LAYER) -> np.ndarray:
-    """Per-attempt error rate of the MPDU: 1 - (1 - BER)^L with L = link.mpdu_bits."""
-    return per(table.ber(snr_db, mcs), link.mpdu_bits)
+def link_chain(
+    snr_db,
+    distance_m,
+    table: McsTable = MCS_80211AG,
+    link: LinkLayer = DEFAULT_LINK_LAYER,
+    k_db=None,
+    fixed_mcs: int | None = None,
+    selection: Literal["throughput", "threshold"] = "throughput",
+    margin_db: float = 3.0,
+) -> tuple[np.ndarray, np.ndarray, LinkParams]:
+    """(mcs, reach, LinkParams) per link: the MCS choice of the module docstring, then the link
+    layer at that MCS (`reach[:, 1]` is the first attempt's PER)."""
+    snr = np.atleast_1d(np.asarray(snr_db, dtype=float))
+    if fixed_mcs is not None or selection == "threshold":
+        mcs = np.full(snr.shape, fixed_mcs, dtype=np.int64) if fixed_mcs is not None else table.select(snr, margin_db)
+        reach = attempt_reach(snr, mcs, table, link, k_db)
+        return mcs, reach, link_params_from_reach(reach, mcs, distance_m, table, link)
+    best = None
+    for m in range(len(table)):
+        mcs = np.full(snr.shape, m, dtype=np.int64)
+        reach = attempt_reach(snr, mcs, table, link, k_db)
+        # Minstrel's success ratio of a rate: frames delivered at it / attempts made at it (its
+        # retries sit in the same fade, so an aggressive rate also pays for its failed retries).
+        n_at = link.retry_limit + 1 if link.fallback_after is None else min(link.fallback_after, link.retry_limit + 1)
+        ratio = (1.0 - reach[:, n_at]) / reach[:, :n_at].sum(axis=1)
+        tput = ratio / attempt_time_us(mcs, table, link, 0)
+        if best is None:
+            best = (tput, mcs, reach)
+            continue
+        better = tput > best[0]  # ties keep the more robust level
+        best = (np.where(better, tput, best[0]), np.where(better, mcs, best[1]), np.where(better[:, None], reach, best[2]))
+    mcs, reach = best[1], best[2]
+    return mcs, reach, link_params_from_reach(reach, mcs, distance_m, table, link)
 
 
 def link_params_from_per(
     per_, mcs, distance_m, table: McsTable = MCS_80211AG, link: LinkLayer = DEFAULT_LINK_LAYER
 ) -> LinkParams:
-    """`link_params` for an already computed per-attempt PER."""
-    p = np.asarray(per_, dtype=float)
-    mcs = np.asarray(mcs, dtype=np.int64)
-    expected_us = np.zeros(p.shape)
-    reach = np.ones(p.shape)  # probability that attempt k happens: p^k
+    """`link_params` for one given per-attempt PER used by every attempt (no fading, no fallback)."""
+    p = np.atleast_1d(np.asarray(per_, dtype=float))
+    reach = p[:, None] ** np.arange(link.retry_limit + 2)
+    return link_params_from_reach(reach, mcs, distance_m, table, link.model_copy(update={"fallback_after": None}))
+
+
+def link_params_from_reach(
+    reach, mcs, distance_m, table: McsTable = MCS_80211AG, link: LinkLayer = DEFAULT_LINK_LAYER
+) -> LinkParams:
+    """LinkParams from the attempt probabilities reach_k, k = 0..retry_limit + 1."""
+    r = np.asarray(reach, dtype=float)
+    levels = attempt_levels(np.broadcast_to(np.asarray(mcs, dtype=np.int64), r.shape[:1]), link)
+    expected_us = np.zeros(r.shape[0])
     for k in range(link.retry_limit + 1):
-        expected_us += reach * attempt_time_us(mcs, table, link, k)
-        reach = reach * p
-    loss = reach  # p^(R+1): every attempt failed
+        expected_us += r[:, k] * attempt_time_us(levels[:, k], table, link, k)
+    loss = np.clip(r[:, link.retry_limit + 1], 0.0, 1.0)  # every attempt failed
     if link.rate_model == "dcf":
         rate = 8.0 * link.packet_bytes / expected_us
     else:
-        rate = table.rate_mbps[mcs].astype(float)
-    delay = np.asarray(distance_m, dtype=float) / SPEED_OF_LIGHT_M_S * 1e3 + link.processing_delay_ms
-    return LinkParams(rate_mbps=rate, delay_ms=delay + expected_us / 1e3, loss=loss)
+        rate = table.rate_mbps[levels[:, 0]].astype(float)
+    delay = np.broadcast_to(np.asarray(distance_m, dtype=float) / SPEED_OF_LIGHT_M_S * 1e3 + link.processing_delay_ms,
+                            r.shape[:1]).astype(float)
+    return LinkParams(rate_mbps=rate, delay_ms=delay, loss=loss, mac_time_us=expected_us)

@@ -1,15 +1,16 @@
 """`Channel`: the whole per-window chain for a set of nodes, vectorised over links.
 
     positions -> LinkGeometry -> path loss (+ LOS state) -> + correlated shadowing -> SNR
-              -> MCS (adaptive or fixed) -> BER -> PER -> ARQ -> LinkParams
+              -> MCS (adaptive or fixed) -> coded PER averaged over Rician fading -> ARQ
+              -> LinkParams (single-link DCF rate; `airtime` shares it among contenders)
 
 The plan builds one `Channel` per run and calls `evaluate` once per window, in window order,
 with every node pair; each call advances the shadowing (and LOS-state) processes by the nodes'
 displacement since the previous call, so consecutive windows are correlated as Gudmundson's
 model says. Same seed, same node count and same sequence of calls give identical arrays.
 
-Geometry: antenna heights are the node positions' z (the plan puts a BS at z = its mast height,
-25 m by default, and UAVs at their altitude). For the 3GPP models h_UT is the UAV altitude and
+Geometry: antenna heights are the node positions' z (the plan puts a BS at z = its profile's
+mast height - 10 m, the AERPAW LW1 tower, in the calibrated profile - and UAVs at their altitude). For the 3GPP models h_UT is the UAV altitude and
 the BS height comes from its position; UAV-UAV links use each model's documented air-to-air
 rule (see `geometry`, `pathloss.LogDistance` and `tr36777`: the aerial end's altitude for
 log-distance, the LOS branch for TR 36.777).
@@ -21,20 +22,26 @@ model's LOS/NLOS-state correlation distance of TR 38.901 Table 7.6.3.1-2: 50 m f
 in AR(1) form: the marginal P(LOS) is exactly P_LOS, yet a link does not flip between LOS and
 NLOS (a 20+ dB jump) every window while its geometry barely changes. `sample_los=False` uses
 the LOS-probability-weighted mean loss instead (`los` is then None).
+
+Fading: with a `fading` K profile (`uavcas.channel.fading.KFactorProfile`) the window's loss,
+MAC time and rate are expectations over Rician fading with K(h) at the link's aerial end;
+fading=None keeps the SNR as it is (no small-scale fading).
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Literal
 
 import numpy as np
 from scipy.special import ndtr
 
-from .budget import LinkBudget, LinkLayer, link_params_from_per, mpdu_per
+from .budget import LinkBudget, LinkLayer, link_chain
+from .fading import KFactorProfile
 from .geometry import LinkGeometry
 from .mcs import DEFAULT_MARGIN_DB, MCS_80211AG, McsTable, parse_modulation
-from .pathloss import DEFAULT_FC_GHZ, AerialModel, PathLossModel, PathLossProfile, make_pathloss
+from .pathloss import AerialModel, PathLossModel, PathLossProfile, make_pathloss
 from .shadowing import DEFAULT_DECORRELATION_M, GudmundsonShadowing
 
 # SeedSequence([seed, stream]) streams; never renumber (it would change every plan).
@@ -57,10 +64,12 @@ class LinkArrays:
     shadow_db: np.ndarray
     snr_db: np.ndarray
     mcs: np.ndarray  # int
-    per: np.ndarray  # per-attempt frame error rate of the MPDU at that MCS
-    rate_mbps: np.ndarray
-    delay_ms: np.ndarray
+    per: np.ndarray  # first attempt's frame error rate at that MCS (fading-averaged)
+    rate_mbps: np.ndarray  # the link alone on the channel; `airtime` divides it among contenders
+    delay_ms: np.ndarray  # propagation + processing (the MAC time is in the rate)
     loss: np.ndarray  # residual after ARQ
+    mac_time_us: np.ndarray  # expected channel time per packet, retries included
+    k_db: np.ndarray | None  # Rician K used per link (None: no fading)
     los: np.ndarray | None  # bool, for models with a LOS state (3GPP), else None
 
     def __len__(self) -> int:
@@ -79,11 +88,14 @@ class Channel:
     seed: seeds the shadowing and LOS-state processes (independent streams).
     tx_power_dbm, noise_dbm, tx_gain_dbi, rx_gain_dbi: the link budget.
     modulation: "adaptive", a fixed level k or "mcsk".
-    margin_db: adaptive-MCS margin (paper: 3 dB).
+    margin_db: adaptive-MCS margin of the "threshold" selection (paper: 3 dB).
+    selection: adaptive MCS by expected goodput ("throughput", Minstrel's criterion) or by SNR
+        threshold + margin ("threshold", the paper's); see `budget.link_chain`.
     d_corr_m: shadowing decorrelation distance (paper: 50 m).
     los_corr_m: LOS-state correlation distance (3GPP models; default: the model's).
     sample_los: draw a LOS state (3GPP models) rather than use the LOS-weighted mean loss.
     link_layer: 802.11 DCF assumptions (`budget.LinkLayer`).
+    fading: Rician K(h) profile (None: no small-scale fading).
     """
 
     def __init__(
@@ -98,7 +110,7 @@ class Channel:
         noise_dbm: float = -95.0,
         modulation: str | int = "adaptive",
         d_corr_m: float = DEFAULT_DECORRELATION_M,
-        fc_ghz: float = DEFAULT_FC_GHZ,
+        fc_ghz: float | None = None,
         tx_gain_dbi: float = 0.0,
         rx_gain_dbi: float = 0.0,
         margin_db: float = DEFAULT_MARGIN_DB,
@@ -106,6 +118,8 @@ class Channel:
         los_corr_m: float | None = None,
         sample_los: bool = True,
         mcs_table: McsTable | None = None,
+        fading: KFactorProfile | None = None,
+        selection: Literal["throughput", "threshold"] = "throughput",
     ) -> None:
         if node_names is None and n_nodes is None:
             raise ValueError("give node_names or n_nodes")
@@ -122,6 +136,8 @@ class Channel:
         self.fixed_mcs = parse_modulation(modulation, len(self.table))
         self.margin_db = float(margin_db)
         self.link_layer = link_layer or LinkLayer()
+        self.fading = fading
+        self.selection = selection
         self.seed = int(seed)
         self._shadow = GudmundsonShadowing(
             self.n_nodes, d_corr_m, np.random.SeedSequence([self.seed, _SHADOW_STREAM])
@@ -159,12 +175,9 @@ class Channel:
         shadow = self._shadow(pos, pairs, res.sigma_db)
         total = res.loss_db + shadow
         snr = self.budget.snr_db(total)
-        if self.fixed_mcs is None:
-            mcs = self.table.select(snr, self.margin_db)
-        else:
-            mcs = np.full(len(pairs), self.fixed_mcs, dtype=np.int64)
-        per = mpdu_per(snr, mcs, self.table, self.link_layer)
-        lp = link_params_from_per(per, mcs, geom.d3d_m, self.table, self.link_layer)
+        k_db = None if self.fading is None else self.fading.at(geom.h_air_m)
+        mcs, reach, lp = link_chain(snr, geom.d3d_m, self.table, self.link_layer, k_db, self.fixed_mcs,
+                                    self.selection, self.margin_db)
         return LinkArrays(
             pairs=pairs,
             distance_m=geom.d3d_m,
@@ -173,9 +186,11 @@ class Channel:
             shadow_db=shadow,
             snr_db=snr,
             mcs=mcs,
-            per=per,
+            per=reach[:, 1],
             rate_mbps=lp.rate_mbps,
             delay_ms=lp.delay_ms,
             loss=lp.loss,
+            mac_time_us=lp.mac_time_us,
+            k_db=k_db,
             los=res.los,
         )

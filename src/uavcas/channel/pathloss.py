@@ -4,18 +4,28 @@ free space, and `make_pathloss` for the scenario string's names.
 Every model has ``evaluate(geom: LinkGeometry, los_uniform=None) -> PathLossResult`` (median loss
 in dB, the shadowing std to apply, and the LOS state where the model has one).
 
-Log-distance on an absolute scale
----------------------------------
-PL(d, h) = PL0(h) + 10 n(h) log10(d / d0),  d = 3-D distance, d0 = 1 m, X ~ N(0, sigma(h)^2)
-added by the shadowing process. n, PL0 and sigma are given at calibration altitudes and linearly
-interpolated in h, clamped to the end values outside (`np.interp`).
+Log-distance on an absolute scale, anchored to the carrier
+----------------------------------------------------------
+PL(d, h, fc) = PL0(h) + 20 log10(fc / fc_p) + 10 n(h) log10(d / d0),   d = 3-D distance, d0 = 1 m
+
+with X ~ N(0, sigma(h)^2) added by the shadowing process. n, PL0 and sigma are given at
+calibration altitudes and linearly interpolated in h, clamped to the end values outside
+(`np.interp`). PL0 is the loss at d0 at the profile's carrier fc_p; at another carrier fc the
+whole curve moves by Friis' 20 log10(fc / fc_p) (the loss at d0 is free space plus a
+frequency-independent excess, so the excess and the slope carry over). That carrier anchor is
+what lets one fitted profile serve another band (calibration checks it on the multi-band
+campaign, fitted at 3.51 GHz, scored at 3.3 GHz).
+
+Profiles. The twin's default is the *calibrated* profile shipped with uavcas (fitted by
+`uavcas calibrate` on the AERPAW Maeng et al. LTE flights; `uavcas.twin.profile`). This module
+holds the paper's numbers, the library fallback when no profile is given:
 
 The paper's table ``tab:pathloss_params`` (h = 30, 50, 70, 90, 110 m: n = 1.541, 1.593, 1.849,
 1.881, 1.860; PL0 = 15.23, 13.65, 4.01, 3.16, 3.37 dB; sigma = 3.70, 3.73, 4.08, 4.48, 4.46 dB)
 was fitted to RSRP on a *relative* scale: a PL0 of 3-15 dB at 1 m is 30-40 dB less than free
-space allows, which is why the authors' code saw SNR >= 41 dB on every link. The default profile
-(``paper-anchored``) keeps the fitted exponents and spreads and restores an absolute level with
-ONE constant offset for all altitudes:
+space allows, which is why the authors' code saw SNR >= 41 dB on every link. The
+``paper-anchored`` profile keeps the fitted exponents and spreads and restores an absolute
+level with ONE constant offset for all altitudes:
 
     PL0(h) = FSPL(d0 = 1 m, 3.51 GHz) + (PL0_paper(h) - min_h PL0_paper(h))
            = 43.35 dB + (PL0_paper(h) - 3.16 dB)     ->  55.42, 53.84, 44.20, 43.35, 43.56 dB
@@ -23,12 +33,10 @@ ONE constant offset for all altitudes:
 so the least-lossy calibration altitude (90 m) sits exactly at free space at d0 and no altitude
 is below it there. A common offset keeps what the fit did measure - the difference between
 altitudes, which it took from one receiver chain, so it is not affected by the unknown absolute
-calibration - whereas anchoring each altitude separately at 43.35 dB would discard it and, with
-n(h) rising from 1.54 to 1.86, would make 110 m some 9 dB lossier than 30 m at 500 m, the
-opposite of the data. With n < 2 the curves still fall below free space far from d0 (at 500 m
-h = 30 m gives 97.0 dB against 97.3 dB free space); that is the fitted slope, kept as fitted.
-Calibration (a later stage) can replace the profile with absolute fitted values; the raw paper
-numbers stay available as the ``paper-relative`` profile for parity with the authors' data.
+calibration - whereas anchoring each altitude separately at 43.35 dB would discard it. With
+n < 2 the curves fall below free space far from d0 (at 500 m h = 30 m gives 97.0 dB against
+97.3 dB free space); that is the fitted slope, kept as fitted. The raw paper numbers stay
+available as the ``paper-relative`` profile for parity with the authors' data.
 """
 
 from __future__ import annotations
@@ -97,7 +105,7 @@ PAPER_RELATIVE_PROFILE = PathLossProfile(
     altitude_m=_PAPER_ALT_M, n=_PAPER_N, pl0_db=_PAPER_PL0_DB, sigma_db=_PAPER_SIGMA_DB,
 )
 _FSPL_D0_DB = float(free_space_loss_db(1.0, DEFAULT_FC_GHZ))  # 43.35 dB
-DEFAULT_PROFILE = PathLossProfile(
+PAPER_ANCHORED_PROFILE = PathLossProfile(
     name="paper-anchored",
     source="tab:pathloss_params n and sigma; PL0 shifted by one constant so min PL0 = FSPL(1 m, 3.51 GHz)",
     altitude_m=_PAPER_ALT_M,
@@ -105,12 +113,14 @@ DEFAULT_PROFILE = PathLossProfile(
     pl0_db=tuple(round(_FSPL_D0_DB + p - min(_PAPER_PL0_DB), 4) for p in _PAPER_PL0_DB),
     sigma_db=_PAPER_SIGMA_DB,
 )
-PROFILES = {p.name: p for p in (DEFAULT_PROFILE, PAPER_RELATIVE_PROFILE)}
+PROFILES = {p.name: p for p in (PAPER_ANCHORED_PROFILE, PAPER_RELATIVE_PROFILE)}
 
 
 def get_profile(profile: PathLossProfile | str | None) -> PathLossProfile:
+    """A profile object, or one of this module's by name; None -> ``paper-anchored`` (the library
+    fallback - the twin passes its own profile, calibrated by default)."""
     if profile is None:
-        return DEFAULT_PROFILE
+        return PAPER_ANCHORED_PROFILE
     if isinstance(profile, PathLossProfile):
         return profile
     try:
@@ -122,15 +132,22 @@ def get_profile(profile: PathLossProfile | str | None) -> PathLossProfile:
 @dataclass(frozen=True)
 class LogDistance:
     """Altitude-dependent log-distance. The altitude used is the link's aerial end (the UAV for
-    UAV-BS links, as in the fit; the higher UAV for UAV-UAV links, one rule for both kinds)."""
+    UAV-BS links, as in the fit; the higher UAV for UAV-UAV links, one rule for both kinds).
+    `fc_ghz` (None: the profile's carrier) moves the curve by 20 log10(fc / profile.fc_ghz)."""
 
-    profile: PathLossProfile = DEFAULT_PROFILE
+    profile: PathLossProfile = PAPER_ANCHORED_PROFILE
+    fc_ghz: float | None = None
     name = "logdist"
+
+    @property
+    def carrier_shift_db(self) -> float:
+        fc = self.profile.fc_ghz if self.fc_ghz is None else self.fc_ghz
+        return float(20.0 * np.log10(fc / self.profile.fc_ghz))
 
     def loss_db(self, d3d_m, h_m) -> np.ndarray:
         n, pl0, _ = self.profile.at(h_m)
         d = np.maximum(np.asarray(d3d_m, dtype=float), self.profile.d0_m)
-        return pl0 + 10.0 * n * np.log10(d / self.profile.d0_m)
+        return pl0 + self.carrier_shift_db + 10.0 * n * np.log10(d / self.profile.d0_m)
 
     def sigma_db(self, h_m) -> np.ndarray:
         return self.profile.at(h_m)[2]
@@ -212,14 +229,16 @@ PATHLOSS_NAMES = PATHLOSS_MODELS  # the scenario vocabulary's names
 def make_pathloss(
     name: str,
     profile: PathLossProfile | str | None = None,
-    fc_ghz: float = DEFAULT_FC_GHZ,
+    fc_ghz: float | None = None,
     h_bs_m: float | None = None,
 ) -> PathLossModel:
     """Model for a scenario-string name: logdist, 3gpp (= UMa-AV), uma, rma, umi, tworay,
-    freespace. `profile` applies to logdist only (default ``paper-anchored``); `h_bs_m`
-    overrides the 3GPP models' default BS height (used only where no geometry gives one)."""
+    freespace, at carrier `fc_ghz` (None: 3.51 GHz, or the log-distance profile's own carrier).
+    `profile` applies to logdist only (default ``paper-anchored``); `h_bs_m` overrides the
+    3GPP models' default BS height (used only where no geometry gives one)."""
     if name == "logdist":
-        return LogDistance(get_profile(profile))
+        return LogDistance(get_profile(profile), fc_ghz)
+    fc_ghz = DEFAULT_FC_GHZ if fc_ghz is None else fc_ghz
     if name in ("3gpp", "uma", "rma", "umi"):
         cls = {"3gpp": UMaAV, "uma": UMaAV, "rma": RMaAV, "umi": UMiAV}[name]
         return cls(fc_ghz=fc_ghz) if h_bs_m is None else cls(fc_ghz=fc_ghz, h_bs_m=h_bs_m)
@@ -231,7 +250,7 @@ def make_pathloss(
 
 
 __all__ = [
-    "DEFAULT_PROFILE", "PAPER_RELATIVE_PROFILE", "PATHLOSS_NAMES", "PROFILES", "AerialModel",
+    "PAPER_ANCHORED_PROFILE", "PAPER_RELATIVE_PROFILE", "PATHLOSS_NAMES", "PROFILES", "AerialModel",
     "FreeSpace", "LinkGeometry", "LogDistance", "PathLossModel", "PathLossProfile",
     "PathLossResult", "RMaAV", "TwoRay", "UMaAV", "UMiAV", "free_space_loss_db", "get_profile",
     "make_pathloss",

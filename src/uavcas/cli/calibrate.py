@@ -16,7 +16,7 @@ def calibrate_cmd(
     layer: str = typer.Argument(..., help="pathloss | mobility | link | fidelity | all"),
     data: Path = typer.Option(..., "--data", help="Folder with the AERPAW data (shared layout or the original downloads)."),
     out: Path = typer.Option(..., "--out", help="Output folder for JSON, markdown and figures."),
-    write_profile: str = typer.Option(None, "--write-profile", help="Save the fitted twin profile under this name."),
+    write_profile: str = typer.Option(None, "--write-profile", help="Save the fitted twin profile (with provenance) under this name, or to a path ending in .json."),
     seed: int = typer.Option(0, "--seed", min=0, help="Seed of the splits and simulations."),
     missions: str = typer.Option(None, "--missions", help="AFAR team -> mission, e.g. '301=spiral,328=grid' (default: the paper's)."),
 ) -> None:

@@ -3,7 +3,8 @@
     DATASET_DIR/shards/<run_id>.parquet   one run (re-extracting the run replaces it)
     DATASET_DIR/flows.parquet             union of all shards, rewritten after every extract
     DATASET_DIR/dataset.json              schema version, views, label modes and rules, class
-                                          counts, packet effect counts, seeds, runs, versions
+                                          counts, packet effect counts, seeds, twin profiles
+                                          (name + SHA-256), runs, library versions
 
 Extraction itself is `uavcas.extract`. A run is identified by run.json's `run_id` when present,
 else by the run directory's name; one shard per run id, so a run appears once whatever view or labels it was last extracted with.
@@ -95,6 +96,9 @@ def rebuild(out_dir: Path) -> dict:
         "label_rules": sorted({r["label_rule"] for r in runs if r.get("label_rule")}),
         "effect_counts": _effect_counts(runs),
         "seeds": sorted({int(r["seed"]) for r in runs if "seed" in r}),
+        # Twin profiles the runs were planned with: name -> the SHA-256s of their JSON.
+        "profiles": {name: sorted({r.get("profile_sha256") for r in runs if r.get("profile") == name} - {None})
+                     for name in sorted({r["profile"] for r in runs if r.get("profile")})},
         "runs": runs,
         "versions": package_versions("numpy", "pandas", "pyarrow"),
     }

@@ -259,5 +259,6 @@ def _write_outputs(st: _State) -> None:
         http_clients=st.clients, delay_daemon=st.delay_stats,
         attack_errors=ex.errors if ex else [],
         wind_down_errors=st.wind_down_errors,
+        profile=st.plan.profile, profile_sha256=st.plan.profile_sha256,
     )
     atomic_write_text(rd.run_json, st.info.to_json())

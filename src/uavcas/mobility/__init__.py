@@ -1,4 +1,5 @@
-"""UAV mobility: spiral, grid (boustrophedon), hover-transit, Gauss–Markov 3-D, trace replay.
+"""UAV mobility: rectangular spiral, grid (boustrophedon), hover-transit - flown leg by leg
+(`legs`: per-leg speeds, acceleration, altitude) - Gauss–Markov 3-D, trace replay.
 
 One protocol (`Mission.positions(t_s)`), bounded to an `Area`, seeded per UAV; the same
 generators and parameter models are used by calibration to fit (see `fit.py`, `kinematics.py`).
@@ -7,7 +8,7 @@ generators and parameter models are used by calibration to fit (see `fit.py`, `k
 from uavcas.mobility.area import Area
 from uavcas.mobility.base import Mission, MissionBase
 from uavcas.mobility.factory import make_mission, mission_seed
-from uavcas.mobility.fit import GaussMarkovFit, fit_gauss_markov, resample_uniform, velocities_from_positions
+from uavcas.mobility.fit import GaussMarkovFit, Legs, fit_gauss_markov, resample_uniform, split_legs, velocities_from_positions
 from uavcas.mobility.gauss_markov import (
     GaussMarkovMission,
     alpha_at_step,
@@ -36,6 +37,8 @@ __all__ = [
     "make_mission",
     "mission_seed",
     "GaussMarkovFit",
+    "Legs",
+    "split_legs",
     "fit_gauss_markov",
     "resample_uniform",
     "velocities_from_positions",

@@ -117,3 +117,49 @@ def resample_uniform(t_s: np.ndarray, positions_m: np.ndarray, step_s: float) ->
 def velocities_from_positions(positions_m: np.ndarray, step_s: float) -> np.ndarray:
     """Forward-difference velocities (T-1, ..., 3) of a uniformly sampled track."""
     return np.diff(np.asarray(positions_m, dtype=float), axis=0) / step_s
+
+
+@dataclass(frozen=True)
+class Legs:
+    """Straight legs of a flown track (`split_legs`), one entry per leg."""
+
+    length_m: np.ndarray
+    duration_s: np.ndarray
+    peak_speed_mps: np.ndarray  # 90th percentile of the leg's sampled ground speeds
+    altitude_m: np.ndarray  # median altitude flown on the leg
+
+
+def _douglas_peucker(p: np.ndarray, tol_m: float) -> np.ndarray:
+    """Indices of the vertices kept by Douglas-Peucker simplification of a 2-D polyline."""
+    keep = np.zeros(len(p), dtype=bool)
+    keep[[0, -1]] = True
+    stack = [(0, len(p) - 1)]
+    while stack:
+        a, b = stack.pop()
+        if b <= a + 1:
+            continue
+        seg = p[b] - p[a]
+        rel = p[a + 1 : b] - p[a]
+        norm = float(np.hypot(*seg))
+        d = np.abs(seg[0] * rel[:, 1] - seg[1] * rel[:, 0]) / norm if norm > 0 else np.hypot(rel[:, 0], rel[:, 1])
+        k = int(np.argmax(d))
+        if d[k] > tol_m:
+            keep[a + 1 + k] = True
+            stack += [(a, a + 1 + k), (a + 1 + k, b)]
+    return np.flatnonzero(keep)
+
+
+def split_legs(positions_m: np.ndarray, t_s: np.ndarray, tol_m: float = 4.0) -> Legs:
+    """Cut a uniformly sampled track (T, 3) into straight legs: the vertices of its Douglas-Peucker
+    simplification with tolerance `tol_m` (GPS noise and the turns' rounding stay inside)."""
+    x = np.asarray(positions_m, dtype=float)
+    t = np.asarray(t_s, dtype=float)
+    idx = _douglas_peucker(x[:, :2], tol_m)
+    speed = np.hypot(*np.diff(x[:, :2], axis=0).T) / np.diff(t)
+    a, b = idx[:-1], idx[1:]
+    return Legs(
+        length_m=np.hypot(*(x[b, :2] - x[a, :2]).T),
+        duration_s=t[b] - t[a],
+        peak_speed_mps=np.array([np.percentile(speed[i:j], 90) for i, j in zip(a, b)]),
+        altitude_m=np.array([np.median(x[i : j + 1, 2]) for i, j in zip(a, b)]),
+    )

@@ -14,6 +14,11 @@ velocity *and* mean velocity change sign (the UAV's preferred direction turns aw
 wall). Sign flips keep |v| and |vbar| per axis, so the stationary speed law — and therefore the
 configured mean speed — is unchanged by the walls (tested against the configured value).
 
+Speed limit (`max_speed_mps`, optional): the position advances with the state velocity scaled
+down to the limit where its horizontal speed exceeds it - an autopilot's speed cap; the state
+walk is unchanged, so its statistics below the cap are the model's, and the mean speed is then
+the capped one (lower than `mean_speed_mps`).
+
 Simulation runs vectorised over UAVs on a fixed internal grid (`sim_step_s`), extended lazily in
 fixed-size chunks so results never depend on query order; positions in between are linearly
 interpolated (the box is convex, so they stay inside).
@@ -65,6 +70,15 @@ def horizontal_mean_velocity(mean_speed_mps: float, sigma_mps: float) -> tuple[f
     return float(nu), float(sigma_mps)
 
 
+def _capped(v: np.ndarray, vmax: float) -> np.ndarray:
+    """Velocities (n, 3) with the horizontal part scaled down to speed vmax where faster."""
+    h = np.hypot(v[:, 0], v[:, 1])
+    scale = np.where(h > vmax, vmax / np.maximum(h, 1e-300), 1.0)
+    out = v.copy()
+    out[:, :2] *= scale[:, None]
+    return out
+
+
 class GaussMarkovMission(MissionBase):
     kind = "random"
 
@@ -75,6 +89,7 @@ class GaussMarkovMission(MissionBase):
         self.params = p = params or GaussMarkovParams()
         self.area = area or Area()
         self.dt_s = p.sim_step_s
+        self.max_speed_mps = p.max_speed_mps
         self.alpha_dt = alpha_at_step(p.alpha, p.step_s, self.dt_s)
         sigma = float(np.sqrt(p.sigma2_mps2))
         self.nu_mps, sigma_h = horizontal_mean_velocity(p.mean_speed_mps, sigma)
@@ -113,8 +128,9 @@ class GaussMarkovMission(MissionBase):
             for k in range(_CHUNK_STEPS):
                 if not (first and k == 0):  # the first step flies the stationary initial v0
                     v = a * v + (1.0 - a) * mu + self._noise_sd * w[k]
-                vs[k] = v
-                x, flip = reflect_into(x + v * dt, lo, hi)
+                fly = v if self.max_speed_mps is None else _capped(v, self.max_speed_mps)
+                vs[k] = fly
+                x, flip = reflect_into(x + fly * dt, lo, hi)
                 if flip.any():
                     sign = np.where(flip, -1.0, 1.0)
                     v = v * sign
@@ -136,9 +152,8 @@ class GaussMarkovMission(MissionBase):
         return (1.0 - frac) * self._X[k] + frac * self._X[k + 1]
 
     def velocities(self, t_s: float | np.ndarray) -> np.ndarray:
-        """Velocity state (m/s) in force at t (the step containing t); same shapes as positions.
-
-        On a step where the UAV hit a wall this is the pre-reflection velocity."""
+        """Velocity flown (m/s) at t (the step containing t, speed limit applied); same shapes as
+        positions. On a step where the UAV hit a wall this is the pre-reflection velocity."""
         t = np.asarray(t_s, dtype=float)
         if not np.all(np.isfinite(t)) or np.any(t < 0):
             raise ValueError("t_s must be finite and >= 0")

@@ -1,9 +1,10 @@
-"""Boustrophedon (lawn-mower) coverage of a bounding box at fixed altitude and constant speed.
+"""Boustrophedon (lawn-mower) coverage of a bounding box at fixed altitude, flown leg by leg.
 
 Lanes run parallel to one side of the box, `lane_spacing_m` apart, joined at alternate ends;
-the UAV flies the sweep at `speed_mps` and then flies it back in reverse (ping-pong), so its
-speed never changes and it never leaves the box. Either every UAV sweeps its own box around a
-seeded anchor, or all share `box_m` with stratified phases along the sweep so they spread out.
+the UAV flies the sweep and then flies it back in reverse, for ever, so it never leaves the
+box. Speeds, accelerations and altitude per leg: `uavcas.mobility.legs` (the paper's constant
+speed is speed_cv 0 without an acceleration limit). Either every UAV sweeps its own box around
+a seeded anchor, or all share `box_m` with stratified starting points so they spread out.
 """
 
 from __future__ import annotations
@@ -11,9 +12,9 @@ from __future__ import annotations
 import numpy as np
 
 from uavcas.mobility.area import Area
-from uavcas.mobility.base import MissionBase, SeedLike, anchor_box, as_seed_sequence, ping_pong, seeded_anchors
+from uavcas.mobility.base import MissionBase, SeedLike, anchor_box, as_seed_sequence, seeded_anchors
+from uavcas.mobility.legs import LegFlight, back_and_forth
 from uavcas.mobility.params import GridParams
-from uavcas.mobility.path import Polyline
 
 
 def boustrophedon(x0: float, y0: float, x1: float, y1: float, spacing_m: float, along_x: bool = True) -> np.ndarray:
@@ -39,7 +40,7 @@ class GridMission(MissionBase):
         self.params = p = params or GridParams()
         self.area = area or Area()
         self.altitude_m = self.area.clamp_altitude(p.altitude_m)
-        anchors_ss, phase_ss = as_seed_sequence(seed).spawn(2)
+        anchors_ss, phase_ss, *uav_ss = as_seed_sequence(seed).spawn(2 + self.n_uav)
         rng = np.random.default_rng(phase_ss)
         along_x = rng.random(self.n_uav) < 0.5  # lane orientation per UAV, for variety
         size = np.array([self.area.x_max_m, self.area.y_max_m])
@@ -56,17 +57,18 @@ class GridMission(MissionBase):
             centres = seeded_anchors(np.random.default_rng(anchors_ss), self.n_uav, alo, ahi, p.min_separation_m)
             boxes = np.concatenate([np.maximum(centres - half, 0.0), np.minimum(centres + half, size)], axis=1)
         self.boxes_m = boxes
-        self.paths = [Polyline(boustrophedon(*boxes[i], p.lane_spacing_m, bool(along_x[i]))) for i in range(self.n_uav)]
-        lengths = np.array([pl.length_m for pl in self.paths])
-        # Stratified phases over the out-and-back period: with a shared box, UAV i starts in the
-        # i-th of n equal slices of the sweep (random order, random offset inside the slice).
+        self.paths = [boustrophedon(*boxes[i], p.lane_spacing_m, bool(along_x[i])) for i in range(self.n_uav)]
+        # Stratified starts over the out-and-back: with a shared box, UAV i starts in the i-th of
+        # n equal slices of the sweep's vertices (random order).
         order = rng.permutation(self.n_uav)
-        self.s0_m = (order + rng.random(self.n_uav)) / self.n_uav * 2.0 * lengths
+        self.flights = []
+        for i, path in enumerate(self.paths):
+            n_cycle = max(2 * len(path) - 2, 1)
+            start = int((order[i] + rng.random()) / self.n_uav * n_cycle) % n_cycle
+            self.flights.append(LegFlight(
+                back_and_forth(path, start), np.random.default_rng(uav_ss[i]), speed_mps=p.speed_mps,
+                speed_cv=p.speed_cv, accel_mps2=p.accel_mps2, altitude_m=self.altitude_m,
+                altitude_sd_m=p.altitude_sd_m, altitude_band=(self.area.z_min_m, self.area.z_max_m)))
 
     def _positions(self, t: np.ndarray) -> np.ndarray:
-        out = np.empty((t.size, self.n_uav, 3))
-        for i, pl in enumerate(self.paths):
-            s = ping_pong(self.s0_m[i] + self.params.speed_mps * t, pl.length_m)
-            out[:, i, :2] = pl.at(s)
-        out[..., 2] = self.altitude_m
-        return out
+        return np.stack([f.positions(t) for f in self.flights], axis=1)

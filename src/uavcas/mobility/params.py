@@ -1,8 +1,9 @@
 """Mission parameters as JSON-serialisable pydantic models, and the `MobilityProfile`.
 
 Defaults are the paper's table `tab:mobility_params` (fitted on AFAR/AADM flights); the
-geometric parameters the table does not give (spiral r0/pitch, grid box/lanes, hover time,
-Gauss–Markov reference step and vertical mean) are our documented choices, which calibration
+geometric parameters the table does not give (spiral footprint/rings, grid box/lanes, hover
+time, Gauss–Markov reference step and vertical mean) are our documented choices, and the
+paper's constant speeds are kept as constant (speed_cv 0, no acceleration limit), which calibration
 (layer 2) may overwrite by writing a profile. Fitted altitudes are kept as fitted; the clamp to
 the area's altitude band happens when a mission is built (see `Area.clamp_altitude`), so a
 profile records what the data said and the twin records what it flew.
@@ -26,29 +27,35 @@ class _Params(BaseModel):
     min_separation_m: float = Field(25.0, ge=0)
 
 
-class SpiralParams(_Params):
-    """Archimedean spiral r = r0 + pitch * theta / (2 pi) at fixed altitude, constant ground speed.
+class _LegParams(_Params):
+    """Leg-by-leg flight (`uavcas.mobility.legs`): per-leg cruise speeds drawn around
+    `speed_mps` with coefficient of variation `speed_cv`, acceleration limit `accel_mps2`
+    (None: instant speed changes, i.e. constant speed on every leg), per-leg altitude spread
+    `altitude_sd_m` around `altitude_m`."""
 
-    The UAV flies outward from r0 to r_max and back (ping-pong along the arc), so the ground speed
-    is `speed_mps` everywhere and the footprint stays a disc of radius r_max around its centre.
-    """
+    speed_mps: float = Field(5.0, ge=0)
+    speed_cv: float = Field(0.0, ge=0)
+    accel_mps2: Optional[float] = Field(None, gt=0)
+    altitude_m: float = 30.0
+    altitude_sd_m: float = Field(0.0, ge=0)
+
+
+class SpiralParams(_LegParams):
+    """Rectangular spiral at fixed altitude: expanding axis-aligned legs from the centre out to a
+    `width_m` x `height_m` footprint, then back in (the AFAR "spiral" search pattern: 74-92 %
+    of its moving steps are axis-aligned). Leg lengths grow by one ring unit every two legs
+    (unit = width / 2R along x, height / 2R along y, R = rings of `ring_spacing_m`)."""
 
     kind: Literal["spiral"] = "spiral"
-    r0_m: float = Field(10.0, ge=0)
-    pitch_m: float = Field(40.0, gt=0)  # inter-loop spacing
-    r_max_m: float = Field(150.0, gt=0)  # clamped so the disc fits the area
+    width_m: float = Field(300.0, gt=0)  # AFAR spiral footprint (about 300 x 215 m)
+    height_m: float = Field(215.0, gt=0)
+    ring_spacing_m: float = Field(40.0, gt=0)
     speed_mps: float = Field(0.570, ge=0)  # paper table
     altitude_m: float = 25.96  # paper table (fitted); clamped to the band -> 30 m
 
-    @model_validator(mode="after")
-    def _check_radii(self) -> "SpiralParams":
-        if self.r_max_m <= self.r0_m:
-            raise ValueError(f"spiral r_max_m={self.r_max_m} must exceed r0_m={self.r0_m}")
-        return self
 
-
-class GridParams(_Params):
-    """Boustrophedon (lawn-mower) sweep of a bounding box at fixed altitude, constant speed.
+class GridParams(_LegParams):
+    """Boustrophedon (lawn-mower) sweep of a bounding box at fixed altitude, leg by leg.
 
     `box_m` = (x0, y0, x1, y1) fixes one box shared by all UAVs (spread along the sweep by phase);
     when None each UAV sweeps its own box of `box_width_m` x `box_height_m` around its anchor.
@@ -71,8 +78,8 @@ class GridParams(_Params):
         return self
 
 
-class HoverTransitParams(_Params):
-    """Closed tour of waypoints: hover `hover_s` at each, fly straight legs at `speed_mps`.
+class HoverTransitParams(_LegParams):
+    """Closed tour of waypoints: hover `hover_s` at each, fly straight legs in between.
 
     Waypoints are seeded within `leg_radius_m` of the UAV's anchor, or all UAVs share
     `waypoints_m` (x, y) when given. The paper fitted 37.53 m and forces 50 m to keep hovering
@@ -127,6 +134,10 @@ class GaussMarkovParams(_Params):
     sigma2_z_mps2: Optional[float] = Field(None, ge=0)
     # Internal simulation step; positions are linearly interpolated in between.
     sim_step_s: float = Field(0.5, gt=0)
+    # Speed limit of the autopilot: the UAV flies the state velocity scaled down to this
+    # horizontal speed when it is faster (the state itself evolves unsaturated). None: no limit
+    # (the paper's walk). The AFAR "random" flights cruise against a ~5 m/s limit.
+    max_speed_mps: Optional[float] = Field(None, gt=0)
 
 
 MissionParams = SpiralParams | GridParams | HoverTransitParams | GaussMarkovParams

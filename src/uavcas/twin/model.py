@@ -128,6 +128,7 @@ class Plan(_Frozen):
     seed: int
     window_s: float
     profile: str  # channel/mobility profile name the plan was made with
+    profile_sha256: str | None = None  # SHA-256 of the profile's JSON (None: plans made before it was recorded)
     area_m: tuple[float, float, float, float]  # x_max, y_max, z_min, z_max
     nodes: list[Node]
     windows: list[Window]

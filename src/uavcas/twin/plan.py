@@ -9,6 +9,11 @@ its rate, delay and loss (evaluated for every pair each window, active or not, s
 shadowing evolves with the geometry rather than with the routing); the routing rule
 (`topology.routing`) picks the active links among the usable ones, plus the detours of
 traffic-detouring attacks while one is scheduled, and marks UAVs that reach no BS disconnected.
+The active air links then share the channel's airtime with the links in their carrier-sense
+range (`uavcas.channel.airtime`): a link's rate is its share of the DCF capacity.
+
+The profile (default: the calibrated one shipped with uavcas) is recorded in the plan by name
+and by the SHA-256 of its JSON.
 """
 
 from __future__ import annotations
@@ -16,13 +21,13 @@ from __future__ import annotations
 import numpy as np
 
 from uavcas.attacks import family
-from uavcas.channel import Channel
+from uavcas.channel import Channel, hears_matrix, shared_rate_mbps
 from uavcas.mobility import Area, make_mission
 from uavcas.scenario import Scenario
 from uavcas.topology.routing import Topology, nearest_neighbour_topology, route, with_wormholes
 
 from .model import Attack, Link, Node, Plan, Route, Window, WormholeOverride
-from .profile import DEFAULT_PROFILE, TwinProfile, load_profile
+from .profile import TwinProfile, load_profile, profile_sha256
 from .schedule import schedule_attacks
 
 # Stream ids for SeedSequence([seed, stream]); never renumber (it would change every plan).
@@ -80,8 +85,7 @@ def plan(
         raise ValueError(f"windows must be >= 1, got {windows}")
     if not window_s > 0:
         raise ValueError(f"window_s must be > 0, got {window_s}")
-    prof = load_profile(profile) if not isinstance(profile, TwinProfile) else profile
-    prof = prof or DEFAULT_PROFILE
+    prof = profile if isinstance(profile, TwinProfile) else load_profile(profile)
     area = prof.area
     nodes = _nodes(scenario)
     n_uav, n = scenario.n_uav, len(nodes)
@@ -138,7 +142,8 @@ def plan(
         triples = [(names.index(v), names.index(a.attackers[0]), bs_of[names.index(v)])
                    for a in detours for v in a.victims]
         topo = with_wormholes(base, pos, is_bs, triples, losses[w]) if triples else base
-        links = [_link(names, topo, e, arrs[w], pair_index[e], prof) for e in topo.edges]
+        shared = _shared_rates(topo, arrs[w], pair_index, n, scenario.tx_dbm, prof)
+        links = [_link(names, topo, e, arrs[w], pair_index[e], prof, shared.get(e)) for e in topo.edges]
         out_windows.append(
             Window(
                 index=w,
@@ -160,6 +165,7 @@ def plan(
         seed=seed,
         window_s=float(window_s),
         profile=prof.name,
+        profile_sha256=profile_sha256(prof),
         area_m=(area.x_max_m, area.y_max_m, area.z_min_m, area.z_max_m),
         nodes=nodes,
         windows=out_windows,
@@ -180,7 +186,21 @@ def _loss_matrix(n: int, pairs: np.ndarray, loss: np.ndarray) -> np.ndarray:
     return m
 
 
-def _link(names, topo: Topology, edge, arr, k: int, prof: TwinProfile) -> Link:
+def _shared_rates(topo: Topology, arr, pair_index, n: int, tx_dbm: float, prof: TwinProfile) -> dict:
+    """Air link -> its share of the DCF airtime among the active air links it contends with."""
+    air = [e for e, why in zip(topo.edges, topo.reasons) if why != "backhaul"]
+    if not air:
+        return {}
+    idx = np.array([pair_index[e] for e in air])
+    c = prof.channel
+    hears = hears_matrix(n, arr.pairs, arr.pathloss_db, float(tx_dbm), c.tx_gain_dbi + c.rx_gain_dbi, c.cca_dbm)
+    rates = shared_rate_mbps(arr.pairs[idx], arr.mac_time_us[idx], hears, c.link_layer.packet_bytes)
+    if c.link_layer.rate_model != "dcf":  # the paper's PHY-rate mode keeps its raw rates
+        return {}
+    return dict(zip(air, rates))
+
+
+def _link(names, topo: Topology, edge, arr, k: int, prof: TwinProfile, shared_rate: float | None) -> Link:
     i, j = edge
     reason = topo.reasons[topo.edges.index(edge)]
     if reason == "backhaul":
@@ -198,7 +218,7 @@ def _link(names, topo: Topology, edge, arr, k: int, prof: TwinProfile) -> Link:
         pathloss_db=_round(arr.pathloss_db[k], 3),
         snr_db=_round(arr.snr_db[k], 3),
         mcs=int(arr.mcs[k]),
-        rate_mbps=_round(arr.rate_mbps[k], 4),
+        rate_mbps=_round(arr.rate_mbps[k] if shared_rate is None else shared_rate, 4),
         delay_ms=_round(arr.delay_ms[k], 4),
         loss=_loss(arr.loss[k]),
         los=los,

@@ -1,0 +1,138 @@
+"""`uavcas channel predict`: the twin's path-loss models and link chain on a user's geometry.
+
+    uavcas channel predict --model M [--profile P] --in GEOM.csv --out OUT.csv [--tx-dbm T]
+
+GEOM.csv has one row per link (or flight-log sample) with columns d3d_m, d2d_m, h_uav_m,
+h_bs_m (metres) and optionally fc_ghz (default: the profile's carrier); any other column is
+passed through. OUT.csv is GEOM.csv plus:
+
+* pathloss_db - the model's mean loss: no shadowing, no fading; for the 3GPP models the
+  LOS-probability-weighted mean P PL_LOS + (1 - P) PL_NLOS (TR 36.777); log-distance with the
+  profile's n(h), PL0 and carrier anchor; two-ray with its ground; free space.
+* snr_db = tx_dbm + antenna gains (profile) - pathloss_db - noise_dbm.
+* mcs, rate_mbps, loss - the link chain of the plan for one link alone on the channel
+  (`uavcas.channel.budget.link_chain`: coded PER, Rician fading with the profile's K(h) at
+  h_uav_m averaged over a window, retry chain, the profile's MCS selection). rate_mbps is the
+  single-link DCF rate; in a plan, links in carrier-sense range share it (`channel.airtime`).
+"""
+
+from __future__ import annotations
+
+import io
+import stat
+from pathlib import Path
+
+import typer
+
+from .common import atomic_write_text, console, fail
+
+REQUIRED = ("d3d_m", "d2d_m", "h_uav_m", "h_bs_m")
+OUTPUT = ("pathloss_db", "snr_db", "mcs", "rate_mbps", "loss")
+
+app = typer.Typer(help="The twin's channel on your own geometry.", no_args_is_help=True)
+
+
+def _check_out(out: Path) -> None:
+    """Refuse an output that is not a regular file we may replace (symlink, FIFO, device, dir)."""
+    try:
+        st = out.lstat()
+    except FileNotFoundError:
+        return
+    if stat.S_ISLNK(st.st_mode) or not stat.S_ISREG(st.st_mode):
+        raise fail(f"--out {out}: exists and is not a regular file (symlink, FIFO, device or folder); not replacing it")
+
+
+def _read_geometry(path: Path):
+    import numpy as np
+    import pandas as pd
+
+    if not path.is_file():
+        raise fail(f"--in {path}: no such file")
+    try:
+        df = pd.read_csv(path)
+    except Exception as e:  # pandas raises several types on garbage
+        raise fail(f"--in {path}: not a readable CSV ({str(e).splitlines()[0] if str(e) else type(e).__name__})") from None
+    missing = [c for c in REQUIRED if c not in df.columns]
+    if missing:
+        raise fail(f"--in {path}: missing column(s) {', '.join(missing)} (need {', '.join(REQUIRED)}; fc_ghz optional)")
+    if df.empty:
+        raise fail(f"--in {path}: no rows")
+    clash = [c for c in OUTPUT if c in df.columns]
+    if clash:
+        raise fail(f"--in {path}: already has output column(s) {', '.join(clash)}")
+    for c in REQUIRED + (("fc_ghz",) if "fc_ghz" in df.columns else ()):
+        v = pd.to_numeric(df[c], errors="coerce")
+        bad = ~np.isfinite(v.to_numpy(dtype=float))
+        if bad.any():
+            raise fail(f"--in {path}: column {c} row {int(np.flatnonzero(bad)[0]) + 1}: not a finite number ({df[c].iloc[int(np.flatnonzero(bad)[0])]!r})")
+        df[c] = v.astype(float)
+    for c in ("d3d_m", "d2d_m", "h_uav_m", "h_bs_m"):
+        neg = df[c] < 0
+        if neg.any():
+            raise fail(f"--in {path}: column {c} row {int(neg.idxmax()) + 1}: negative ({df[c][neg.idxmax()]})")
+    if "fc_ghz" in df.columns and (df["fc_ghz"] <= 0).any():
+        raise fail(f"--in {path}: column fc_ghz row {int((df['fc_ghz'] <= 0).idxmax()) + 1}: must be > 0")
+    short = df["d3d_m"] < df["d2d_m"] - 1e-6
+    if short.any():
+        raise fail(f"--in {path}: row {int(short.idxmax()) + 1}: d3d_m is shorter than d2d_m")
+    return df
+
+
+def predict_frame(df, model_name: str, profile, tx_dbm: float, noise_dbm: float):
+    """The output columns for a validated geometry frame (see module docstring)."""
+    import numpy as np
+
+    from uavcas.channel import LinkGeometry, make_pathloss
+    from uavcas.channel.budget import LinkBudget, link_chain
+    from uavcas.channel.mcs import MCS_80211AG
+
+    c = profile.channel
+    fc = df["fc_ghz"].to_numpy(float) if "fc_ghz" in df.columns else np.full(len(df), c.fc_ghz)
+    geom_all = LinkGeometry(d3d_m=df["d3d_m"].to_numpy(float), d2d_m=df["d2d_m"].to_numpy(float),
+                            h_ground_m=df["h_bs_m"].to_numpy(float), h_air_m=df["h_uav_m"].to_numpy(float),
+                            air_to_air=np.zeros(len(df), dtype=bool))
+    loss = np.empty(len(df))
+    for f in np.unique(fc):
+        rows = fc == f
+        geom = LinkGeometry(*(getattr(geom_all, k)[rows] for k in ("d3d_m", "d2d_m", "h_ground_m", "h_air_m", "air_to_air")))
+        loss[rows] = make_pathloss(model_name, profile.pathloss, float(f)).evaluate(geom, None).loss_db
+    budget = LinkBudget(tx_power_dbm=tx_dbm, tx_gain_dbi=c.tx_gain_dbi, rx_gain_dbi=c.rx_gain_dbi, noise_dbm=noise_dbm)
+    snr = budget.snr_db(loss)
+    k_db = None if c.fading is None else c.fading.at(geom_all.h_air_m)
+    mcs, _, lp = link_chain(snr, geom_all.d3d_m, MCS_80211AG, c.link_layer, k_db, None, c.selection, c.margin_db)
+    out = df.copy()
+    out["pathloss_db"], out["snr_db"], out["mcs"] = loss, snr, mcs
+    out["rate_mbps"], out["loss"] = lp.rate_mbps, lp.loss
+    return out
+
+
+@app.command("predict")
+def predict_cmd(
+    model: str = typer.Option(..., "--model", help="logdist | 3gpp | uma | rma | umi | tworay | freespace"),
+    geom: Path = typer.Option(..., "--in", help="CSV with d3d_m, d2d_m, h_uav_m, h_bs_m (fc_ghz optional)."),
+    out: Path = typer.Option(..., "--out", help="Output CSV: the input plus pathloss_db, snr_db, mcs, rate_mbps, loss."),
+    profile: str = typer.Option(None, "--profile", help="Twin profile (default: the calibrated one; 'paper'; a name or JSON path)."),
+    tx_dbm: float = typer.Option(20.0, "--tx-dbm", help="Transmit power (dBm)."),
+    noise_dbm: float = typer.Option(-95.0, "--noise-dbm", help="Noise floor (dBm)."),
+) -> None:
+    """Evaluate a path-loss model and the link chain on your own geometry."""
+    from uavcas.twin.profile import ProfileError, load_profile
+    from uavcas.vocabulary import PATHLOSS_MODELS
+
+    if model not in PATHLOSS_MODELS:
+        raise fail(f"--model {model!r}: expected one of {', '.join(PATHLOSS_MODELS)}")
+    _check_out(out)
+    try:
+        prof = load_profile(profile)
+    except ProfileError as e:
+        raise fail(f"--profile: {e}") from None
+    df = _read_geometry(geom)
+    res = predict_frame(df, model, prof, tx_dbm, noise_dbm)
+    buf = io.StringIO()
+    res.to_csv(buf, index=False, float_format="%.10g")
+    atomic_write_text(out, buf.getvalue())
+    console.print(f"{len(res)} rows, model {model}, profile {prof.name}: written to {out}", highlight=False)
+
+
+def register(root: typer.Typer) -> None:
+    root.add_typer(app, name="channel")
