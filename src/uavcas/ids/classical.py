@@ -88,7 +88,7 @@ class LightGBMClassifier(EarlyStoppingClassifier):
                                    random_state=self.random_state, deterministic=True, verbose=-1)
         kw = {}
         if X_val is not None:
-            kw = {"eval_set": [(X_val, yv)], "callbacks": [lgb.early_stopping(self.early_stopping_rounds, verbose=False)]}
+            kw = {"eval_X": X_val, "eval_y": yv, "callbacks": [lgb.early_stopping(self.early_stopping_rounds, verbose=False)]}
         model.fit(X, yi, **kw)
         self.model_ = model
         self.n_iter_ = int(model.best_iteration_ or model.n_estimators_)
