@@ -10,6 +10,7 @@ from . import analyze as _analyze
 from . import calibrate as _calibrate
 from . import bench as _bench
 from . import campaign as _campaign
+from . import dataset as _dataset
 from . import emulate as _emulate
 from . import flows as _flows
 from . import plan as _plan
@@ -24,7 +25,7 @@ app = typer.Typer(
     pretty_exceptions_enable=False,
 )
 
-for _module in (_plan, _campaign, _flows, _emulate, _analyze, _bench, _report, _run, _calibrate):
+for _module in (_plan, _campaign, _dataset, _flows, _emulate, _analyze, _bench, _report, _run, _calibrate):
     _module.register(app)
 
 
