@@ -73,14 +73,14 @@ def resolve_features(df: pd.DataFrame, spec: str | Iterable[str] | None = None) 
     return cols
 
 
-def feature_matrix(df: pd.DataFrame, columns: Iterable[str] | str | None = None) -> np.ndarray:
-    """float32 matrix of the features `columns` (see `resolve_features`) of `df`.
+def finite_features(df: pd.DataFrame, columns: list[str]) -> np.ndarray:
+    """float64 values of `columns`; inf (a rate over a zero duration) and NaN become 0: the
+    estimators need finite input and a zero rate is what CICFlowMeter writes for a one-packet flow."""
+    return np.nan_to_num(df[columns].to_numpy(dtype=np.float64), nan=0.0, posinf=0.0, neginf=0.0)
 
-    inf (a rate over a zero duration) and NaN become 0: the estimators need finite input and a
-    zero rate is what CICFlowMeter writes for a one-packet flow.
-    """
-    cols = resolve_features(df, columns)
-    x = df[cols].to_numpy(dtype=np.float64)
-    x = np.nan_to_num(x, nan=0.0, posinf=0.0, neginf=0.0)
+
+def feature_matrix(df: pd.DataFrame, columns: Iterable[str] | str | None = None) -> np.ndarray:
+    """float32 matrix of the features `columns` (see `resolve_features`) of `df`, finite."""
+    x = finite_features(df, resolve_features(df, columns))
     # float32 overflows above 3.4e38; clip so huge rates stay finite
     return np.clip(x, -1e30, 1e30).astype(np.float32)
