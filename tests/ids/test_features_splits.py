@@ -125,3 +125,16 @@ def test_composition_parsing():
     assert families_of("benign") == ()
     assert protocols.is_dos("DoS") and protocols.is_dos("DoS Hulk") and not protocols.is_dos("DoS+Replay")
     assert not protocols.is_dos("DDoS")
+
+
+def test_train_cap_per_run_and_class(synth_df):
+    from uavcas.ids.splits import cap_rows
+
+    y, g = synth_df["label"].to_numpy(), synth_df["run_id"].to_numpy()
+    rows = np.arange(len(y))
+    kept = cap_rows(rows, y, g, 3, seed=0)
+    per = pd.DataFrame({"g": g[kept], "y": y[kept]}).value_counts()
+    full = pd.DataFrame({"g": g, "y": y}).value_counts()
+    assert per.max() == 3 and len(per) == len(full)  # every (run, class) kept, none above the cap
+    assert (per == full.clip(upper=3).loc[per.index]).all()
+    assert cap_rows(rows, y, g, 3, seed=0).tolist() == kept.tolist() != cap_rows(rows, y, g, 3, seed=1).tolist()

@@ -31,7 +31,7 @@ from uavcas.vocabulary import families_of
 from .features import feature_matrix, resolve_features
 from .metrics import STEALTH, auroc, class_scores, confusion, pr_auc, scores
 from .models import DEEP, DISPLAY, MODELS, TREES, fit_model, make_model
-from .splits import DegenerateSplitError, Split, check_declared, grouped_split
+from .splits import DegenerateSplitError, Split, cap_rows, check_declared, grouped_split
 from .torch_estimator import default_threads
 
 PROTOCOLS = ("binary", "multiclass", "ood", "cross-condition")
@@ -53,6 +53,7 @@ class BenchConfig:
     importance: bool = True
     importance_rows: int = 2000  # test flows permuted (a seeded subsample when there are more)
     importance_repeats: int = 5
+    train_cap: int | None = None  # at most this many training/validation flows per run and class
     n_threads: int | None = None
     progress: Callable[[str], None] | None = None  # told "<seed> <model>: <seconds>" after each fit
 
@@ -336,6 +337,9 @@ def execute(prep: Prepared, cfg: BenchConfig) -> ProtocolResult:
     res = ProtocolResult(prep.protocol, task.declared, prep.features, notes=list(prep.notes))
     for seed, sp in prep.splits.items():
         res.splits += _split_rows(task, seed, sp)
+        if cfg.train_cap:
+            sp = Split(cap_rows(sp.train, task.y, task.groups, cfg.train_cap, seed),
+                       cap_rows(sp.val, task.y, task.groups, cfg.train_cap, seed + 1), sp.test, sp.groups)
         res.sizes[seed] = {"train": len(sp.train), "val": len(sp.val), "test": len(sp.test),
                            **{k: len(v) for k, v in task.fixed.items()}}
         for name in cfg.models:

@@ -157,3 +157,16 @@ def grouped_split(y, groups, seed: int = 0, test: float = 0.2, val: float = 0.1,
     idx = {s: np.flatnonzero(side_of_row == s) for s in ("train", "val", "test")}
     members = {s: tuple(sorted(g for g, p in part.items() if p == s)) for s in ("train", "val", "test")}
     return Split(idx["train"], idx["val"], idx["test"], members)
+
+
+def cap_rows(rows: np.ndarray, y: np.ndarray, groups: np.ndarray, cap: int, seed: int) -> np.ndarray:
+    """At most `cap` of `rows` per (run, class), a seeded sample, sorted: bounds the cost of
+    training on floods (thousands of near-identical SYN flows per run) while keeping every run
+    and class; test rows are never capped."""
+    if cap is None or len(rows) == 0:
+        return rows
+    df = pd.DataFrame({"r": rows, "g": groups[rows], "y": y[rows]})
+    rng = np.random.default_rng(seed)
+    df["k"] = rng.random(len(df))
+    kept = df.sort_values("k").groupby(["g", "y"], sort=False).head(cap)
+    return np.sort(kept["r"].to_numpy())
