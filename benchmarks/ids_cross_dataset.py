@@ -32,21 +32,23 @@ def main() -> int:
 
     import pandas as pd
 
-    from uavcas.analysis.synthetic import make_flows, write_dataset
+    from uavcas.dataset.synthetic import make_flows, write_dataset
     from uavcas.dataset.read import load_any
     from uavcas.ids.models import MODELS
     from uavcas.ids.protocols import BenchConfig, run_protocol
+    from uavcas.ids.results import results_frame
 
-    ours = args.dataset or write_dataset(Path(tempfile.mkdtemp()) / "uavcas-synthetic", make_flows(20_000, flows_per_run=50))
+    ours = args.dataset or write_dataset(Path(tempfile.mkdtemp()) / "uavcas-synthetic", make_flows(400, flows_per_run=50))
     models = MODELS if args.models == "all" else tuple(args.models.split(","))
-    cfg = BenchConfig(models=models, scaler=args.scaler, epochs=args.epochs, n_threads=args.threads or None)
+    cfg = BenchConfig(models=models, scaler=args.scaler, epochs=args.epochs, seeds=(0,), importance=False,
+                      n_threads=args.threads or None)
     cols = {}
     for path in [*args.external, ours]:
         res = run_protocol(load_any(path), "binary", cfg)
-        df = pd.DataFrame(res.rows)
+        df = results_frame(res)
         w = df[(df["metric"] == "f1_weighted") & (df["class"] == "")].set_index("model")["value"]
         cols[Path(path).name] = w * 100
-        print(f"{Path(path).name}: split {res.splits}" + "".join(f"; {n}" for n in res.notes), flush=True)
+        print(f"{Path(path).name}: flows per split {res.sizes}" + "".join(f"; {n}" for n in res.notes), flush=True)
     table = pd.DataFrame(cols)
     table.index.name = "model"
     print("\nBinary Benign-vs-DoS weighted F1 (%)\n")

@@ -5,12 +5,12 @@ from __future__ import annotations
 
 import pytest
 
-from uavcas.analysis.synthetic import make_flows, write_dataset
+from uavcas.dataset.synthetic import make_flows, write_dataset
 
 
 @pytest.fixture(scope="session")
 def synth_df():
-    return make_flows(2400, flows_per_run=15, seed=3)
+    return make_flows(160, flows_per_run=15, seed=3)
 
 
 @pytest.fixture(scope="session")

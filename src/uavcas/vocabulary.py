@@ -97,6 +97,13 @@ CLASSES: tuple[str, ...] = (
 )
 assert len(CLASSES) == 15
 
+# Families that leave a flow's statistics near benign (no flood): the benchmark's "stealth" score
+# is the macro-F1 over the classes holding one of them (3 singles + every pair, 12 classes).
+STEALTH_FAMILIES: tuple[str, ...] = ("blackhole", "replay", "wormhole")
+STEALTH_CLASSES: tuple[str, ...] = tuple(
+    class_name(fams) for fams in [(f,) for f in FAMILIES] + list(PAIRS) if set(fams) & set(STEALTH_FAMILIES)
+)
+
 
 def families_of(attacks_field: str) -> tuple[str, ...]:
     """Families of a scenario's attacks field, canonical order: 'blackhole+dos=1000' -> ('blackhole', 'dos').

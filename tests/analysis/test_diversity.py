@@ -1,5 +1,6 @@
 """Diversity on a synthetic dataset: a separable class far above baseline, an indistinguishable
-one at baseline; CLI outputs (diversity, axes, separability)."""
+one at baseline (drawn at its sample size); one IAT source for every dataset; confounded axes
+flagged; stratified t-SNE; CLI outputs (diversity, axes, separability)."""
 
 from __future__ import annotations
 
@@ -12,6 +13,9 @@ from typer.testing import CliRunner
 
 from uavcas.analysis.axes import axis_diversity
 from uavcas.analysis.diversity import DiversityOptions, diversity_table, split_by_run
+from uavcas.analysis.iat import choose_source, flow_iats
+from uavcas.analysis.separability import stratified_sample
+from uavcas.dataset.synthetic import write_dataset
 from uavcas.cli import app
 
 runner = CliRunner()
@@ -46,11 +50,54 @@ def test_axis_diversity_rows_and_baseline(synth_df):
     table, bins = axis_diversity(synth_df, n_boot=20)
     t = table.set_index("axis")
     assert {"n_uav", "pathloss", "mission", "tx_dbm"} <= set(t.index)
-    assert (t.loc["n_uav", "low"], t.loc["n_uav", "high"]) == (5, 20)
+    assert (t.loc["n_uav", "low"], t.loc["n_uav", "high"]) == (5, 10)
     assert (t.loc["mission", "low"], t.loc["mission", "high"]) == ("spiral", "random")
-    # swarm size moves benign timing by a factor 2 in the generator: far above its baseline
+    # swarm size (with what it is confounded with) moves benign timing: far above its baseline
     assert t.loc["n_uav", "hellinger"] > 2 * t.loc["n_uav", "baseline_hellinger"]
     assert set(bins) == set(t.index)
+    assert (t["baseline_n_flows"] <= t["n_flows_high"]).all() and (t["baseline_n_flows"] > 0).all()
+
+
+def test_confounded_axes_flagged(synth_df):
+    """The medium design crosses path loss with TX power (2 x 2) but ties swarm size and mission
+    to the channel setting: n_uav 5 vs 10 is also spiral vs random at 30 vs 10 dBm."""
+    t = axis_diversity(synth_df, n_boot=0)[0].set_index("axis")
+    flagged = {a: dict(x.split(":") for x in str(v).split(", ") if x) for a, v in t["confounded_with"].fillna("").items()}
+    assert float(flagged["n_uav"]["mission"]) == 1.0 and float(flagged["n_uav"]["tx_dbm"]) == 1.0
+    assert "tx_dbm" not in flagged["pathloss"] and "pathloss" not in flagged["tx_dbm"]
+    assert "attacks" not in flagged["n_uav"]  # every setting holds every composition
+
+
+def test_baseline_drawn_at_the_class_sample_size(synth_df):
+    """A benign-identical class of 8 flows scores far above 0 (plug-in bias) and so does its
+    baseline at 8 flows; a whole-benign baseline would call it different."""
+    small = synth_df[~((synth_df["label"] == "Wormhole") & (synth_df.groupby("label").cumcount() >= 8))]
+    t = diversity_table(small, "s", DiversityOptions(n_boot=0, legacy=False, iat_source="flow-mean")).table.set_index("class")
+    w, dos = t.loc["Wormhole"], t.loc["DoS"]
+    assert w["n_flows"] == w["baseline_n_flows"] == 8
+    assert w["baseline_hellinger"] > 2 * dos["baseline_hellinger"]  # the small-sample floor is higher
+    assert w["hellinger"] < w["baseline_hellinger_hi"] and dos["hellinger"] > dos["baseline_hellinger_hi"]
+
+
+def test_one_iat_source_for_every_dataset(synth_df):
+    external_like = synth_df.drop(columns=["seq_time_s", "seq_size", "seq_flags", "seq_dir"])
+    assert choose_source([synth_df, synth_df]) == "packet"
+    assert choose_source([synth_df, external_like]) == "flow-mean"
+    with pytest.raises(ValueError, match="flow-mean"):
+        choose_source([synth_df, external_like], "packet")
+    # flow-mean from the sequences: one value per flow, the mean of its packet IATs
+    packet, mean = flow_iats(synth_df, source="packet"), flow_iats(synth_df, source="flow-mean")
+    assert len(mean.per_flow) == len(packet.per_flow) and all(len(v) == 1 for v in mean.per_flow)
+    np.testing.assert_allclose(mean.per_flow[3][0], packet.per_flow[3].mean())
+    np.testing.assert_array_equal(mean.rows, packet.rows)
+
+
+def test_stratified_tsne_sample_keeps_small_classes():
+    labels = np.array(["DoS"] * 5000 + ["Benign"] * 600 + ["Wormhole"] * 8)
+    pick = stratified_sample(labels, 300, seed=1)
+    got = dict(zip(*np.unique(labels[pick], return_counts=True)))
+    assert len(pick) == 300 and len(set(pick)) == 300 and got["Wormhole"] == 8
+    assert got["DoS"] == got["Benign"] == 146
 
 
 def test_cli_diversity_writes_csv_and_json(synth_dir, tmp_path):
@@ -85,9 +132,47 @@ def test_cli_axes_and_separability(synth_dir, tmp_path):
     assert {"axis", "hellinger", "jsd", "baseline_hellinger", "baseline_jsd"} <= set(pd.read_csv(tmp_path / "ax" / "axes.csv").columns)
     r = runner.invoke(app, ["analyze", "separability", str(synth_dir), "--out", str(tmp_path / "sep"), "--tsne-samples", "300"])
     assert r.exit_code == 0, r.output
+    assert pd.read_csv(tmp_path / "sep" / "tsne.csv")["label"].nunique() == 15
     stats = pd.read_csv(tmp_path / "sep" / "separability.csv").set_index("class")
     assert stats.loc["DoS", "pkt_rate_pps_mean"] > 100 * stats.loc["Benign", "pkt_rate_pps_mean"]
     for name in ("tsne.png", "distributions.png"):
         data = (tmp_path / "sep" / name).read_bytes()
         assert data[:8] == b"\x89PNG\r\n\x1a\n"
     assert not list((tmp_path / "sep").glob(".*tmp*"))  # atomic writes leave no temporary file
+
+
+def test_cli_one_source_with_a_dataset_without_sequences(synth_df, synth_dir, tmp_path):
+    """A CICIDS2017-format CSV (per-flow mean IAT in microseconds, no packet sequences) beside our
+    dataset: auto picks flow-mean for both, packet is refused."""
+    cols = ["Flow Duration", "Flow IAT Mean", "Fwd IAT Mean", "Total Fwd Packets"]
+    csv = synth_df[cols].copy()
+    csv[["Flow Duration", "Flow IAT Mean", "Fwd IAT Mean"]] *= 1e6
+    csv["Label"] = synth_df["label"].replace({"Benign": "BENIGN"})
+    (tmp_path / "cic").mkdir()
+    csv.to_csv(tmp_path / "cic" / "sample.csv", index=False)
+    args = ["analyze", "diversity", str(synth_dir), "--reference", str(tmp_path / "cic"), "--boot", "0"]
+    r = runner.invoke(app, [*args, "--out", str(tmp_path / "p"), "--iat-source", "packet"])
+    assert r.exit_code == 2 and "flow-mean" in r.output and not (tmp_path / "p").exists()
+    r = runner.invoke(app, [*args, "--out", str(tmp_path / "a")])
+    assert r.exit_code == 0, r.output
+    d = pd.read_csv(tmp_path / "a" / "diversity.csv")
+    assert set(d["iat_source"]) == {"seq_time_s flow mean", "Flow IAT Mean"}
+    # the same flows through both routes: the same divergences
+    ours, theirs = (d[d["dataset"] == n].set_index("class")["hellinger"] for n in ("ds", "cic"))
+    np.testing.assert_allclose(ours.sort_index(), theirs.sort_index(), atol=0.02)
+
+
+@pytest.mark.shared
+def test_cli_like_for_like_with_external(shared_data, synth_dir, tmp_path):
+    ext = shared_data / "ids-samples" / "cicids2017-improved-rnd2500"
+    if not ext.is_dir():
+        pytest.skip(f"{ext} not found")
+    r = runner.invoke(app, ["analyze", "diversity", str(synth_dir), "--reference", str(ext), "--out", str(tmp_path / "p"),
+                            "--iat-source", "packet"])
+    assert r.exit_code == 2 and "flow-mean" in r.output and not (tmp_path / "p").exists()
+    r = runner.invoke(app, ["analyze", "diversity", str(synth_dir), "--reference", str(ext), "--out", str(tmp_path / "a"),
+                            "--boot", "0"])
+    assert r.exit_code == 0, r.output
+    d = pd.read_csv(tmp_path / "a" / "diversity.csv")
+    assert set(d["iat_source"]) == {"seq_time_s flow mean", "Flow IAT Mean"}
+    assert (d["baseline_n_flows"] <= d["n_flows"]).all()

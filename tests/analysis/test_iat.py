@@ -2,6 +2,7 @@ from __future__ import annotations
 
 import numpy as np
 import pandas as pd
+import pytest
 import pyarrow as pa
 
 from uavcas.analysis.iat import flow_iats, iats_of_sequences
@@ -24,5 +25,9 @@ def test_arrow_backed_lists_match_object_lists_and_limit():
 
 
 def test_fallback_to_mean_iat_feature_is_recorded():
-    r = flow_iats(pd.DataFrame({"Flow IAT Mean": [0.1, np.nan, 0.3], "label": ["a", "b", "c"]}))
+    df = pd.DataFrame({"Flow IAT Mean": [0.1, np.nan, 0.3], "label": ["a", "b", "c"]})
+    r = flow_iats(df, source="flow-mean")
     assert r.source == "Flow IAT Mean" and r.n_flows_no_iat == 1 and len(r.per_flow) == 2
+    assert r.rows.tolist() == [0, 2]
+    with pytest.raises(ValueError, match="flow-mean"):
+        flow_iats(df, source="packet")  # no sequences: per-packet IATs do not exist

@@ -1,5 +1,6 @@
-"""End-to-end `uavcas bench ids` on a small synthetic dataset (few epochs), and the known
-structure: DoS separable (F1, AUROC ~ 1), Wormhole indistinguishable (AUROC ~ 0.5)."""
+"""End-to-end `uavcas bench ids` on a small synthetic dataset (few epochs, two seeds): the output
+files, the known structure (DoS separable, Wormhole indistinguishable), degenerate splits refused,
+the leaderboard."""
 
 from __future__ import annotations
 
@@ -13,49 +14,99 @@ from sklearn.metrics import roc_auc_score
 from typer.testing import CliRunner
 
 from uavcas.cli import app
+from uavcas.dataset.synthetic import write_dataset
 from uavcas.ids.features import feature_matrix
+from uavcas.ids.leaderboard import COLUMNS as LEADERBOARD_COLUMNS
 from uavcas.ids.models import make_model
+from uavcas.ids.results import RESULT_COLUMNS
 from uavcas.ids.splits import grouped_split
 
 runner = CliRunner()
+NEEDS_TORCH = pytest.mark.skipif(importlib.util.find_spec("torch") is None, reason="PyTorch not installed (pip install '.[dl]')")
+
+
+def _read(path):
+    return pd.read_csv(path, keep_default_na=False, na_values=["nan", "NaN"])
 
 
 def _bench(ds, out, *args):
-    r = runner.invoke(app, ["bench", "ids", str(ds), "--out", str(out), "--epochs", "2", "--threads", "1", *args])
+    r = runner.invoke(app, ["bench", "ids", str(ds), "--out", str(out), "--epochs", "2", "--threads", "1",
+                            "--seeds", "0,1", *args])
     assert r.exit_code == 0, r.output
-    df = pd.read_csv(out / "results.csv", keep_default_na=False)
-    assert list(df.columns) == ["protocol", "model", "metric", "class", "value"]
-    assert (out / "results.md").is_file() and json.loads((out / "results.json").read_text())["results"]
+    df = _read(out / "results.csv")
+    assert tuple(df.columns) == RESULT_COLUMNS and set(df["seed"]) == {0, 1}
+    assert (out / "results.md").is_file() and json.loads((out / "results.json").read_text())["declared"]
     return df
 
 
-@pytest.mark.skipif(importlib.util.find_spec("torch") is None, reason="PyTorch not installed (pip install '.[dl]')")
+def _overall(df, metric):
+    return df[(df["metric"] == metric) & (df["class"] == "")].groupby("model")["value"].mean()
+
+
+@NEEDS_TORCH
 def test_multiclass_all_ten_models(synth_dir, tmp_path):
     df = _bench(synth_dir, tmp_path, "--protocol", "multiclass")
-    assert df["model"].nunique() == 10
-    overall = df[df["class"] == ""]
-    assert {"f1_macro", "f1_weighted", "accuracy"} <= set(overall["metric"])
-    assert set(df[df["class"] != ""]["metric"]) == {"f1"}
-    assert df["value"].astype(float).between(0, 1).all()
-    rf = overall[(overall["model"] == "RF") & (overall["metric"] == "f1_weighted")]["value"].astype(float).item()
-    assert rf > 0.6
-    assert (tmp_path / "confusion_best_worst.png").read_bytes()[:4] == b"\x89PNG"
-    assert (tmp_path / "confusion_LightGBM.csv").is_file()
+    models = sorted(df["model"].unique())
+    assert len(models) == 10
+    assert {"f1_macro", "f1_weighted", "accuracy", "pr_auc_macro", "fit_s"} <= set(df[df["class"] == ""]["metric"])
+    per = df[~df["class"].isin(["", "stealth"])]
+    assert set(per["metric"]) == {"precision", "recall", "f1", "support", "pr_auc"}
+    assert per["class"].nunique() == 15
+    scores = df[~df["metric"].isin(["fit_s", "epochs", "support"])]["value"].dropna()
+    assert scores.between(0, 1).all()
+    # macro-F1 is the mean over the 15 declared classes, whatever a model predicts
+    f1 = per[per["metric"] == "f1"].groupby(["seed", "model"])["value"].mean()
+    macro = df[(df["metric"] == "f1_macro") & (df["class"] == "")].set_index(["seed", "model"])["value"]
+    np.testing.assert_allclose(macro.sort_index(), f1.sort_index())
+    assert df[(df["metric"] == "f1_macro") & (df["class"] == "stealth")]["model"].nunique() == 10
+    assert _overall(df, "f1_weighted")["RF"] > 0.6
+    # confusion counts for every model: each seed's matrix sums to its test flows
+    conf = _read(tmp_path / "confusion.csv")
+    sizes = json.loads((tmp_path / "results.json").read_text())["sizes"]
+    for (seed, _model), g in conf.groupby(["seed", "model"]):
+        assert g["count"].sum() == sizes[str(seed)]["test"]
+    for m in models:
+        name = "".join(ch if ch.isalnum() else "_" for ch in m)
+        assert (tmp_path / f"confusion_{name}.csv").is_file()
+        assert (tmp_path / f"confusion_{name}.png").read_bytes()[:4] == b"\x89PNG"
+    imp = _read(tmp_path / "importance.csv")
+    assert set(imp["model"]) == {"RF", "LightGBM"} and imp["feature"].nunique() == 47
+    splits = _read(tmp_path / "splits.csv")
+    assert list(splits.columns) == ["seed", "run_id", "split"] and set(splits["split"]) == {"train", "val", "test"}
+    assert splits.groupby("seed")["run_id"].nunique().tolist() == [160, 160]
+    assert set(splits[splits["seed"] == 0].query("split == 'test'")["run_id"]) != set(
+        splits[splits["seed"] == 1].query("split == 'test'")["run_id"])
+    lb = _read(tmp_path / "leaderboard.csv")
+    assert tuple(lb.columns) == LEADERBOARD_COLUMNS and (lb["std"].dropna() >= 0).all()
 
 
 def test_binary_dos_is_separable(synth_dir, tmp_path):
-    df = _bench(synth_dir, tmp_path, "--protocol", "binary", "--models", "lr,rf,tinyml", "--scaler", "robust")
-    w = df[(df["metric"] == "f1_weighted") & (df["class"] == "")].set_index("model")["value"].astype(float)
-    m = df[(df["metric"] == "f1_macro") & (df["class"] == "")].set_index("model")["value"].astype(float)
-    assert (w[["LR", "RF"]] > 0.97).all() and (m[["LR", "RF"]] > 0.95).all()
+    df = _bench(synth_dir, tmp_path, "--protocol", "binary", "--models", "lr,rf", "--scaler", "robust")
+    assert (_overall(df, "f1_weighted")[["LR", "RF"]] > 0.97).all() and (_overall(df, "f1_macro")[["LR", "RF"]] > 0.95).all()
+    assert (_overall(df, "auroc") > 0.99).all() and (_overall(df, "pr_auc") > 0.95).all()
+    assert set(_read(tmp_path / "confusion_RF.csv").columns[1:]) == {"Benign", "DoS"}
 
 
-def test_ood_and_cross_condition(synth_dir, tmp_path):
-    df = _bench(synth_dir, tmp_path / "ood", "--protocol", "ood", "--models", "rf")
-    au = df[df["metric"] == "auroc"].set_index("class")["value"].astype(float)
-    assert len(au) == 9 and au["Blackhole+DoS"] > 0.95
-    df = _bench(synth_dir, tmp_path / "cc", "--protocol", "cross-condition", "--models", "lr", "--holdout", "mission=random")
-    assert {"f1_macro", "f1_macro_iid"} <= set(df["metric"])
+def test_all_protocols_one_leaderboard(synth_dir, tmp_path):
+    r = runner.invoke(app, ["bench", "ids", str(synth_dir), "--out", str(tmp_path), "--protocol", "all",
+                            "--models", "lr", "--seeds", "0,1", "--holdout", "mission=random", "--threads", "1"])
+    assert r.exit_code == 0, r.output
+    lb = _read(tmp_path / "leaderboard.csv")
+    assert set(lb["protocol"]) == {"binary", "multiclass", "ood", "cross-condition"}
+    ood = lb[(lb["protocol"] == "ood") & (lb["metric"] == "auroc") & (lb["class"] != "")].set_index("class")["mean"]
+    assert len(ood) == 9 and ood["Blackhole+DoS"] > 0.95
+    cc = lb[lb["protocol"] == "cross-condition"]
+    assert {"f1_macro", "f1_macro_iid"} <= set(cc["metric"]) and "stealth" in set(cc["class"])
+    md = (tmp_path / "leaderboard.md").read_text()
+    assert "### ood" in md and "±" in md
+    for p in ("binary", "multiclass", "ood", "cross-condition"):
+        assert (tmp_path / p / "results.csv").is_file() and (tmp_path / p / "splits.csv").is_file()
+    # the same results again through `bench leaderboard` give the same table
+    r = runner.invoke(app, ["bench", "leaderboard", str(tmp_path), "--out", str(tmp_path / "lb")])
+    assert r.exit_code == 0, r.output
+    again = _read(tmp_path / "lb" / "leaderboard.csv")
+    key = ["protocol", "model", "metric", "class"]
+    pd.testing.assert_frame_equal(again.sort_values(key).reset_index(drop=True), lb.sort_values(key).reset_index(drop=True))
 
 
 def test_indistinguishable_class_auroc_near_chance(synth_df):
@@ -71,22 +122,37 @@ def test_indistinguishable_class_auroc_near_chance(synth_df):
     assert 0.3 < auroc("Wormhole") < 0.7
 
 
+def test_quick_like_dataset_is_refused_naming_the_class(synth_df, tmp_path):
+    """One run per composition (as in the quick campaign): every attack class is in one run."""
+    first = synth_df.groupby("attacks")["run_id"].min()
+    ds = write_dataset(tmp_path / "one-run-each", synth_df[synth_df["run_id"].isin(first)])
+    for protocol, cls in (("multiclass", "Blackhole is in 1 run"), ("binary", "DoS is in 1 run")):
+        r = runner.invoke(app, ["bench", "ids", str(ds), "--out", str(tmp_path / protocol), "--protocol", protocol,
+                                "--models", "lr"])
+        assert r.exit_code == 2 and cls in r.output and "degenerate split" in r.output, r.output
+        assert not (tmp_path / protocol).exists()
+
+
 @pytest.mark.parametrize(
     "args,msg",
     [
         (["--protocol", "nope"], "--protocol"),
         (["--models", "lr,xgb"], "--models"),
         (["--scaler", "zscore"], "--scaler"),
+        (["--seeds", "0,x"], "--seeds"),
+        (["--seeds", "1,1"], "--seeds"),
+        (["--features", "nope", "--models", "lr"], "unknown feature set"),
         (["--protocol", "cross-condition", "--models", "lr"], "--holdout"),
+        (["--protocol", "binary,cross-condition", "--models", "lr"], "--holdout"),
         (["--protocol", "cross-condition", "--models", "lr", "--holdout", "mission"], "AXIS=VALUE"),
         (["--protocol", "cross-condition", "--models", "lr", "--holdout", "run_id=run00001"], "not an axis"),
     ],
 )
 def test_bad_input_one_line_error(synth_dir, tmp_path, args, msg):
-    r = runner.invoke(app, ["bench", "ids", str(synth_dir), "--out", str(tmp_path), *args])
+    r = runner.invoke(app, ["bench", "ids", str(synth_dir), "--out", str(tmp_path / "o"), *args])
     assert r.exit_code != 0
     assert msg in r.output and len(r.output.strip().splitlines()) <= 2
-    assert not (tmp_path / "results.csv").exists()
+    assert not (tmp_path / "o").exists()
 
 
 @pytest.mark.shared
@@ -95,7 +161,6 @@ def test_external_cicids_binary(shared_data, tmp_path):
     if not ds.is_dir():
         pytest.skip(f"{ds} not found")
     df = _bench(ds, tmp_path, "--protocol", "binary", "--models", "lr")
-    w = df[(df["metric"] == "f1_weighted") & (df["class"] == "")]["value"].astype(float).item()
-    assert w > 0.9
+    assert _overall(df, "f1_weighted")["LR"] > 0.9
     notes = json.loads((tmp_path / "results.json").read_text())["notes"]
     assert any("own group" in n for n in notes)

@@ -1,5 +1,5 @@
-"""Estimator contract of every baseline: fit/predict/predict_proba, classes_, Pipeline, clone,
-same seed -> same model."""
+"""Estimator contract of every baseline: `baseline(name, **params)`, fit/predict/predict_proba,
+classes_, Pipeline, clone, same seed -> same model, early stopping on the given validation split."""
 
 from __future__ import annotations
 
@@ -12,6 +12,10 @@ from sklearn.base import clone
 from sklearn.pipeline import make_pipeline
 from sklearn.preprocessing import StandardScaler
 
+from sklearn.metrics import log_loss
+
+from uavcas.ids import baseline
+from uavcas.ids.classical import GroupedMLPClassifier, LightGBMClassifier
 from uavcas.ids.models import DEEP, MODELS, make_model
 from uavcas.ids.torch_estimator import DL_MISSING, TorchClassifier, import_torch
 
@@ -75,3 +79,60 @@ def test_unknown_model_and_arch():
         make_model("xgboost")
     with pytest.raises(ValueError, match="unknown architecture"):
         TorchClassifier(arch="transformer").fit(*_data())
+
+
+@pytest.mark.parametrize("name", ALL)
+def test_baseline_by_name_with_overrides(name):
+    est = baseline(name, random_state=7)
+    assert est.get_params()["random_state"] == 7
+    assert baseline(name.upper()).get_params() == baseline(name).get_params()
+    with pytest.raises(ValueError):
+        baseline(name, no_such_parameter=1)
+
+
+def test_baseline_paper_settings():
+    assert baseline("rf").n_estimators == 100 and baseline("rf", n_estimators=10).n_estimators == 10
+    assert baseline("mlp").get_params()["hidden_layer_sizes"] == (128, 64)
+    assert baseline("mlp").max_iter == 50 and baseline("mlp").n_iter_no_change == 5
+
+
+def _noisy(seed):
+    rng = np.random.default_rng(seed)
+    x = rng.normal(size=(300, 6))
+    y = np.where(x[:, 0] + 0.8 * rng.normal(size=300) > 0, "DoS", "Benign")
+    return x, y
+
+
+def test_mlp_early_stops_on_the_given_validation_split():
+    x, y = _noisy(0)
+    xv, yv = _noisy(1)
+    est = GroupedMLPClassifier(max_iter=40, n_iter_no_change=3, batch_size=32).fit(x, y, X_val=xv, y_val=yv)
+    assert est.n_iter_ == len(est.validation_loss_) <= 40
+    # the weights kept are those of the epoch with the lowest loss on the split we passed
+    yi = np.searchsorted(est.classes_, yv)
+    assert log_loss(yi, est.predict_proba(xv)) == pytest.approx(min(est.validation_loss_), rel=1e-9)
+    # labels unrelated to X: the validation loss never improves for long, so it stops early
+    noise = np.random.default_rng(2).permutation(yv)
+    early = GroupedMLPClassifier(max_iter=40, n_iter_no_change=3, batch_size=32).fit(x, y, X_val=xv, y_val=noise)
+    assert early.n_iter_ < est.n_iter_
+
+
+def test_lightgbm_early_stops_on_the_given_validation_split():
+    x, y = _noisy(3)
+    xv, yv = _noisy(4)
+    full = LightGBMClassifier(n_estimators=300, n_jobs=1).fit(x, y)
+    stopped = LightGBMClassifier(n_estimators=300, n_jobs=1, early_stopping_rounds=5).fit(x, y, X_val=xv, y_val=yv)
+    assert full.n_iter_ == 300 and stopped.n_iter_ < 300
+
+
+@pytest.mark.parametrize("name", ALL)
+def test_predict_before_fit_and_bad_input(name):
+    from sklearn.exceptions import NotFittedError
+
+    est = _model(name)
+    with pytest.raises(NotFittedError):
+        est.predict(np.zeros((2, 47)))
+    x, y = _data(n=40)
+    x[3, 5] = np.inf  # (NaN is a valid "missing" value for RF; inf is never)
+    with pytest.raises(ValueError):
+        _model(name).fit(x, y)

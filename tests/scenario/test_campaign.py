@@ -20,6 +20,30 @@ def test_paper_preset_has_1024_distinct_round_tripping_configs():
     assert len({s.axes()["attacks"] for s in axes}) == 16
 
 
+def test_medium_preset_every_composition_in_four_channel_settings(tmp_path):
+    """64 runs of 12 windows: the 16 compositions x 4 settings covering path loss, mission, TX
+    power and swarm size (path loss x TX power as a full 2 x 2), via the CLI's manifest."""
+    from collections import Counter
+
+    out = tmp_path / "m.jsonl"
+    r = subprocess.run([sys.executable, "-m", "uavcas.cli", "campaign", "manifest", "--preset", "medium",
+                        "--out", str(out)], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    entries = [json.loads(line) for line in out.read_text().splitlines()]
+    assert len(entries) == 64 and {(e["windows"], e["window_s"]) for e in entries} == {(12, 5.0)}
+    scen = [parse(e["config"]) for e in entries]
+    comps = Counter(s.axes()["attacks"] for s in scen)
+    assert len(comps) == 16 and min(comps.values()) >= 4
+    settings = {(s.n_uav, s.pathloss, s.mission, s.tx_dbm) for s in scen}
+    assert len(settings) == 4
+    assert {s.pathloss for s in scen} == {"logdist", "3gpp"} and {s.tx_dbm for s in scen} == {10, 30}
+    assert {s.mission for s in scen} == {"spiral", "grid", "hover_transit", "random"} and len({s.n_uav for s in scen}) == 4
+    assert len({(s.pathloss, s.tx_dbm) for s in scen}) == 4
+    # every composition in every setting: holding one setting out leaves each composition in 3
+    assert Counter((s.axes()["attacks"], s.mission) for s in scen) == Counter({k: 1 for k in
+                                                                                {(c, m) for c in comps for m in {s.mission for s in scen}}})
+
+
 def test_permutation_is_seeded_and_shards_partition_it():
     a, b, c = manifest("paper", seed=7), manifest("paper", seed=7), manifest("paper", seed=8)
     assert [e.index for e in a] == [e.index for e in b] != [e.index for e in c]

@@ -43,12 +43,37 @@ def _signed_log(x: np.ndarray) -> np.ndarray:
     return np.sign(x) * np.log1p(np.abs(x))
 
 
+def stratified_sample(labels, n: int, seed: int = 0) -> np.ndarray:
+    """Sorted row positions of a seeded subsample of `n` rows with every class as equal a share as
+    it can have: classes smaller than their share give all their rows, the rest is shared out
+    among the larger ones (so a 8-flow Wormhole is in the plot beside 5,000 DoS flows)."""
+    labels = np.asarray(labels)
+    if n >= len(labels):
+        return np.arange(len(labels))
+    rng = np.random.default_rng(seed)
+    classes, counts = np.unique(labels, return_counts=True)
+    take = np.zeros(len(classes), dtype=int)
+    left = n
+    while left > 0:
+        open_ = np.flatnonzero(take < counts)
+        share = max(1, left // len(open_))
+        for i in rng.permutation(open_):
+            add = min(share, counts[i] - take[i], left)
+            take[i] += add
+            left -= add
+            if left == 0:
+                break
+    picks = [rng.choice(np.flatnonzero(labels == c), k, replace=False) for c, k in zip(classes, take) if k]
+    return np.sort(np.concatenate(picks))
+
+
 def tsne_embedding(df: pd.DataFrame, n_samples: int = 2000, seed: int = 0) -> pd.DataFrame:
-    """2-D t-SNE of the 47 features (signed log, standardised) on a seeded subsample."""
+    """2-D t-SNE of the 47 features (signed log, standardised) on a seeded subsample stratified
+    by class (`stratified_sample`)."""
     from sklearn.manifold import TSNE
     from sklearn.preprocessing import StandardScaler
 
-    sub = df.sample(n=min(n_samples, len(df)), random_state=seed) if len(df) > n_samples else df
+    sub = df.iloc[stratified_sample(df["label"].astype(str).to_numpy(), n_samples, seed)]
     if len(sub) < 5:
         raise ValueError(f"t-SNE needs at least 5 flows, got {len(sub)}")
     x = _signed_log(np.nan_to_num(sub[list(schema.FEATURES)].to_numpy(dtype=float)))

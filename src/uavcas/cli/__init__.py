@@ -11,6 +11,7 @@ from . import calibrate as _calibrate
 from . import bench as _bench
 from . import campaign as _campaign
 from . import channel as _channel
+from . import dataset as _dataset
 from . import emulate as _emulate
 from . import flows as _flows
 from . import plan as _plan
@@ -25,7 +26,7 @@ app = typer.Typer(
     pretty_exceptions_enable=False,
 )
 
-for _module in (_plan, _campaign, _flows, _emulate, _analyze, _bench, _report, _run, _calibrate, _channel):
+for _module in (_plan, _campaign, _dataset, _flows, _emulate, _analyze, _bench, _report, _run, _calibrate, _channel):
     _module.register(app)
 
 

@@ -7,12 +7,14 @@ from pathlib import Path
 
 import typer
 
-from .common import atomic_write_text, console, fail
+from .common import atomic_write_text, console, err_console, fail
 
 analyze_app = typer.Typer(help="Measure a dataset: diversity, per-axis diversity, separability.", no_args_is_help=True)
 
 
 VIEW_HELP = "Flow view to use when the dataset holds several (5tuple | hostpair)."
+IAT_HELP = ("packet (every IAT, needs per-packet sequences) | flow-mean (one mean IAT per flow) | auto "
+            "(packet when every dataset has sequences, else flow-mean); one source for all datasets compared.")
 
 
 def _load(path: Path, view: str | None = None):
@@ -38,19 +40,30 @@ def diversity_cmd(
     seed: int = typer.Option(0, "--seed"),
     view: str = typer.Option(None, "--view", help=VIEW_HELP),
     pairwise: bool = typer.Option(False, "--pairwise", help="Also average over random flow pairs."),
-    legacy: bool = typer.Option(True, "--legacy/--no-legacy", help="Also the authors' unbounded legacy metric."),
+    legacy: bool = typer.Option(True, "--legacy/--no-legacy", help="Also the authors' unbounded legacy metric (packet source only)."),
+    iat_source: str = typer.Option("auto", "--iat-source", help=IAT_HELP),
+    baseline_draws: int = typer.Option(50, "--baseline-draws", min=1, help="Benign samples drawn at each class's size for its baseline."),
 ) -> None:
-    """Hellinger and JSD (base 2, bounded) of each class's IATs vs Benign, with CIs and baseline."""
+    """Hellinger and JSD (base 2, bounded) of each class's IATs vs Benign, with CIs and a
+    baseline drawn at the class's sample size."""
     import pandas as pd
 
     from uavcas.analysis.diversity import DiversityOptions, diversity_table
+    from uavcas.analysis.iat import choose_source
 
-    opt = DiversityOptions(n_bins=bins, n_boot=boot, seed=seed, pairwise=pairwise, legacy=legacy)
+    paths = [dataset, *reference]
+    frames = [_load(p, view) for p in paths]
+    try:
+        source = choose_source(frames, iat_source)
+    except ValueError as e:
+        raise fail(str(e)) from None
+    opt = DiversityOptions(n_bins=bins, n_boot=boot, seed=seed, pairwise=pairwise, legacy=legacy,
+                           iat_source=source, baseline_draws=baseline_draws)
     tables, payload = [], {"options": vars(opt), "bins": {}, "info": {}}
-    for path in [dataset, *reference]:
+    for path, df in zip(paths, frames):
         name = path.name if path.name != "flows.parquet" else path.parent.name
         try:
-            res = diversity_table(_load(path, view), dataset=name, opt=opt)
+            res = diversity_table(df, dataset=name, opt=opt)
         except ValueError as e:
             raise fail(f"{path}: {e}") from None
         tables.append(res.table)
@@ -61,7 +74,7 @@ def diversity_cmd(
     payload["table"] = json.loads(table.to_json(orient="records"))
     _json(out / "diversity.json", payload)
     typer.echo(table[["dataset", "class", "hellinger", "jsd", "baseline_hellinger", "legacy_hellinger"]].to_string(index=False))
-    console.print(f"wrote {out / 'diversity.csv'} and diversity.json")
+    console.print(f"IAT source: {source} (every dataset); wrote {out / 'diversity.csv'} and diversity.json")
 
 
 @analyze_app.command("axes")
@@ -72,19 +85,29 @@ def axes_cmd(
     boot: int = typer.Option(200, "--boot", min=0),
     seed: int = typer.Option(0, "--seed"),
     view: str = typer.Option(None, "--view", help=VIEW_HELP),
+    iat_source: str = typer.Option("auto", "--iat-source", help=IAT_HELP),
 ) -> None:
-    """Internal diversity per configuration axis on benign flows (extreme values), with baseline."""
-    from uavcas.analysis.axes import axis_diversity
+    """Internal diversity per configuration axis on benign flows (extreme values), with a
+    size-matched baseline; axes confounded with others in this dataset are flagged."""
+    from uavcas.analysis.axes import CONFOUND_TV, axis_diversity
+    from uavcas.analysis.iat import choose_source
 
+    df = _load(dataset, view)
     try:
-        table, edges = axis_diversity(_load(dataset, view), n_bins=bins, n_boot=boot, seed=seed)
+        source = choose_source([df], iat_source)
+        table, edges = axis_diversity(df, n_bins=bins, n_boot=boot, seed=seed, iat_source=source)
     except ValueError as e:
         raise fail(f"{dataset}: {e}") from None
     if table.empty:
         raise fail(f"{dataset}: no configuration axis has two values among benign flows")
     atomic_write_text(out / "axes.csv", table.to_csv(index=False))
-    _json(out / "axes.json", {"bins": edges, "table": json.loads(table.to_json(orient="records"))})
+    _json(out / "axes.json", {"iat_source": source, "confound_tv": CONFOUND_TV, "bins": edges,
+                              "table": json.loads(table.to_json(orient="records"))})
     typer.echo(table[["axis", "low", "high", "hellinger", "jsd", "baseline_hellinger", "baseline_jsd"]].to_string(index=False))
+    for r in table.itertuples():
+        if r.confounded_with:
+            err_console.print(f"[yellow]confounded[/]: {r.axis} {r.low} vs {r.high} also differs in {r.confounded_with} "
+                              f"(total-variation distance over runs); the difference is not the axis's alone")
 
 
 @analyze_app.command("separability")

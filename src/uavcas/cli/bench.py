@@ -1,4 +1,6 @@
-"""`uavcas bench ids DATASET --protocol ... --out DIR`: the IDS baselines under one protocol."""
+"""`uavcas bench ids DATASET --protocol ... --out DIR`: the IDS baselines under one or more
+protocols, repeated over seeds; `uavcas bench leaderboard DIR ... --out DIR`: one leaderboard
+from several benchmark outputs."""
 
 from __future__ import annotations
 
@@ -6,7 +8,7 @@ from pathlib import Path
 
 import typer
 
-from .common import err_console, fail
+from .common import atomic_write_text, err_console, fail
 
 bench_app = typer.Typer(help="Benchmarks on a dataset.", no_args_is_help=True)
 
@@ -21,53 +23,124 @@ def _parse_holdout(items: list[str]) -> tuple[tuple[str, str], ...]:
     return tuple(out)
 
 
+def _parse_seeds(text: str) -> tuple[int, ...]:
+    try:
+        seeds = tuple(int(s) for s in text.split(",") if s.strip())
+    except ValueError:
+        raise fail(f"--seeds: expected comma-separated integers, got {text!r}") from None
+    if not seeds or len(set(seeds)) != len(seeds):
+        raise fail(f"--seeds: expected distinct integers, got {text!r}")
+    return seeds
+
+
+def _parse_list(text: str, known: tuple[str, ...], option: str) -> tuple[str, ...]:
+    names = known if text.strip() == "all" else tuple(m.strip().lower() for m in text.split(",") if m.strip())
+    unknown = [m for m in names if m not in known]
+    if unknown or not names:
+        raise fail(f"{option}: unknown {unknown} (known: {', '.join(known)}, or all)")
+    return names
+
+
+def _write_leaderboard(out: Path, results, notes: list[str]) -> None:
+    from uavcas.ids.leaderboard import leaderboard_markdown, summarize
+
+    summary = summarize(results)
+    atomic_write_text(out / "leaderboard.csv", summary.to_csv(index=False))
+    atomic_write_text(out / "leaderboard.md", leaderboard_markdown(summary, notes=notes))
+
+
 @bench_app.command("ids")
 def ids_cmd(
     dataset: Path = typer.Argument(..., help="Dataset directory (flows.parquet), the authors' CSV (*_ts.csv) or a CICIDS2017/UNSW-NB15 sample."),
-    out: Path = typer.Option(..., "--out", help="Output directory."),
-    protocol: str = typer.Option("multiclass", "--protocol", help="binary | multiclass | ood | cross-condition."),
+    out: Path = typer.Option(..., "--out", help="Output directory (one sub-directory per protocol when several)."),
+    protocol: str = typer.Option("multiclass", "--protocol", help="binary | multiclass | ood | cross-condition, comma-separated, or all."),
     models: str = typer.Option("all", "--models", help="Comma-separated: lr,sgd,rf,mlp,lightgbm,cnn1d,lstm,convnet,tinyml,cnn_bilstm (or all)."),
     scaler: str = typer.Option("standard", "--scaler", help="standard | minmax | robust."),
-    epochs: int = typer.Option(50, "--epochs", min=1, help="Max epochs of the neural models (early stopping on validation)."),
+    epochs: int = typer.Option(50, "--epochs", min=1, help="Max epochs of the neural models (early stopping on the grouped validation split)."),
     holdout: list[str] = typer.Option([], "--holdout", help="AXIS=VALUE held out (cross-condition; repeatable)."),
-    seed: int = typer.Option(0, "--seed"),
+    seeds: str = typer.Option("0,1,2,3,4", "--seeds", help="Comma-separated seeds: one grouped split and model seed each; mean ± std over them."),
+    features: str = typer.Option(None, "--features", help="A feature set of the schema (e.g. cic, paper) or comma-separated columns (default: the dataset's)."),
+    importance: bool = typer.Option(True, "--importance/--no-importance", help="Permutation importance of the tree models (RF, LightGBM)."),
+    train_cap: int = typer.Option(0, "--train-cap", min=0, help="At most N training (and validation) flows per run and class, seeded (0: all); test flows are never capped."),
     threads: int = typer.Option(0, "--threads", min=0, help="Threads per model (0: cores available)."),
     fmt: str = typer.Option("auto", "--format", help="auto | uavcas | uavcas-csv | cicids2017 | unsw-nb15."),
     view: str = typer.Option(None, "--view", help="Flow view when the dataset holds several (5tuple | hostpair)."),
 ) -> None:
-    """Train and evaluate the baselines; writes results.csv/json/md (+ confusion matrices)."""
+    """Train and evaluate the baselines; writes results/summary/splits/confusion CSVs, figures,
+    results.md per protocol and leaderboard.csv/md."""
+    import pandas as pd
+
     from uavcas.dataset.read import load_any
-    from uavcas.ids.models import MODELS
-    from uavcas.ids.protocols import PROTOCOLS, SCALERS, BenchConfig, run_protocol
-    from uavcas.ids.results import write_results
+    from uavcas.ids.models import DEEP, MODELS
+    from uavcas.ids.protocols import PROTOCOLS, SCALERS, BenchConfig, execute, prepare
+    from uavcas.ids.results import results_frame, write_results
     from uavcas.ids.torch_estimator import DL_MISSING
 
-    if protocol not in PROTOCOLS:
-        raise fail(f"--protocol: unknown {protocol!r} (known: {', '.join(PROTOCOLS)})")
+    protocols = _parse_list(protocol, PROTOCOLS, "--protocol")
     if scaler not in SCALERS:
         raise fail(f"--scaler: unknown {scaler!r} (known: {', '.join(SCALERS)})")
-    names = MODELS if models.strip() == "all" else tuple(m.strip().lower() for m in models.split(",") if m.strip())
-    unknown = [m for m in names if m not in MODELS]
-    if unknown or not names:
-        raise fail(f"--models: unknown {unknown} (known: {', '.join(MODELS)})")
-    if any(m in MODELS[5:] for m in names):
+    names = _parse_list(models, MODELS, "--models")
+    if any(m in DEEP for m in names):
         try:
             import torch  # noqa: F401
         except ImportError:
             raise fail(DL_MISSING) from None
-    cfg = BenchConfig(models=names, scaler=scaler, epochs=epochs, seed=seed,
-                      holdout=_parse_holdout(holdout), n_threads=threads or None,
-                      progress=lambda msg: err_console.print(f"[dim]{protocol}[/] {msg}", highlight=False))
+    feats = None
+    if features:
+        feats = features.strip() if "," not in features else tuple(f.strip() for f in features.split(",") if f.strip())
+    cfg = BenchConfig(models=names, scaler=scaler, epochs=epochs, seeds=_parse_seeds(seeds),
+                      holdout=_parse_holdout(holdout), features=feats, importance=importance,
+                      train_cap=train_cap or None, n_threads=threads or None)
     try:
         df = load_any(dataset, None if fmt == "auto" else fmt, view=view)
-        res = run_protocol(df, protocol, cfg)
+        prepared = [prepare(df, p, cfg) for p in protocols]  # refuse bad input before any fit
     except (FileNotFoundError, ValueError, KeyError, OSError) as e:
         raise fail(f"{dataset}: {e}") from None
-    meta = {"dataset": str(dataset), "scaler": scaler, "epochs": epochs, "seed": seed,
-            "models": list(names), "holdout": [f"{a}={v}" for a, v in cfg.holdout],
-            "absent_features": df.attrs.get("absent_features", [])}
-    write_results(res, out, meta)
-    typer.echo((out / "results.md").read_text())
+    frames, notes = [], []
+    for prep in prepared:
+        cfg.progress = lambda msg, p=prep.protocol: err_console.print(f"[dim]{p}[/] {msg}", highlight=False)
+        res = execute(prep, cfg)
+        meta = {"dataset": str(dataset), "scaler": scaler, "epochs": epochs, "seeds": list(cfg.seeds),
+                "train_cap": cfg.train_cap,
+                "models": list(names), "holdout": [f"{a}={v}" for a, v in cfg.holdout],
+                "absent_features": df.attrs.get("absent_features", [])}
+        where = out if len(prepared) == 1 else out / prep.protocol
+        write_results(res, where, meta)
+        frames.append(results_frame(res))
+        notes += [f"{prep.protocol}: {n}" for n in res.notes]
+    _write_leaderboard(out, pd.concat(frames, ignore_index=True), notes)
+    typer.echo((out / "leaderboard.md").read_text())
+
+
+@bench_app.command("leaderboard")
+def leaderboard_cmd(
+    results: list[Path] = typer.Argument(..., help="Benchmark output directories (their results.csv, searched recursively)."),
+    out: Path = typer.Option(..., "--out", help="Output directory for leaderboard.csv and leaderboard.md."),
+) -> None:
+    """One leaderboard (mean ± std over seeds) from several `bench ids` outputs."""
+    import pandas as pd
+
+    from uavcas.ids.results import RESULT_COLUMNS
+
+    files = []
+    for r in results:
+        found = sorted(r.rglob("results.csv")) if r.is_dir() else ([r] if r.name == "results.csv" else [])
+        if not found:
+            raise fail(f"{r}: no results.csv (expected a `bench ids` output directory)")
+        files += found
+    frames = []
+    for f in files:
+        df = pd.read_csv(f, keep_default_na=False, na_values=[""], dtype={"class": str})
+        if list(df.columns) != list(RESULT_COLUMNS):
+            raise fail(f"{f}: not a `bench ids` results.csv (columns {list(df.columns)})")
+        frames.append(df.fillna({"class": ""}))
+    allr = pd.concat(frames, ignore_index=True)
+    dup = allr.duplicated(["protocol", "seed", "model", "metric", "class"])
+    if dup.any():
+        p = allr.loc[dup, "protocol"].iloc[0]
+        raise fail(f"protocol {p!r} appears in more than one results.csv: pass each protocol once")
+    _write_leaderboard(out, allr, [f"from {f}" for f in files])
+    typer.echo((out / "leaderboard.md").read_text())
 
 
 def register(app: typer.Typer) -> None:

@@ -1,8 +1,11 @@
-"""The feature matrix of a flow table: the 47 schema features and nothing else.
+"""The feature matrix of a flow table: flow features and nothing else.
 
 Metadata (run id, config, axes, addresses, labels, sequences: schema.METADATA_COLUMNS and every
-column not in schema.FEATURES) must never reach a model — the authors' `config_idx` among the
+column that is no flow feature) must never reach a model — the authors' `config_idx` among the
 features is the defect this module exists to prevent.
+
+Feature lists come from `uavcas.schema` only: its feature standards (`schema.FEATURE_STANDARDS`,
+e.g. 'cic' and 'paper', when the schema defines several) or its one list `schema.FEATURES`.
 """
 
 from __future__ import annotations
@@ -16,34 +19,68 @@ from uavcas import schema
 
 
 class MetadataLeakError(ValueError):
-    """A column that is not one of the 47 flow features was requested as a feature."""
+    """A column that is not a flow feature was requested as a feature."""
+
+
+def feature_sets() -> dict[str, tuple[str, ...]]:
+    """Named feature sets, from the schema (its standards; else its one list, named 'cic')."""
+    return dict(getattr(schema, "FEATURE_STANDARDS", None) or {"cic": schema.FEATURES})
+
+
+def known_features() -> set[str]:
+    return set(schema.FEATURES).union(*feature_sets().values())
 
 
 def check_feature_columns(columns: Iterable[str]) -> list[str]:
     """Return `columns` as a list if every one is a schema feature; raise otherwise."""
     cols = list(columns)
+    known = known_features()
     meta = [c for c in cols if c in schema.METADATA_COLUMNS]
-    other = [c for c in cols if c not in schema.FEATURES and c not in meta]
+    other = [c for c in cols if c not in known and c not in meta]
     if meta or other:
-        raise MetadataLeakError(
-            f"not flow features (never used by the IDS): {meta + other}"
-        )
+        raise MetadataLeakError(f"not flow features (never used by the IDS): {meta + other}")
     if not cols:
         raise MetadataLeakError("no feature column")
     return cols
 
 
-def feature_matrix(df: pd.DataFrame, columns: Iterable[str] | None = None) -> np.ndarray:
-    """float32 matrix of the schema features present in `df` (or of `columns`, checked).
+def resolve_features(df: pd.DataFrame, spec: str | Iterable[str] | None = None) -> list[str]:
+    """The feature columns to use on `df`.
 
-    inf (a rate over a zero duration) and NaN become 0: the estimators need finite input and a
-    zero rate is what CICFlowMeter writes for a one-packet flow.
+    None: the dataset's feature set (`df.attrs['features']` when it names one, else the first set
+    whose columns `df` all has, else the schema features `df` has); a name: that set, every
+    column of which `df` must have; a list: those columns (checked to be features).
     """
-    cols = check_feature_columns(columns if columns is not None else [f for f in schema.FEATURES if f in df.columns])
+    sets = feature_sets()
+    if spec is None:
+        named = df.attrs.get("features")
+        if isinstance(named, str) and named in sets:
+            spec = named
+        else:
+            full = [n for n, cols in sets.items() if set(cols) <= set(df.columns)]
+            if not full:
+                return check_feature_columns([f for f in schema.FEATURES if f in df.columns])
+            spec = full[0]
+    if isinstance(spec, str):
+        if spec not in sets:
+            raise ValueError(f"unknown feature set {spec!r}; known: {', '.join(sets)}")
+        cols = list(sets[spec])
+    else:
+        cols = check_feature_columns(spec)
     missing = [c for c in cols if c not in df.columns]
     if missing:
         raise ValueError(f"feature columns missing from the dataset: {missing}")
-    x = df[cols].to_numpy(dtype=np.float64)
-    x = np.nan_to_num(x, nan=0.0, posinf=0.0, neginf=0.0)
+    return cols
+
+
+def finite_features(df: pd.DataFrame, columns: list[str]) -> np.ndarray:
+    """float64 values of `columns`; inf (a rate over a zero duration) and NaN become 0: the
+    estimators need finite input and a zero rate is what CICFlowMeter writes for a one-packet flow."""
+    return np.nan_to_num(df[columns].to_numpy(dtype=np.float64), nan=0.0, posinf=0.0, neginf=0.0)
+
+
+def feature_matrix(df: pd.DataFrame, columns: Iterable[str] | str | None = None) -> np.ndarray:
+    """float32 matrix of the features `columns` (see `resolve_features`) of `df`, finite."""
+    x = finite_features(df, resolve_features(df, columns))
     # float32 overflows above 3.4e38; clip so huge rates stay finite
     return np.clip(x, -1e30, 1e30).astype(np.float32)

@@ -23,22 +23,31 @@ from __future__ import annotations
 
 import torch
 from torch import nn
+from torch.nn import functional as F
+
+
+def _padded(x: torch.Tensor, length: int) -> torch.Tensor:
+    """(batch, F) -> (batch, 1, max(F, length)): zeros appended so the pooling layers always
+    have an input (a dataset may keep fewer than 4 features)."""
+    return F.pad(x, (0, max(0, length - x.shape[1]))).unsqueeze(1)
 
 
 class CNN1D(nn.Module):
+    MIN_LENGTH = 4  # two MaxPool2 stages
+
     def __init__(self, n_features: int, n_classes: int) -> None:
         super().__init__()
         self.conv = nn.Sequential(
             nn.Conv1d(1, 32, 3, padding=1), nn.ReLU(), nn.MaxPool1d(2),
             nn.Conv1d(32, 64, 3, padding=1), nn.ReLU(), nn.MaxPool1d(2),
         )
-        length = n_features // 2 // 2
+        length = max(n_features, self.MIN_LENGTH) // 2 // 2
         self.head = nn.Sequential(
             nn.Flatten(), nn.Linear(64 * max(length, 1), 64), nn.ReLU(), nn.Dropout(0.3), nn.Linear(64, n_classes)
         )
 
     def forward(self, x: torch.Tensor) -> torch.Tensor:
-        return self.head(self.conv(x.unsqueeze(1)))
+        return self.head(self.conv(_padded(x, self.MIN_LENGTH)))
 
 
 class LSTMNet(nn.Module):
@@ -53,6 +62,8 @@ class LSTMNet(nn.Module):
 
 
 class ConvNet(nn.Module):
+    MIN_LENGTH = 2  # one MaxPool2 stage
+
     def __init__(self, n_features: int, n_classes: int) -> None:
         super().__init__()
 
@@ -63,7 +74,7 @@ class ConvNet(nn.Module):
         self.head = nn.Sequential(nn.Linear(128, 64), nn.ReLU(), nn.Dropout(0.5), nn.Linear(64, n_classes))
 
     def forward(self, x: torch.Tensor) -> torch.Tensor:
-        return self.head(self.conv(x.unsqueeze(1)).mean(-1))
+        return self.head(self.conv(_padded(x, self.MIN_LENGTH)).mean(-1))
 
 
 class TinyML(nn.Module):
@@ -76,6 +87,8 @@ class TinyML(nn.Module):
 
 
 class CNNBiLSTM(nn.Module):
+    MIN_LENGTH = 2  # one MaxPool2 stage
+
     def __init__(self, n_features: int, n_classes: int) -> None:
         super().__init__()
         self.conv = nn.Sequential(nn.Conv1d(1, 64, 3, padding=1), nn.ReLU(), nn.MaxPool1d(2), nn.BatchNorm1d(64))
@@ -83,7 +96,7 @@ class CNNBiLSTM(nn.Module):
         self.head = nn.Sequential(nn.Dropout(0.5), nn.Linear(128, n_classes))
 
     def forward(self, x: torch.Tensor) -> torch.Tensor:
-        z = self.conv(x.unsqueeze(1)).transpose(1, 2)  # (batch, steps, 64 channels)
+        z = self.conv(_padded(x, self.MIN_LENGTH)).transpose(1, 2)  # (batch, steps, 64 channels)
         _, (h, _) = self.lstm(z)
         return self.head(torch.cat([h[-2], h[-1]], dim=1))
 

@@ -1,5 +1,17 @@
-"""The four evaluation protocols. Each returns long-format rows (protocol, model, metric, class,
-value; class "" for overall metrics) plus confusion matrices, timings and notes."""
+"""The four evaluation protocols, each repeated over seeds (a new grouped split and model seed
+each time). A protocol is a `Task` built once from the flow table (targets, declared classes, the
+rows split by run, extra test sets) and a scoring rule; `run_protocol` splits, fits every model
+and scores it per seed, and returns long-format scores (protocol, seed, model, metric, class,
+value; class "" for overall metrics), confusion counts, the splits, fit times and, for the tree
+models, permutation importances.
+
+- binary: Benign vs DoS (DoS classes of other datasets: 'DoS ...'), declared {Benign, DoS}.
+- multiclass: every class of the dataset (15 on a full uavcas dataset).
+- ood: attack-vs-benign trained on single-attack configurations; AUROC and PR-AUC per
+  collaborative composition (all its flows + the benign test flows of the seed's split).
+- cross-condition: every flow with AXIS=VALUE held out and tested on; multiclass on the rest,
+  whose own grouped test split is scored too (metrics suffixed `_iid`).
+"""
 
 from __future__ import annotations
 
@@ -10,21 +22,23 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
-from sklearn.metrics import confusion_matrix, f1_score, roc_auc_score
 from sklearn.preprocessing import MinMaxScaler, RobustScaler, StandardScaler
 from threadpoolctl import threadpool_limits
 
 from uavcas import schema
 from uavcas.vocabulary import families_of
 
-from .features import feature_matrix
-from .models import DEEP, DISPLAY, MODELS, fit_model, make_model
-from .splits import grouped_split
+from .features import feature_matrix, resolve_features
+from .metrics import STEALTH, auroc, class_scores, confusion, pr_auc, scores
+from .models import DEEP, DISPLAY, MODELS, TREES, fit_model, make_model
+from .splits import DegenerateSplitError, Split, cap_rows, check_declared, grouped_split
 from .torch_estimator import default_threads
 
 PROTOCOLS = ("binary", "multiclass", "ood", "cross-condition")
 SCALERS = {"standard": StandardScaler, "minmax": MinMaxScaler, "robust": RobustScaler}
+DEFAULT_SEEDS = (0, 1, 2, 3, 4)
 ATTACK = "Attack"
+DOS = "DoS"
 _DOS = re.compile(r"^dos($|[ _\-])", re.IGNORECASE)  # DoS, 'DoS Hulk', 'DoS-UDP_Flood'; not 'DoS+Replay'
 
 
@@ -33,28 +47,100 @@ class BenchConfig:
     models: tuple[str, ...] = MODELS
     scaler: str = "standard"
     epochs: int = 50
-    seed: int = 0
+    seeds: tuple[int, ...] = DEFAULT_SEEDS
     holdout: tuple[tuple[str, str], ...] = ()
+    features: str | tuple[str, ...] | None = None  # a feature-set name or columns; None: all schema features
+    importance: bool = True
+    importance_rows: int = 2000  # test flows permuted (a seeded subsample when there are more)
+    importance_repeats: int = 5
+    train_cap: int | None = None  # at most this many training/validation flows per run and class
     n_threads: int | None = None
-    progress: Callable[[str], None] | None = None  # told "<model>: <seconds>" after each model
+    progress: Callable[[str], None] | None = None  # told "<seed> <model>: <seconds>" after each fit
+
+
+@dataclass(frozen=True)
+class Score:
+    protocol: str
+    seed: int
+    model: str
+    metric: str
+    cls: str
+    value: float
+
+
+@dataclass(frozen=True)
+class SplitRow:
+    seed: int
+    run_id: str
+    split: str
+
+
+@dataclass(frozen=True)
+class Fit:
+    seed: int
+    model: str
+    seconds: float
+    epochs: int | None
+
+
+@dataclass(frozen=True)
+class Importance:
+    seed: int
+    model: str
+    feature: str
+    mean: float
+    std: float
 
 
 @dataclass
 class ProtocolResult:
     protocol: str
-    rows: list[dict] = field(default_factory=list)
-    confusion: dict[str, tuple[list[str], np.ndarray]] = field(default_factory=dict)
-    timings: dict[str, float] = field(default_factory=dict)
-    epochs_run: dict[str, int] = field(default_factory=dict)  # neural models: epochs before early stop
-    splits: dict[str, int] = field(default_factory=dict)
+    declared: list[str]
+    features: list[str]
+    scores: list[Score] = field(default_factory=list)
+    confusion: dict[tuple[int, str], np.ndarray] = field(default_factory=dict)  # (seed, model) -> counts
+    splits: list[SplitRow] = field(default_factory=list)
+    sizes: dict[int, dict[str, int]] = field(default_factory=dict)  # seed -> flows per part
+    fits: list[Fit] = field(default_factory=list)
+    importance: list[Importance] = field(default_factory=list)
     notes: list[str] = field(default_factory=list)
 
-    def add(self, model: str, metric: str, value: float, cls: str = "") -> None:
-        self.rows.append({"protocol": self.protocol, "model": model, "metric": metric, "class": cls, "value": float(value)})
+    def add(self, seed: int, model: str, rows) -> None:
+        self.scores += [Score(self.protocol, seed, model, m, c, float(v)) for m, c, v in rows]
+
+
+Predict = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]  # rows -> (proba, model classes)
+
+
+@dataclass
+class Task:
+    """What a protocol fits and scores. `pool` rows are split by run each seed; `score` turns a
+    fitted model's predictions into rows and returns them with the main test rows and their
+    predicted classes (for the confusion matrix and the permutation importance)."""
+
+    x: np.ndarray
+    y: np.ndarray
+    groups: np.ndarray
+    strata: np.ndarray | None
+    pool: np.ndarray
+    declared: list[str]
+    score: Callable[["Task", Split, Predict], tuple[list, np.ndarray, np.ndarray]]
+    fixed: dict[str, np.ndarray] = field(default_factory=dict)  # label of extra test runs -> rows
+
+    def split(self, seed: int) -> Split:
+        p = self.pool
+        sp = grouped_split(self.y[p], self.groups[p], seed=seed, declared=self.declared,
+                           strata=None if self.strata is None else self.strata[p])
+        return Split(p[sp.train], p[sp.val], p[sp.test], sp.groups)
 
 
 def is_dos(label: str) -> bool:
     return bool(_DOS.match(str(label)))
+
+
+def class_order(labels) -> list[str]:
+    present = set(map(str, labels))
+    return [c for c in schema.CLASSES if c in present] + sorted(present - set(schema.CLASSES))
 
 
 def _groups(df: pd.DataFrame, notes: list[str]) -> np.ndarray:
@@ -64,139 +150,75 @@ def _groups(df: pd.DataFrame, notes: list[str]) -> np.ndarray:
     return np.arange(len(df)).astype(str)
 
 
-def _fit_predict(res: ProtocolResult, name: str, cfg: BenchConfig, xtr, ytr, xva, yva, xtests: list[np.ndarray]):
-    """Scale on the training rows only, fit, return probabilities on each test matrix + classes;
-    records the fit+predict time (and epochs run, for the neural models) in `res`."""
-    if cfg.scaler not in SCALERS:
-        raise ValueError(f"unknown scaler {cfg.scaler!r}; known: {', '.join(SCALERS)}")
-    t0 = time.perf_counter()
-    scaler = SCALERS[cfg.scaler]().fit(xtr)
-    tf = lambda x: np.clip(scaler.transform(x), -1e6, 1e6).astype(np.float32)  # noqa: E731
-    est = make_model(name, random_state=cfg.seed, epochs=cfg.epochs, n_threads=cfg.n_threads)
-    # why: BLAS/OpenMP pools default to all cores and busy-wait; on a shared 2-core machine
-    # oversubscription makes a 1-second fit take 10
-    with threadpool_limits(limits=cfg.n_threads or default_threads()):
-        fit_model(est, tf(xtr), ytr, tf(xva) if len(xva) else None, yva if len(xva) else None)
-        probs = [est.predict_proba(tf(x)) if len(x) else np.empty((0, len(est.classes_))) for x in xtests]
-    res.timings[DISPLAY[name]] = time.perf_counter() - t0
-    n_ep = getattr(est, "n_epochs_", None) or getattr(est, "n_iter_", None)
-    if isinstance(n_ep, (int, np.integer)) and name in ("mlp",) + DEEP:
-        res.epochs_run[DISPLAY[name]] = int(n_ep)
-    if cfg.progress:
-        epochs = f", {n_ep} epochs" if name in ("mlp",) + DEEP else ""
-        cfg.progress(f"{DISPLAY[name]}: {res.timings[DISPLAY[name]]:.1f} s{epochs}")
-    return probs, est.classes_
+def _strata(df: pd.DataFrame) -> np.ndarray | None:
+    # a run's composition: runs of one composition are dealt evenly between the splits
+    return df["attacks"].astype(str).to_numpy() if "attacks" in df.columns else None
 
 
-def _per_class_f1(res: ProtocolResult, model: str, y, pred, labels: list[str]) -> None:
-    """F1 of each class that has test flows (a class without any has no F1, not an F1 of 0)."""
-    present = set(np.asarray(y).tolist())
-    absent = [c for c in labels if c not in present]
-    note = f"no test flow of: {', '.join(absent)} (no per-class F1 for them)"
-    if absent and note not in res.notes:
-        res.notes.append(note)
-    labels = [c for c in labels if c in present]
-    f1s = f1_score(y, pred, labels=labels, average=None, zero_division=0)
-    for c, v in zip(labels, f1s):
-        res.add(model, "f1", v, c)
+def _classify(task: Task, sp: Split, predict: Predict, positive: str | None = None):
+    proba, classes = predict(sp.test)
+    return scores(task.y[sp.test], proba, classes, task.declared, positive), sp.test, classes[proba.argmax(1)]
 
 
-def _overall(res: ProtocolResult, model: str, y, pred, suffix: str = "") -> None:
-    res.add(model, "f1_weighted" + suffix, f1_score(y, pred, average="weighted", zero_division=0))
-    res.add(model, "f1_macro" + suffix, f1_score(y, pred, average="macro", zero_division=0))
-    res.add(model, "accuracy" + suffix, float(np.mean(np.asarray(y) == np.asarray(pred))))
+def _score_binary(task, sp, predict):
+    return _classify(task, sp, predict, positive=DOS)
 
 
-def _auroc(y_pos: np.ndarray, score: np.ndarray) -> float:
-    if len(np.unique(y_pos)) < 2:
-        return float("nan")
-    return float(roc_auc_score(y_pos, score))
+def _score_multiclass(task, sp, predict):
+    return _classify(task, sp, predict)
 
 
-def _class_order(labels) -> list[str]:
-    present = set(map(str, labels))
-    return [c for c in schema.CLASSES if c in present] + sorted(present - set(schema.CLASSES))
+def _score_ood(task, sp, predict):
+    rows, main, pred = _classify(task, sp, predict, positive=ATTACK)
+    test_benign = sp.test[task.y[sp.test] == schema.BENIGN]
+    for comp, comp_rows in task.fixed.items():
+        e = np.concatenate([comp_rows, test_benign])
+        proba, classes = predict(e)
+        score = class_scores(proba, classes, ATTACK)
+        y_pos = task.y[e] == ATTACK
+        rows += [("auroc", comp, auroc(y_pos, score)), ("pr_auc", comp, pr_auc(y_pos, score))]
+    return rows, main, pred
 
 
-def _grouped_fits(res: ProtocolResult, df: pd.DataFrame, y: np.ndarray, cfg: BenchConfig):
-    """70/10/20 split grouped by run; per model yield (name, y_test, proba, classes, pred).
-
-    Overall weighted/macro F1 are recorded here; the protocol adds its own metrics.
-    """
-    x, g = feature_matrix(df), _groups(df, res.notes)
-    sp = grouped_split(y, g, seed=cfg.seed)
-    res.splits = {"train": len(sp.train), "val": len(sp.val), "test": len(sp.test)}
-    for name in cfg.models:
-        (p,), classes = _fit_predict(res, name, cfg, x[sp.train], y[sp.train], x[sp.val], y[sp.val], [x[sp.test]])
-        pred = classes[p.argmax(1)]
-        m = DISPLAY[name]
-        _overall(res, m, y[sp.test], pred)
-        yield m, y[sp.test], p, classes, pred
+def _score_cross(task, sp, predict):
+    held = task.fixed["heldout"]
+    proba, classes = predict(held)
+    rows, pred = scores(task.y[held], proba, classes, task.declared), classes[proba.argmax(1)]
+    if len(sp.test):
+        proba, classes = predict(sp.test)
+        rows += [(f"{m}_iid", c, v) for m, c, v in scores(task.y[sp.test], proba, classes, task.declared)
+                 if c in ("", STEALTH)]
+    return rows, held, pred
 
 
-def run_binary(df: pd.DataFrame, cfg: BenchConfig) -> ProtocolResult:
-    """Benign vs DoS (DoS classes of other datasets: 'DoS ...'); weighted and macro F1, AUROC."""
-    res = ProtocolResult("binary")
-    sub = df[(df["label"] == schema.BENIGN) | df["label"].map(is_dos)]
-    y = np.where(sub["label"] == schema.BENIGN, schema.BENIGN, "DoS")
-    if len(np.unique(y)) < 2:
+def prepare_binary(df: pd.DataFrame, x: np.ndarray, notes: list[str], cfg: BenchConfig) -> Task:
+    keep = ((df["label"] == schema.BENIGN) | df["label"].map(is_dos)).to_numpy()
+    y = np.where(df["label"] == schema.BENIGN, schema.BENIGN, DOS).astype(object)
+    if not (keep & (y == DOS)).any() or not (keep & (y == schema.BENIGN)).any():
         raise ValueError("binary protocol needs Benign and DoS flows")
-    for m, y_test, p, classes, pred in _grouped_fits(res, sub, y, cfg):
-        pos = list(classes).index("DoS") if "DoS" in classes else None
-        res.add(m, "auroc", _auroc(y_test == "DoS", p[:, pos]) if pos is not None else np.nan)
-        _per_class_f1(res, m, y_test, pred, [schema.BENIGN, "DoS"])
-    return res
+    return Task(x, y, _groups(df, notes), _strata(df), np.flatnonzero(keep), [schema.BENIGN, DOS], _score_binary)
 
 
-def run_multiclass(df: pd.DataFrame, cfg: BenchConfig) -> ProtocolResult:
-    """All classes (15 on a full uavcas dataset): per-class F1, macro/weighted F1, confusion."""
-    res = ProtocolResult("multiclass")
+def prepare_multiclass(df: pd.DataFrame, x: np.ndarray, notes: list[str], cfg: BenchConfig) -> Task:
     y = df["label"].astype(str).to_numpy()
-    labels = _class_order(y)
-    for m, y_test, _p, _classes, pred in _grouped_fits(res, df, y, cfg):
-        _per_class_f1(res, m, y_test, pred, labels)
-        res.confusion[m] = (labels, confusion_matrix(y_test, pred, labels=labels))
-    return res
+    return Task(x, y, _groups(df, notes), _strata(df), np.arange(len(df)), class_order(y), _score_multiclass)
 
 
-def run_ood(df: pd.DataFrame, cfg: BenchConfig) -> ProtocolResult:
-    """Train attack-vs-benign on single-attack configurations; AUROC per collaborative one.
-
-    Each composition's test set: all flows of its runs (attack and benign ones) plus the benign
-    flows of the held-out single-configuration test runs, so both classes are always present.
-    """
-    res = ProtocolResult("ood")
+def prepare_ood(df: pd.DataFrame, x: np.ndarray, notes: list[str], cfg: BenchConfig) -> Task:
     if "attacks" not in df.columns:
         raise ValueError("ood protocol needs the 'attacks' axis column (a uavcas dataset)")
     comp = df["attacks"].map(families_of)
     single = (comp.map(len) <= 1).to_numpy()
-    multi = ~single
-    if not multi.any() or not single.any():
+    if single.all() or not single.any():
         raise ValueError("ood protocol needs both single-attack and collaborative configurations")
-    y = np.where(df["label"] == schema.BENIGN, schema.BENIGN, ATTACK)
-    x, g = feature_matrix(df), _groups(df, res.notes)
-    si = np.flatnonzero(single)
-    sp = grouped_split(y[si], g[si], seed=cfg.seed)
-    tr, va, te = si[sp.train], si[sp.val], si[sp.test]
-    names = comp.map(lambda f: schema.class_name(f)).to_numpy()
-    comps = _class_order(names[multi])
-    test_benign = te[y[te] == schema.BENIGN]
-    evals = [te] + [np.concatenate([np.flatnonzero(multi & (names == c)), test_benign]) for c in comps]
-    res.splits = {"train": len(tr), "val": len(va), "test_single": len(te), "compositions": len(comps)}
-    for name in cfg.models:
-        probs, classes = _fit_predict(res, name, cfg, x[tr], y[tr], x[va], y[va], [x[e] for e in evals])
-        k = list(classes).index(ATTACK)
-        m = DISPLAY[name]
-        res.add(m, "auroc_in_distribution", _auroc(y[te] == ATTACK, probs[0][:, k]))
-        for c, e, p in zip(comps, evals[1:], probs[1:]):
-            res.add(m, "auroc", _auroc(y[e] == ATTACK, p[:, k]), c)
-    return res
+    y = np.where(df["label"] == schema.BENIGN, schema.BENIGN, ATTACK).astype(object)
+    names = comp.map(schema.class_name).to_numpy()
+    fixed = {c: np.flatnonzero(~single & (names == c)) for c in class_order(names[~single])}
+    return Task(x, y, _groups(df, notes), _strata(df), np.flatnonzero(single), [schema.BENIGN, ATTACK],
+                _score_ood, fixed)
 
 
-def run_cross_condition(df: pd.DataFrame, cfg: BenchConfig) -> ProtocolResult:
-    """Hold out every flow whose axis has the given value; multiclass on the rest; F1 on the
-    held-out condition beside F1 on a grouped test split of the seen conditions (`_iid`)."""
-    res = ProtocolResult("cross-condition")
+def prepare_cross(df: pd.DataFrame, x: np.ndarray, notes: list[str], cfg: BenchConfig) -> Task:
     if not cfg.holdout:
         raise ValueError("cross-condition needs --holdout AXIS=VALUE (e.g. mission=random)")
     held = np.zeros(len(df), dtype=bool)
@@ -209,39 +231,121 @@ def run_cross_condition(df: pd.DataFrame, cfg: BenchConfig) -> ProtocolResult:
         held |= m
     if held.all():
         raise ValueError("--holdout leaves no flow to train on")
-    res.notes.append("held out: " + ", ".join(f"{a}={v}" for a, v in cfg.holdout))
+    where = " (held out: " + ", ".join(f"{a}={v}" for a, v in cfg.holdout) + ")"
+    notes.append("held out: " + ", ".join(f"{a}={v}" for a, v in cfg.holdout))
     y = df["label"].astype(str).to_numpy()
-    labels = _class_order(y)
-    x, g = feature_matrix(df), _groups(df, res.notes)
-    rest, ho = np.flatnonzero(~held), np.flatnonzero(held)
-    sp = grouped_split(y[rest], g[rest], seed=cfg.seed)
-    tr, va, te = rest[sp.train], rest[sp.val], rest[sp.test]
-    res.splits = {"train": len(tr), "val": len(va), "test_seen": len(te), "test_heldout": len(ho)}
-    for name in cfg.models:
-        (p_ho, p_te), classes = _fit_predict(res, name, cfg, x[tr], y[tr], x[va], y[va], [x[ho], x[te]])
-        m = DISPLAY[name]
-        pred = classes[p_ho.argmax(1)]
-        _overall(res, m, y[ho], pred)
-        _overall(res, m, y[te], classes[p_te.argmax(1)], suffix="_iid")
-        _per_class_f1(res, m, y[ho], pred, labels)
-        res.confusion[m] = (labels, confusion_matrix(y[ho], pred, labels=labels))
+    declared = class_order(y)
+    missing = [c for c in declared if not (held & (y == c)).any()]
+    if missing:
+        raise DegenerateSplitError(f"degenerate split{where}: no held-out flow of {', '.join(missing)}")
+    groups = _groups(df, notes)
+    check_declared(y[~held], groups[~held], declared, where=" of the seen conditions")
+    return Task(x, y, groups, _strata(df), np.flatnonzero(~held), declared, _score_cross,
+                {"heldout": np.flatnonzero(held)})
+
+
+PREPARE = {"binary": prepare_binary, "multiclass": prepare_multiclass, "ood": prepare_ood, "cross-condition": prepare_cross}
+
+
+def _split_rows(task: Task, seed: int, sp: Split) -> list[SplitRow]:
+    out = [SplitRow(seed, g, part) for part, gs in sp.groups.items() for g in gs]
+    for name, rows in task.fixed.items():
+        out += [SplitRow(seed, g, "heldout" if name == "heldout" else "ood-test") for g in sorted(set(task.groups[rows]))]
+    return out
+
+
+def _fit_one(res: ProtocolResult, task: Task, sp: Split, name: str, seed: int, cfg: BenchConfig) -> None:
+    t0 = time.perf_counter()
+    scaler = SCALERS[cfg.scaler]().fit(task.x[sp.train])
+    tf = lambda rows: np.clip(scaler.transform(task.x[rows]), -1e6, 1e6).astype(np.float32)  # noqa: E731
+    est = make_model(name, random_state=seed, epochs=cfg.epochs, n_threads=cfg.n_threads)
+    model = DISPLAY[name]
+    # why: BLAS/OpenMP pools default to all cores and busy-wait; on a shared 2-core machine
+    # oversubscription makes a 1-second fit take 10
+    with threadpool_limits(limits=cfg.n_threads or default_threads()):
+        fit_model(est, tf(sp.train), task.y[sp.train], tf(sp.val) if len(sp.val) else None,
+                  task.y[sp.val] if len(sp.val) else None)
+        rows, main, pred = task.score(task, sp, lambda r: (est.predict_proba(tf(r)), est.classes_))
+        seconds = time.perf_counter() - t0
+        res.add(seed, model, rows)
+        res.confusion[(seed, model)] = confusion(task.y[main], pred, task.declared)
+        if cfg.importance and name in TREES:
+            res.importance += _importance(est, tf, task, main, seed, model, cfg, res.features)
+    epochs = getattr(est, "n_iter_", None) if name in ("mlp",) + DEEP else None
+    res.fits.append(Fit(seed, model, seconds, None if epochs is None else int(epochs)))
+    res.add(seed, model, [("fit_s", "", seconds)] + ([("epochs", "", epochs)] if epochs is not None else []))
+    if cfg.progress:
+        cfg.progress(f"seed {seed} {model}: {seconds:.1f} s" + (f", {epochs} epochs" if epochs is not None else ""))
+
+
+def _importance(est, tf, task: Task, rows: np.ndarray, seed: int, model: str, cfg: BenchConfig,
+                features: list[str]) -> list[Importance]:
+    """Drop in macro-F1 (declared classes) when one feature's test values are shuffled."""
+    from sklearn.inspection import permutation_importance
+    from sklearn.metrics import f1_score
+
+    if len(rows) > cfg.importance_rows:
+        rows = np.sort(np.random.default_rng(seed).choice(rows, cfg.importance_rows, replace=False))
+    def scorer(model, x, y) -> float:  # a plain callable: make_scorer assumes pos_label=1 for two classes
+        return f1_score(y, model.predict(x), average="macro", labels=task.declared, zero_division=0)
+
+    r = permutation_importance(est, tf(rows), task.y[rows], scoring=scorer, n_repeats=cfg.importance_repeats,
+                               random_state=seed, n_jobs=1)
+    return [Importance(seed, model, f, float(m), float(s)) for f, m, s in zip(features, r.importances_mean, r.importances_std)]
+
+
+@dataclass
+class Prepared:
+    """A protocol ready to run: its task and every seed's split, all accepted."""
+
+    protocol: str
+    task: Task
+    splits: dict[int, Split]
+    features: list[str]
+    notes: list[str]
+
+
+def prepare(df: pd.DataFrame, protocol: str, cfg: BenchConfig) -> Prepared:
+    """Build the task and every seed's split; raises (ValueError, DegenerateSplitError) before
+    anything is fitted."""
+    if protocol not in PREPARE:
+        raise ValueError(f"unknown protocol {protocol!r}; known: {', '.join(PROTOCOLS)}")
+    if cfg.scaler not in SCALERS:
+        raise ValueError(f"unknown scaler {cfg.scaler!r}; known: {', '.join(SCALERS)}")
+    if "label" not in df.columns:
+        raise ValueError("the dataset has no 'label' column")
+    if not cfg.seeds:
+        raise ValueError("no seed given")
+    df = df.reset_index(drop=True)
+    features = resolve_features(df, cfg.features)
+    notes: list[str] = []
+    task = PREPARE[protocol](df, feature_matrix(df, features), notes, cfg)
+    splits = {seed: task.split(seed) for seed in cfg.seeds}
+    source = df.attrs.get("source")
+    if source and source not in ("uavcas", "uavcas-csv"):
+        notes.append(f"external dataset ({source}): no runs, each flow is its own group, so the "
+                     "split is a stratified flow-level one")
+    absent = df.attrs.get("absent_features") or []
+    if absent:
+        notes.append(f"{len(absent)} features absent from this dataset (set to 0): {', '.join(absent)}")
+    return Prepared(protocol, task, splits, features, notes)
+
+
+def execute(prep: Prepared, cfg: BenchConfig) -> ProtocolResult:
+    """Fit and score every model on every seed's split."""
+    task = prep.task
+    res = ProtocolResult(prep.protocol, task.declared, prep.features, notes=list(prep.notes))
+    for seed, sp in prep.splits.items():
+        res.splits += _split_rows(task, seed, sp)
+        if cfg.train_cap:
+            sp = Split(cap_rows(sp.train, task.y, task.groups, cfg.train_cap, seed),
+                       cap_rows(sp.val, task.y, task.groups, cfg.train_cap, seed + 1), sp.test, sp.groups)
+        res.sizes[seed] = {"train": len(sp.train), "val": len(sp.val), "test": len(sp.test),
+                           **{k: len(v) for k, v in task.fixed.items()}}
+        for name in cfg.models:
+            _fit_one(res, task, sp, name, seed, cfg)
     return res
-
-
-RUNNERS = {"binary": run_binary, "multiclass": run_multiclass, "ood": run_ood, "cross-condition": run_cross_condition}
 
 
 def run_protocol(df: pd.DataFrame, protocol: str, cfg: BenchConfig) -> ProtocolResult:
-    if protocol not in RUNNERS:
-        raise ValueError(f"unknown protocol {protocol!r}; known: {', '.join(PROTOCOLS)}")
-    if "label" not in df.columns:
-        raise ValueError("the dataset has no 'label' column")
-    source = df.attrs.get("source")
-    res = RUNNERS[protocol](df.reset_index(drop=True), cfg)
-    if source:
-        res.notes.append(f"external dataset ({source}): no runs, each flow is its own group, so the "
-                         "split is a stratified flow-level one")
-    absent = df.attrs.get("absent_features") or []
-    if absent:
-        res.notes.append(f"{len(absent)} features absent from this dataset (set to 0): {', '.join(absent)}")
-    return res
+    return execute(prepare(df, protocol, cfg), cfg)

@@ -1,10 +1,19 @@
-"""Writing a benchmark's results: results.csv (long format), results.json, results.md, confusion
-matrices (CSV) and the best/worst confusion figure. Every file atomically."""
+"""Writing one protocol's results (every file atomically):
+
+    results.csv      protocol, seed, model, metric, class, value (class "" = overall)
+    summary.csv      protocol, model, metric, class, mean, std over the seeds
+    splits.csv       seed, run_id, split (train | val | test | heldout | ood-test)
+    confusion.csv    seed, model, true, predicted, count (the main test set of every seed)
+    confusion_<model>.csv / .png   counts summed over the seeds, every model
+    importance.csv   seed, model, feature, mean, std (permutation importance, tree models)
+    results.json     options, declared classes, split sizes, fit times, notes
+    results.md       the protocol's tables (leaderboard layout) + split sizes and top features
+"""
 
 from __future__ import annotations
 
 import json
-import math
+from dataclasses import asdict
 from pathlib import Path
 
 import numpy as np
@@ -12,85 +21,104 @@ import pandas as pd
 
 from uavcas.atomic import atomic_write_text
 
+from .leaderboard import leaderboard_markdown, summarize
 from .protocols import ProtocolResult
 
-RESULT_COLUMNS = ("protocol", "model", "metric", "class", "value")
+RESULT_COLUMNS = ("protocol", "seed", "model", "metric", "class", "value")
+TOP_FEATURES = 10
 
 
 def results_frame(res: ProtocolResult) -> pd.DataFrame:
-    return pd.DataFrame(res.rows, columns=list(RESULT_COLUMNS))
+    df = pd.DataFrame([asdict(s) for s in res.scores], columns=["protocol", "seed", "model", "metric", "cls", "value"])
+    return df.rename(columns={"cls": "class"})[list(RESULT_COLUMNS)]
 
 
-def _md_table(df: pd.DataFrame, fmt: str = "{:.4f}") -> str:
-    cols = [str(c) for c in df.columns]
-    lines = ["| " + " | ".join([df.index.name or ""] + cols) + " |", "|" + "---|" * (len(cols) + 1)]
-    for idx, row in df.iterrows():
-        cells = [fmt.format(v) if isinstance(v, float) and not math.isnan(v) else ("" if isinstance(v, float) else str(v)) for v in row]
-        lines.append("| " + " | ".join([str(idx)] + cells) + " |")
-    return "\n".join(lines)
+def _safe(name: str) -> str:
+    return "".join(ch if ch.isalnum() else "_" for ch in name)
+
+
+def confusion_totals(res: ProtocolResult) -> dict[str, np.ndarray]:
+    out: dict[str, np.ndarray] = {}
+    for (_seed, model), cm in res.confusion.items():
+        out[model] = out.get(model, 0) + cm
+    return out
+
+
+def confusion_long(res: ProtocolResult) -> pd.DataFrame:
+    rows = []
+    for (seed, model), cm in res.confusion.items():
+        for i, t in enumerate(res.declared):
+            for j, p in enumerate(res.declared):
+                rows.append((seed, model, t, p, int(cm[i, j])))
+    return pd.DataFrame(rows, columns=["seed", "model", "true", "predicted", "count"])
+
+
+def confusion_figure(labels: list[str], cm: np.ndarray, title: str, path: Path) -> Path:
+    """Counts in each cell, colour = share of the true class's flows."""
+    from uavcas.report.figure import plt, save_png
+
+    n = len(labels)
+    size = max(4.0, 0.45 * n + 2)
+    fig, ax = plt.subplots(figsize=(size + 1, size))
+    norm = cm / np.maximum(cm.sum(1, keepdims=True), 1)
+    ax.imshow(norm, cmap="Blues", vmin=0, vmax=1)
+    for i in range(n):
+        for j in range(n):
+            if cm[i, j]:
+                ax.text(j, i, str(int(cm[i, j])), ha="center", va="center", fontsize=6 if n > 8 else 8,
+                        color="white" if norm[i, j] > 0.6 else "black")
+    ax.set_xticks(range(n), labels, rotation=90, fontsize=7)
+    ax.set_yticks(range(n), labels, fontsize=7)
+    ax.set_xlabel("predicted")
+    ax.set_ylabel("true")
+    ax.set_title(title, fontsize=9)
+    return save_png(fig, path)
+
+
+def importance_frame(res: ProtocolResult) -> pd.DataFrame:
+    return pd.DataFrame([asdict(i) for i in res.importance], columns=["seed", "model", "feature", "mean", "std"])
 
 
 def markdown(res: ProtocolResult, meta: dict) -> str:
-    df = results_frame(res)
-    order = list(dict.fromkeys(df["model"]))
-    parts = [f"# IDS benchmark: {res.protocol}", "", f"dataset: `{meta.get('dataset')}`, scaler: {meta.get('scaler')}, "
-             f"epochs: {meta.get('epochs')}, seed: {meta.get('seed')}", ""]
-    if res.notes:
-        parts += ["Notes: " + "; ".join(res.notes), ""]
-    parts += ["Split sizes: " + ", ".join(f"{k} {v}" for k, v in res.splits.items()), ""]
-    overall = df[df["class"] == ""].pivot(index="model", columns="metric", values="value").reindex(order)
-    if not overall.empty:
-        parts += ["## Overall", "", _md_table(overall), ""]
-    per = df[df["class"] != ""]
-    for metric in dict.fromkeys(per["metric"]):
-        t = per[per["metric"] == metric].pivot(index="model", columns="class", values="value").reindex(order)
-        t = t[list(dict.fromkeys(per[per["metric"] == metric]["class"]))]
-        parts += [f"## {metric} per class", "", _md_table(t), ""]
-    if res.timings:
-        tt = pd.DataFrame({"seconds": pd.Series(res.timings), "epochs": pd.Series(res.epochs_run, dtype=float)}).reindex(order)
-        tt.index.name = "model"
-        parts += ["## Fit + predict time", "", _md_table(tt, "{:.1f}"), ""]
+    summary = summarize(results_frame(res))
+    seeds = sorted(res.sizes)
+    parts = [leaderboard_markdown(summary, f"IDS benchmark: {res.protocol}", res.notes),
+             f"dataset: `{meta.get('dataset')}`, scaler: {meta.get('scaler')}, epochs: {meta.get('epochs')}, "
+             f"seeds: {', '.join(map(str, seeds))}, features: {len(res.features)}", "",
+             f"Declared classes ({len(res.declared)}): {', '.join(res.declared)}", "",
+             "Flows per split: " + "; ".join(f"seed {s}: " + ", ".join(f"{k} {v}" for k, v in res.sizes[s].items())
+                                           for s in seeds), ""]
+    imp = importance_frame(res)
+    if not imp.empty:
+        top = imp.groupby(["model", "feature"])["mean"].mean().reset_index()
+        parts += ["## Permutation importance (macro-F1 drop, mean over seeds)", ""]
+        for model, g in top.groupby("model", sort=False):
+            best = g.sort_values("mean", ascending=False).head(TOP_FEATURES)
+            parts.append(f"- {model}: " + ", ".join(f"{r.feature} {r.mean:.3f}" for r in best.itertuples()))
+        parts.append("")
     return "\n".join(parts)
-
-
-def confusion_figure(res: ProtocolResult, path: Path) -> Path | None:
-    """Confusion matrices (row-normalised) of the best and the worst model by macro F1."""
-    if not res.confusion:
-        return None
-    from uavcas.report.figure import plt, save_png
-
-    df = results_frame(res)
-    f1 = df[(df["metric"] == "f1_macro") & (df["class"] == "")].set_index("model")["value"]
-    f1 = f1[f1.index.isin(res.confusion)]
-    if f1.empty:
-        return None
-    picks = [("best", f1.idxmax()), ("worst", f1.idxmin())]
-    fig, axes = plt.subplots(1, 2, figsize=(14, 6.5))
-    for ax, (tag, model) in zip(axes, picks):
-        labels, cm = res.confusion[model]
-        norm = cm / np.maximum(cm.sum(1, keepdims=True), 1)
-        ax.imshow(norm, cmap="Blues", vmin=0, vmax=1)
-        ax.set_xticks(range(len(labels)), labels, rotation=90, fontsize=7)
-        ax.set_yticks(range(len(labels)), labels, fontsize=7)
-        ax.set_xlabel("predicted")
-        ax.set_ylabel("true")
-        ax.set_title(f"{tag}: {model} (macro F1 {f1[model]:.3f})")
-    return save_png(fig, path)
 
 
 def write_results(res: ProtocolResult, out: str | Path, meta: dict) -> list[Path]:
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     df = results_frame(res)
-    written = [atomic_write_text(out / "results.csv", df.to_csv(index=False))]
-    payload = {**meta, "protocol": res.protocol, "splits": res.splits, "notes": res.notes,
-               "timings_s": res.timings, "epochs_run": res.epochs_run, "results": json.loads(df.to_json(orient="records"))}
+    written = [atomic_write_text(out / "results.csv", df.to_csv(index=False)),
+               atomic_write_text(out / "summary.csv", summarize(df).to_csv(index=False)),
+               atomic_write_text(out / "splits.csv", pd.DataFrame([asdict(s) for s in res.splits],
+                                                                  columns=["seed", "run_id", "split"]).to_csv(index=False)),
+               atomic_write_text(out / "confusion.csv", confusion_long(res).to_csv(index=False))]
+    imp = importance_frame(res)
+    if not imp.empty:
+        written.append(atomic_write_text(out / "importance.csv", imp.to_csv(index=False)))
+    payload = {**meta, "protocol": res.protocol, "declared": res.declared, "features": res.features,
+               "sizes": {str(k): v for k, v in res.sizes.items()}, "notes": res.notes,
+               "fits": [asdict(f) for f in res.fits]}
     written.append(atomic_write_text(out / "results.json", json.dumps(payload, indent=2, default=str)))
     written.append(atomic_write_text(out / "results.md", markdown(res, meta)))
-    for model, (labels, cm) in res.confusion.items():
-        name = "confusion_" + "".join(ch if ch.isalnum() else "_" for ch in model) + ".csv"
-        written.append(atomic_write_text(out / name, pd.DataFrame(cm, index=labels, columns=labels).to_csv()))
-    fig = confusion_figure(res, out / "confusion_best_worst.png")
-    if fig:
-        written.append(fig)
+    for model, cm in confusion_totals(res).items():
+        written.append(atomic_write_text(out / f"confusion_{_safe(model)}.csv",
+                                         pd.DataFrame(cm, index=res.declared, columns=res.declared).to_csv()))
+        title = f"{res.protocol}: {model} (counts, {len(res.sizes)} seeds)"
+        written.append(confusion_figure(res.declared, cm, title, out / f"confusion_{_safe(model)}.png"))
     return written

@@ -1,0 +1,58 @@
+"""`uavcas.load_dataset`: X holds features only, aligned with y, groups and meta."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import uavcas
+from uavcas import schema
+from uavcas.ids.features import feature_sets
+
+
+def test_features_labels_groups_meta_consistent(synth_dir, synth_df):
+    X, y, groups, meta = uavcas.load_dataset(synth_dir)
+    assert len(X) == len(y) == len(groups) == len(meta) == len(synth_df)
+    assert list(X.columns) == list(schema.FEATURES) and np.isfinite(X.to_numpy()).all()
+    # no metadata among the features; nothing lost either
+    never = set(schema.METADATA_COLUMNS) | set(schema.SEQUENCE_COLUMNS) | set(schema.COUNT_COLUMNS)
+    assert not never & set(X.columns)
+    assert not set(X.columns) & set(meta.columns) and set(X.columns) | set(meta.columns) == set(synth_df.columns)
+    assert (X.index == meta.index).all() and (groups == meta["run_id"]).all() and (y == meta["label"]).all()
+    assert groups.nunique() == synth_df["run_id"].nunique() and set(y) == set(synth_df["label"])
+    # rows stay aligned: the flows of one run keep their features
+    run = groups.iloc[0]
+    a = X[groups == run]["Flow Duration"].to_numpy()
+    b = synth_df[synth_df["run_id"] == run]["Flow Duration"].to_numpy()
+    np.testing.assert_allclose(np.sort(a), np.sort(b))
+
+
+def test_feature_selection_by_set_or_columns(synth_dir):
+    name = next(iter(feature_sets()))
+    assert list(uavcas.load_dataset(synth_dir, features=name).X.columns) == list(feature_sets()[name])
+    d = uavcas.load_dataset(synth_dir, features=["SYN Flag Count", "Flow Duration"])
+    assert list(d.X.columns) == ["SYN Flag Count", "Flow Duration"] and "Packet Length Mean" in d.meta.columns
+    with pytest.raises(ValueError, match="not flow features"):
+        uavcas.load_dataset(synth_dir, features=["Flow Duration", "config"])
+    with pytest.raises(ValueError, match="unknown feature set"):
+        uavcas.load_dataset(synth_dir, features="nope")
+
+
+def test_trains_a_grouped_model(synth_dir):
+    from sklearn.ensemble import RandomForestClassifier
+    from sklearn.model_selection import GroupKFold, cross_val_score
+
+    X, y, groups, _ = uavcas.load_dataset(synth_dir)
+    dos = y.isin(["Benign", "DoS"])
+    s = cross_val_score(RandomForestClassifier(n_estimators=20, random_state=0), X[dos], y[dos], groups=groups[dos],
+                        cv=GroupKFold(3), scoring="f1_weighted")
+    assert s.min() > 0.95
+
+
+@pytest.mark.shared
+def test_external_sample_each_flow_its_own_group(shared_data):
+    p = shared_data / "ids-samples" / "unsw-nb15-testing-head4528"
+    if not p.is_dir():
+        pytest.skip(f"{p} not found")
+    X, y, groups, meta = uavcas.load_dataset(p)
+    assert groups.is_unique and len(X) == len(y) and not set(X.columns) & set(meta.columns)
