@@ -23,6 +23,8 @@ from typing import TYPE_CHECKING, Literal
 if TYPE_CHECKING:  # only typed against the plan: importing uavcas.twin pulls the whole planner
     from uavcas.twin.model import Link, Plan, WormholeOverride
 
+from uavcas.rundir import ForwardingEpoch
+
 from . import cleanup, kernel
 from .controller import Forwarding, compute
 from .fabric import Fabric, LinkKey, SwitchPorts, key
@@ -76,6 +78,7 @@ class Emulation:
         self.fabric = Fabric(self.naming, self.specs, self.shaper)
         self.window: int | None = None
         self.forwarding: Forwarding | None = None
+        self.forwarding_log: list[ForwardingEpoch] = []  # every table installed, with when
         self._links: list["Link"] = []
         self._routes: list[list[str]] = []
         self._wormholes: list[tuple[str, str, str]] = []
@@ -195,10 +198,12 @@ class Emulation:
         # Two concurrent phases: (1) shaping in place + links going down; (2) links coming up +
         # forwarding. A link is thus shaped before its first frame, and traffic only loses the
         # few milliseconds between the phases on paths that change.
+        t_begin = time.time()
         stage = self.shaper.apply(shapes, also=[kernel.Batch("ip", self.fabric.ns, down)])
         t3 = time.perf_counter()
         kernel.run_batches([kernel.Batch("ip", self.fabric.ns, up), kernel.Batch("bridge", self.fabric.ns, fdb)])
         self.fabric.up, self.fabric.fdb = active, want
+        self._log_forwarding(t_begin, window_index)
         t4 = time.perf_counter()
         timings = {"create_s": t1 - t0, "compute_s": t2 - t1, "phase1_s": t3 - t2, **stage, "phase2_s": t4 - t3,
                    "total_s": t4 - t0}
@@ -223,7 +228,14 @@ class Emulation:
         """Re-route the current links with these wormhole overrides (FDB changes only)."""
         self._wormholes = [tuple(o) if isinstance(o, tuple) else (o.victim, o.attacker, o.bs) for o in overrides]
         self.forwarding = compute(self.names, [(lk.a, lk.b) for lk in self._links], self._routes, self._wormholes)
-        return self.fabric.apply_forwarding(self.forwarding)
+        t_begin = time.time()
+        changes = self.fabric.apply_forwarding(self.forwarding)
+        self._log_forwarding(t_begin, self.forwarding_log[-1].window if self.forwarding_log else -1)
+        return changes
+
+    def _log_forwarding(self, t_begin: float, window: int) -> None:
+        self.forwarding_log.append(ForwardingEpoch(t_begin_unix=t_begin, t_unix=time.time(), window=window,
+                                                   next_hop=self.forwarding.next_hop))
 
     # processes and hooks -------------------------------------------------------------------
     def ns(self, node: str) -> str:

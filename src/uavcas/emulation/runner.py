@@ -223,6 +223,10 @@ def _wind_down(st: _State, opt: RunOptions) -> None:
         logs = st.emu.naming.run_dir / "apps" / "logs"
         if logs.is_dir():
             shutil.copytree(logs, RunDir(st.out).logs_dir, dirs_exist_ok=True)
+        daemon_log = st.emu.naming.run_dir / "nfqdelay.log"
+        if daemon_log.is_file():
+            RunDir(st.out).logs_dir.mkdir(exist_ok=True)
+            shutil.copy(daemon_log, RunDir(st.out).logs_dir / daemon_log.name)
     st.timings["stop_s"] = time.time() - t
     st.wind_down_errors = errors
 
@@ -238,6 +242,8 @@ def _write_outputs(st: _State) -> None:
     atomic_write_text(rd.attacks_jsonl, attack_log_text(ex.log_lines() if ex else []))
     atomic_write_text(rd.shaping_jsonl, "".join(json.dumps(r) + "\n" for r in st.shaping))
     emu = st.emu
+    if emu is not None:
+        atomic_write_text(rd.forwarding_jsonl, "".join(e.model_dump_json() + "\n" for e in emu.forwarding_log))
     lat = st.lateness_ms
     drops = [c.dropped_by_kernel for c in st.capture_stats]
     now = time.time()
