@@ -50,6 +50,7 @@ class Timings(_Strict):
     schedule_s: float | None = None
     stop_s: float | None = None
     teardown_s: float | None = None
+    links_ready_s: float | None = None  # window 0's links raised and operational, before t0
     schedule_lateness_ms: Lateness | None = None
 
 

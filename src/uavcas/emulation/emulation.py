@@ -79,6 +79,10 @@ class Emulation:
         self.window: int | None = None
         self.forwarding: Forwarding | None = None
         self.forwarding_log: list[ForwardingEpoch] = []  # every table installed, with when
+        self._fwd_memo: dict[tuple, Forwarding] = {}
+        self._active: set[LinkKey] = set()  # links of the last apply
+        self._prepared: set[LinkKey] = set()  # raised ahead of the next window (prepare_links)
+        self.keep_links_up = False  # see apply_links
         self._links: list["Link"] = []
         self._routes: list[list[str]] = []
         self._wormholes: list[tuple[str, str, str]] = []
@@ -183,31 +187,43 @@ class Emulation:
 
     def apply_links(self, links: Sequence["Link"], routes: Iterable[Sequence[str]] = (),
                     wormholes: Iterable[tuple[str, str, str]] = (), window_index: int = -1) -> WindowReport:
-        """Make `links` (and only them) active with their shaping, then forwarding for them."""
+        """Make `links` (and only them) active with their shaping, then forwarding for them.
+
+        With `keep_links_up` set, links that leave the window stay up (no forwarding entry
+        points at them, so no frame reaches them; taking a port down waits for an RCU grace
+        period, ~30 ms each under load, which a window change need not wait for).
+        """
         t0 = time.perf_counter()
         self._links, self._routes, self._wormholes = list(links), [list(r) for r in routes], list(wormholes)
         active = {key(self.index[lk.a], self.index[lk.b]) for lk in links}
         created = self.fabric.ensure_links(active)
         t1 = time.perf_counter()
         shapes = self.shapes(links)
-        down, up = self.fabric.toggle_lines(active)
-        self.forwarding = compute(self.names, [(lk.a, lk.b) for lk in links], self._routes, self._wormholes)
+        keep = self._prepared - active  # raised for the next window: stay up
+        up = [f"link set {p} up" for p in Fabric._ports(sorted(active - self.fabric.up))]
+        n_up, n_down = len(active - self._active), len(self._active - active)
+        self.forwarding = self.plan_forwarding(links, self._routes, self._wormholes)
         want = self.fabric.desired_fdb(self.forwarding)
         fdb = self.fabric.fdb_lines(want)
         t2 = time.perf_counter()
-        # Two concurrent phases: (1) shaping in place + links going down; (2) links coming up +
-        # forwarding. A link is thus shaped before its first frame, and traffic only loses the
-        # few milliseconds between the phases on paths that change.
+        # Three phases: (1) shaping in place + links coming up (those `prepare_links` did not
+        # raise ahead); (2) forwarding; (3) links going down (unless `keep_links_up`). A
+        # link is shaped and up before the forwarding sends it a frame, and the forwarding has
+        # left a link before it goes down, so only packets in flight on a vanishing link are lost.
         t_begin = time.time()
-        stage = self.shaper.apply(shapes, also=[kernel.Batch("ip", self.fabric.ns, down)])
+        stage = self.shaper.apply(shapes, also=[kernel.Batch("ip", self.fabric.ns, up)])
         t3 = time.perf_counter()
-        kernel.run_batches([kernel.Batch("ip", self.fabric.ns, up), kernel.Batch("bridge", self.fabric.ns, fdb)])
-        self.fabric.up, self.fabric.fdb = active, want
+        kernel.run_batch("bridge", self.fabric.ns, fdb)
+        self.fabric.fdb = want
         self._log_forwarding(t_begin, window_index)
+        self._active, self._prepared = active, keep
+        self.fabric.up |= active
+        if not self.keep_links_up:
+            self.retire_links()
         t4 = time.perf_counter()
         timings = {"create_s": t1 - t0, "compute_s": t2 - t1, "phase1_s": t3 - t2, **stage, "phase2_s": t4 - t3,
                    "total_s": t4 - t0}
-        n_up, n_down, fdb_changes = len(up) // 2, len(down) // 2, len(fdb)
+        fdb_changes = len(fdb)
         records: list[ShapingRecord] = []
         if self.readback:
             applied = self.shaper.readback([s.port for s in shapes])
@@ -215,6 +231,48 @@ class Emulation:
             timings["readback_s"] = time.perf_counter() - t4
         return WindowReport(window_index, timings, n_up, n_down, created, fdb_changes, self.forwarding.rejected,
                             records)
+
+    def retire_links(self) -> int:
+        """Take down the links that are up but neither active nor prepared; returns how many."""
+        old = sorted(self.fabric.up - self._active - self._prepared)
+        if old:
+            kernel.run_batch("ip", self.fabric.ns, [f"link set {p} down" for p in Fabric._ports(old)])
+            self.fabric.up -= set(old)
+        return len(old)
+
+    def prepare_links(self, links: Sequence["Link"], wait_s: float = 1.0) -> tuple[int, bool]:
+        """Create and raise, ahead of their window, the links of `links` that are not up yet, and
+        wait up to `wait_s` for every link prepared so far to be operational (call it again to
+        wait more).
+
+        A raised link carries nothing until the forwarding points at it (flooding and learning
+        are off), and the kernel attaches a port's queue only once its link-watch work has seen
+        the carrier (up to seconds on a loaded machine; frames sent before are dropped): raising
+        links in idle time and waiting here keeps that off the window change. Returns how many,
+        and whether they all became operational within `wait_s`.
+        """
+        active = {key(self.index[lk.a], self.index[lk.b]) for lk in links}
+        self.fabric.ensure_links(active)
+        new = sorted(active - self.fabric.up)
+        if new:
+            kernel.run_batch("ip", self.fabric.ns, [f"link set {p} up" for p in Fabric._ports(new)])
+            self.fabric.up |= set(new)
+        self._prepared = (self._prepared | set(new)) & active
+        waiting = Fabric._ports(sorted(self._prepared))
+        ok = self.fabric.wait_operational(waiting, wait_s) if waiting else True
+        return len(new), ok
+
+    def plan_forwarding(self, links: Sequence["Link"], routes: Iterable[Sequence[str]] = (),
+                        wormholes: Iterable[tuple[str, str, str]] = ()) -> Forwarding:
+        """The forwarding for these links, routes and overrides (memoised: a runner computes the
+        next window's ahead, in idle time, so that the change itself does not wait for it)."""
+        key = (tuple((lk.a, lk.b) for lk in links), tuple(tuple(r) for r in routes), tuple(tuple(o) for o in wormholes))
+        fwd = self._fwd_memo.get(key)
+        if fwd is None:
+            if len(self._fwd_memo) > 8:
+                self._fwd_memo.clear()
+            fwd = self._fwd_memo[key] = compute(self.names, list(key[0]), key[1], key[2])
+        return fwd
 
     def shapes(self, links: Sequence["Link"]) -> list[Shape]:
         out = []
@@ -227,7 +285,7 @@ class Emulation:
     def set_wormholes(self, overrides: Iterable["WormholeOverride | tuple[str, str, str]"]) -> int:
         """Re-route the current links with these wormhole overrides (FDB changes only)."""
         self._wormholes = [tuple(o) if isinstance(o, tuple) else (o.victim, o.attacker, o.bs) for o in overrides]
-        self.forwarding = compute(self.names, [(lk.a, lk.b) for lk in self._links], self._routes, self._wormholes)
+        self.forwarding = self.plan_forwarding(self._links, self._routes, self._wormholes)
         t_begin = time.time()
         changes = self.fabric.apply_forwarding(self.forwarding)
         self._log_forwarding(t_begin, self.forwarding_log[-1].window if self.forwarding_log else -1)

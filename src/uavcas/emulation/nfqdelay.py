@@ -51,6 +51,8 @@ import sys
 import time
 from pathlib import Path
 
+from .priority import DELAY_RT_PRIORITY
+
 NETLINK_NETFILTER = 12
 NFNL_SUBSYS_QUEUE = 3
 NFQNL_MSG_PACKET, NFQNL_MSG_VERDICT, NFQNL_MSG_CONFIG = 0, 1, 2
@@ -67,7 +69,6 @@ TFD_NONBLOCK, TFD_CLOEXEC = 0o4000, 0o2000000
 PR_SET_TIMERSLACK = 29
 LAG_BUCKETS_US = (25, 50, 100, 200, 500, 1000, 2000, 5000, 10000, 10**9)
 SOURCE = Path(__file__).with_name("nfqdelay.c")
-DEFAULT_RT_PRIORITY = 10  # SCHED_FIFO priority of the compiled helper (0: plain CFS with nice)
 # Released this much before due: the verdict's own path (reinjection, rate stage, veth) until
 # the next switch stamps the frame, measured here at ~10-20 us.
 DEFAULT_LEAD_US = 10
@@ -389,7 +390,7 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--queue", type=int, default=0)
     ap.add_argument("--ctl")
     ap.add_argument("--nice", type=int, default=-15)
-    ap.add_argument("--rt", type=int, default=DEFAULT_RT_PRIORITY, help="SCHED_FIFO priority of the C helper (0: off)")
+    ap.add_argument("--rt", type=int, default=DELAY_RT_PRIORITY, help="SCHED_FIFO priority of the C helper (0: off)")
     ap.add_argument("--lead-us", type=float, default=DEFAULT_LEAD_US)
     ap.add_argument("--impl", choices=("auto", "c", "python"), default="auto")
     ap.add_argument("--build", action="store_true", help="build the C helper, print its path and exit")

@@ -250,9 +250,9 @@ class _Audit:
     def _counters(self) -> dict[tuple[int, str, str], Counters]:
         out = {}
         for r in self.rd.read_shaping():
-            if any(r.get(k) is not None for k in ("sent_packets", "queue_drops", "loss_drops")):
-                out[(r["window"], r["src"], r["dst"])] = Counters(
-                    sent_packets=r.get("sent_packets"), queue_drops=r.get("queue_drops"), loss_drops=r.get("loss_drops"))
+            fields = {k: r.get(k) for k in Counters.model_fields}
+            if any(v is not None for v in fields.values()):
+                out[(r["window"], r["src"], r["dst"])] = Counters(**fields)
         return out
 
     def report(self) -> Fidelity:

@@ -51,6 +51,7 @@ class Counters(_Strict):
     sent_packets: int | None = None  # left the rate stage
     queue_drops: int | None = None  # queue tail (pfifo) drops
     loss_drops: int | None = None  # random-loss rule drops (nft)
+    link_drops: int | None = None  # dropped by the port on transmit (queue not attached yet, peer down)
 
 
 class LinkWindow(DelayErrors):
