@@ -31,6 +31,7 @@ class ShardInfo:
     class_counts: dict[str, int]
     truncations: list[str]
     extracted_unix: float
+    fidelity: str | None = None  # the run's fidelity verdict (run.json), None: never audited
 
 
 @dataclass(frozen=True)
@@ -88,5 +89,6 @@ def extract(
             class_counts=counts,
             truncations=[f"{t.path}@{t.offset}" for t in ex.packets.truncations],
             extracted_unix=time.time(),
+            fidelity=info.fidelity.verdict if info is not None and info.fidelity is not None else None,
         ),
     )

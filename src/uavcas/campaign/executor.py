@@ -26,8 +26,10 @@ def run_local(
     profile: str | None,
     retries: int,
     on_retry: Callable[[RunOutcome, int], None] | None = None,
+    fidelity: str = "flag",
 ) -> Iterator[RunOutcome]:
-    """Run entries `jobs` at a time into their run directories; retry a failure `retries` times."""
+    """Run entries `jobs` at a time into their run directories; retry a failure `retries` times
+    (and a run whose fidelity failed, with `fidelity="retry"`: see `task.execute_entry`)."""
     tries = Retries(retries, on_retry)
     by_index = {e.index: e for e in entries}
     pending = list(entries)
@@ -35,7 +37,7 @@ def run_local(
     def submit(pool: ThreadPoolExecutor, e: ManifestEntry) -> Future:
         tries.started(e.index)
         cdir.reset(e.index)
-        return pool.submit(execute_entry, e, str(cdir.run_dir(e.index)), profile)
+        return pool.submit(execute_entry, e, str(cdir.run_dir(e.index)), profile, fidelity=fidelity)
 
     with ThreadPoolExecutor(max_workers=max(1, jobs)) as pool:
         running: set[Future] = set()
@@ -58,6 +60,7 @@ def run_dask(
     retries: int,
     on_retry: Callable[[RunOutcome, int], None] | None = None,
     connect_timeout_s: float = 30.0,
+    fidelity: str = "flag",
 ) -> Iterator[RunOutcome]:
     """Submit every entry to the scheduler at `address` (tcp://HOST:8786); yield as they finish."""
     from distributed import Client, as_completed
@@ -74,6 +77,7 @@ def run_dask(
                 None,
                 profile,
                 return_files=True,
+                fidelity=fidelity,
                 resources={"emulator": 1},
                 pure=False,
                 key=f"uavcas-run-{e.index}-try{n}",

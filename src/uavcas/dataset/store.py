@@ -91,6 +91,9 @@ def rebuild(out_dir: Path) -> dict:
         "label_modes": sorted({r.get("labels") for r in runs if r.get("labels")}),
         "class_counts": counts,
         "seeds": sorted({int(r["seed"]) for r in runs if "seed" in r}),
+        # runs by fidelity verdict (uavcas.fidelity): how many failed their audit
+        "fidelity": {v: sum(1 for r in runs if (r.get("fidelity") or "unaudited") == v)
+                     for v in ("pass", "fail", "error", "unaudited")},
         "runs": runs,
         "versions": package_versions("numpy", "pandas", "pyarrow"),
     }

@@ -57,6 +57,7 @@ class RunOptions:
     keep_logs: bool = True  # copy tool logs (curl results, stderr) to OUT/logs
     urgent: bool = True  # window changes and attack actions at real-time priority (emulation.priority)
     softirq_boost: bool = True  # the kernel's softirq threads at real-time priority during the run
+    audit: bool = True  # audit a finished run's fidelity (uavcas.fidelity): fidelity.json + run.json summary
 
 
 @dataclass
@@ -140,7 +141,20 @@ def realize(plan: "Plan", out_dir: str | Path, options: RunOptions = RunOptions(
     finally:
         _write_outputs(st)
         notify(RunDone(exit_status=st.exit_status, reason=st.exit_reason))
+    if st.exit_status == 0 and options.audit:
+        _audit(st)
     return st.artifacts()
+
+
+def _audit(st: _State) -> None:
+    """The run's fidelity audit (default tolerances for its swarm); a failure to audit is recorded."""
+    from uavcas.fidelity import record_audit_error, write_fidelity
+
+    try:
+        write_fidelity(st.out)
+    except Exception as e:  # the run itself succeeded: keep it, and say the audit could not be made
+        record_audit_error(st.out, f"{type(e).__name__}: {e}")
+    st.info = RunDir(st.out).read_info()
 
 
 class _State:

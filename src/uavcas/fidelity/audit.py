@@ -69,10 +69,15 @@ def delay_errors(err_ms: np.ndarray) -> dict:
             "late_over_1ms": round(float((err_ms > 1.0).mean()), 6) if err_ms.shape[0] else None}
 
 
-def audit(run_dir: str | Path, tolerances: Tolerances = Tolerances(), table: PacketTable | None = None) -> Fidelity:
-    """Audit one run directory (see the module docstring); nothing is written."""
+def audit(run_dir: str | Path, tolerances: Tolerances | None = None, table: PacketTable | None = None) -> Fidelity:
+    """Audit one run directory (see the module docstring); nothing is written.
+
+    `tolerances`: default `Tolerances.for_swarm` of the plan's number of UAVs.
+    """
     rd = RunDir(Path(run_dir))
     plan, info = rd.read_plan(), rd.read_info()
+    if tolerances is None:
+        tolerances = Tolerances.for_swarm(sum(n.kind == "uav" for n in plan.nodes))
     table, fol = follow_run(rd.root, tolerances.max_hop_s, table=table)
     epochs = rd.read_forwarding()
     if epochs:
