@@ -8,8 +8,8 @@ only metadata (copy mode META: no payload), looks the delay up by the *physical 
 
 Two implementations, one protocol: the compiled verdict loop `nfqdelay.c` (built on first use
 with the system C compiler, cached beside the interpreter; `python -m uavcas.emulation.nfqdelay
---build` builds it ahead, as scripts/setup.sh does) and this module's pure-Python loop, used when
-no compiler is there (`--impl python` forces it). `main` execs the helper, so the daemon's PID
+--build` builds it ahead) and this module's pure-Python loop, used when no compiler is there
+(`--impl python` or UAVCAS_DELAY_IMPL=python forces it). `main` execs the helper, so the daemon's PID
 stays the one the shaper started. What both do to hold delay (issue #14, EMULATION-NOTES sec. 2):
 * due = the packet's kernel receive stamp (NFQA_TIMESTAMP: the stamp the switch captures carry;
   a socket with SO_TIMESTAMP turns stamping on) + the port's delay, so softirq and socket
@@ -67,8 +67,10 @@ NLMSG_ERROR = 2
 CLOCK_MONOTONIC, TFD_TIMER_ABSTIME = 1, 1
 TFD_NONBLOCK, TFD_CLOEXEC = 0o4000, 0o2000000
 PR_SET_TIMERSLACK = 29
+SO_TIMESTAMP = 29  # asm-generic/socket.h (Python's socket module does not export it)
 LAG_BUCKETS_US = (25, 50, 100, 200, 500, 1000, 2000, 5000, 10000, 10**9)
 SOURCE = Path(__file__).with_name("nfqdelay.c")
+IMPL_ENV = "UAVCAS_DELAY_IMPL"  # auto | c | python: which verdict loop a daemon started by a shaper runs
 # Released this much before due: the verdict's own path (reinjection, rate stage, veth) until
 # the next switch stamps the frame, measured here at ~10-20 us.
 DEFAULT_LEAD_US = 10
@@ -121,7 +123,7 @@ class DelayDaemon:
         self.max_lag_us = 0.0
         # one socket asking for receive stamps turns stamping on for every packet, kernel-wide
         self.ts_sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-        self.ts_sock.setsockopt(socket.SOL_SOCKET, socket.SO_TIMESTAMP, 1)
+        self.ts_sock.setsockopt(socket.SOL_SOCKET, SO_TIMESTAMP, 1)
         self.nl = socket.socket(socket.AF_NETLINK, socket.SOCK_RAW, NETLINK_NETFILTER)
         self.nl.setsockopt(socket.SOL_SOCKET, 33, 8 << 20)  # SO_RCVBUFFORCE: absorb bursts
         self.nl.bind((0, 0))
@@ -271,8 +273,12 @@ class DelayDaemon:
                 name, sep, us = item.partition("=")
                 if not sep:
                     raise ValueError(f"bad item {item!r}")
+                try:
+                    index = socket.if_nametoindex(name)
+                except OSError:
+                    raise ValueError(f"no interface {name}") from None
                 table[name] = int(us)
-                delay_ns[socket.if_nametoindex(name)] = int(us) * 1000
+                delay_ns[index] = int(us) * 1000
             self.delay_ns = delay_ns
             self.table_us.update(table)
             return {"ok": True, "table": self.table_us}
@@ -392,7 +398,8 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--nice", type=int, default=-15)
     ap.add_argument("--rt", type=int, default=DELAY_RT_PRIORITY, help="SCHED_FIFO priority of the C helper (0: off)")
     ap.add_argument("--lead-us", type=float, default=DEFAULT_LEAD_US)
-    ap.add_argument("--impl", choices=("auto", "c", "python"), default="auto")
+    ap.add_argument("--impl", choices=("auto", "c", "python"), default=os.environ.get(IMPL_ENV, "auto"),
+                    help=f"auto: the C helper when it builds, else Python (default from ${IMPL_ENV})")
     ap.add_argument("--build", action="store_true", help="build the C helper, print its path and exit")
     args = ap.parse_args(argv)
     if args.build:

@@ -243,8 +243,10 @@ class _Audit:
             offered = rows.shape[0] + rnd
             sigma = _sigma(rnd, offered, p)
             ratios = sat.get((w, i, j), np.zeros(0))
+            de = delay_errors(err)
+            ok = _delay_ok(de, self.tol) and abs(sigma or 0.0) <= self.tol.loss_sigma
             out.append(LinkWindow(
-                src=self.names[i], dst=self.names[j], window=w, **delay_errors(err),
+                verdict="pass" if ok else "fail", src=self.names[i], dst=self.names[j], window=w, **de,
                 planned_delay_ms=float(self.planned.delay_ms[w, i, j]), planned_rate_mbps=float(self.planned.rate_mbps[w, i, j]),
                 planned_loss=p, measured_delay_p50_ms=_q(meas, 50), model_delay_p50_ms=_q(model, 50), lost=lost,
                 lost_tail=tail, lost_transition=down, loss_random=round(rnd / offered, 6) if offered else None,
@@ -308,6 +310,13 @@ class _Audit:
             loss_sigma=sigma, throughput_ratio_p50=_q(ratios, 50), saturated_bins=int(ratios.shape[0]),
             gaps=self._gaps(), window_change_max_ms=round(max(change), 3) if change else None,
             lateness_max_ms=round(max(late), 3) if late else None, checks=checks, tolerances=tol, links=links)
+
+
+def _delay_ok(de: dict, tol: Tolerances) -> bool:
+    return (_le(abs(de["delay_error_p50_ms"] or 0.0), tol.delay_error_p50_ms)
+            and _le(de["delay_error_p90_ms"], tol.delay_error_p90_ms)
+            and _le(de["delay_error_p99_ms"], tol.delay_error_p99_ms)
+            and (de["delay_error_p1_ms"] is None or de["delay_error_p1_ms"] >= -tol.delay_early_p1_ms))
 
 
 def _le(x: float | None, limit: float) -> bool:

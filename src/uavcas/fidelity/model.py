@@ -69,8 +69,13 @@ class Counters(_Strict):
 
 
 class LinkWindow(DelayErrors):
-    """One link direction (src's switch -> dst's switch) in one window."""
+    """One link direction (src's switch -> dst's switch) in one window.
 
+    `verdict`: the run's delay and loss checks on this link alone. Informative only, it does not
+    enter the run's verdict (quantiles of a few hundred packets are noisy).
+    """
+
+    verdict: Verdict
     src: str
     dst: str
     window: int
