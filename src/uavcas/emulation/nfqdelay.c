@@ -378,7 +378,7 @@ static void handle(char *line, sbuf *out) {
 static void on_ctl(void) {
     int c = accept4(S.ctl, NULL, NULL, SOCK_CLOEXEC);
     if (c < 0) return;
-    struct timeval tv = {2, 0};
+    struct timeval tv = {0, 200000};  /* a stuck client must not hold the verdict loop long */
     setsockopt(c, SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof tv);
     setsockopt(c, SOL_SOCKET, SO_SNDTIMEO, &tv, sizeof tv);
     sbuf in = {0};

@@ -256,13 +256,16 @@ class DelayDaemon:
         except BlockingIOError:
             return
         with conn:
-            conn.settimeout(2.0)
-            raw = _recv_line(conn).decode(errors="replace")
             try:
-                reply = self._handle(raw)
-            except (ValueError, OSError) as e:
-                reply = {"ok": False, "error": str(e)}
-            conn.sendall(json.dumps(reply).encode() + b"\n")
+                conn.settimeout(0.2)  # a stuck client must not hold the verdict loop long
+                raw = _recv_line(conn).decode(errors="replace")
+                try:
+                    reply = self._handle(raw)
+                except ValueError as e:
+                    reply = {"ok": False, "error": str(e)}
+                conn.sendall(json.dumps(reply).encode() + b"\n")
+            except OSError:  # the client went away: its loss, not the daemon's
+                pass
 
     def _handle(self, line: str) -> dict:
         op, *items = line.split() or [""]
@@ -350,10 +353,11 @@ def request_line(req: dict) -> str:
 
 def request(ctl_path: str, req: dict, timeout_s: float = 2.0) -> dict:
     """Send one control request to a running daemon and return its reply."""
+    line = request_line(req).encode() + b"\n"
     with socket.socket(socket.AF_UNIX, socket.SOCK_STREAM) as s:
         s.settimeout(timeout_s)
         s.connect(ctl_path)
-        s.sendall(request_line(req).encode() + b"\n")
+        s.sendall(line)
         raw = _recv_line(s)
     reply = json.loads(raw)
     if not reply.get("ok"):
