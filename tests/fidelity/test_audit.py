@@ -88,8 +88,18 @@ def test_queue_tail_drops_are_told_from_random_loss(tmp_path):
     f = audit(build(tmp_path, plan(), tr, drop=lambda h, k: h == 0 and k >= limit + 2).root)
     assert f.lost == 98 - limit and f.lost_tail == f.lost and f.loss_random_observed == 0 and f.verdict == "pass"
     # the same losses from a queue the model says was half empty are random ones
-    g = audit(build(tmp_path / "r", plan(), tr, drop=lambda h, k: h == 0 and k >= limit // 2).root)
+    rd = build(tmp_path / "r", plan(), tr, drop=lambda h, k: h == 0 and k >= limit // 2)
+    g = audit(rd.root)
     assert g.lost_tail == 0 and g.loss_random_observed == g.lost and g.failed == ["loss_sigma"]
+    # ... unless the kernel counted them as tail drops of that port in that window
+    rec = {"window": 0, "src": "uav0", "dst": "uav1", "port": "l0-1", "backend": "htb-nft-nfqueue",
+           "planned_rate_mbps": 8.0, "planned_delay_ms": 2.0, "planned_loss": 0.0, "applied_rate_mbps": 8.0,
+           "applied_delay_ms": 2.0, "applied_loss": 0.0, "sent_packets": 100 - g.lost, "queue_drops": g.lost,
+           "loss_drops": 0, "link_drops": 0}
+    rd.shaping_jsonl.write_text(json.dumps(rec) + "\n")
+    h = audit(rd.root)
+    assert h.lost_tail == g.lost and h.loss_random_observed == 0 and h.verdict == "pass"
+    assert next(lw for lw in h.links if lw.src == "uav0").counters.queue_drops == g.lost
 
 
 def test_losses_at_a_window_change_are_counted_apart(tmp_path):

@@ -238,6 +238,10 @@ class _Audit:
             model = (self.c_start[rows] - self.c.t_from[rows]) * 1000.0
             mine = lk == key
             lost, tail, down = int(mine.sum()), int((mine & self.l_tail).sum()), int((mine & self.l_transition).sum())
+            cnt = counters.get((w, self.names[i], self.names[j]))
+            if cnt is not None and cnt.queue_drops:
+                # the kernel's own count of tail drops wins where the model's queue was not full
+                tail = min(lost - down, max(tail, cnt.queue_drops))
             rnd = lost - tail - down
             p = float(self.planned.loss[w, i, j])
             offered = rows.shape[0] + rnd
@@ -251,7 +255,7 @@ class _Audit:
                 planned_loss=p, measured_delay_p50_ms=_q(meas, 50), model_delay_p50_ms=_q(model, 50), lost=lost,
                 lost_tail=tail, lost_transition=down, loss_random=round(rnd / offered, 6) if offered else None,
                 loss_sigma=None if sigma is None else round(sigma, 3), saturated_bins=int(ratios.shape[0]),
-                throughput_ratio_p50=_q(ratios, 50), counters=counters.get((w, self.names[i], self.names[j]))))
+                throughput_ratio_p50=_q(ratios, 50), counters=cnt))
         return out
 
     def _counters(self) -> dict[tuple[int, str, str], Counters]:
@@ -306,7 +310,8 @@ class _Audit:
         return Fidelity(
             verdict="fail" if failed else "pass", failed=failed, **pooled, packets=self.fol.n_packets,
             crossings_unmodelled=int(np.isnan(self.err_ms).sum()), lost=len(self.fol.losses),
-            lost_tail=int(self.l_tail.sum()), lost_transition=int(self.l_transition.sum()), loss_random_observed=rnd_obs, loss_random_expected=round(exp, 3),
+            lost_tail=sum(lw.lost_tail for lw in links), lost_transition=int(self.l_transition.sum()),
+            loss_random_observed=rnd_obs, loss_random_expected=round(exp, 3),
             loss_sigma=sigma, throughput_ratio_p50=_q(ratios, 50), saturated_bins=int(ratios.shape[0]),
             gaps=self._gaps(), window_change_max_ms=round(max(change), 3) if change else None,
             lateness_max_ms=round(max(late), 3) if late else None, checks=checks, tolerances=tol, links=links)
