@@ -67,7 +67,7 @@ class WindowApply(_Strict):
 
 class ScheduledEvent(_Strict):
     t_s: float
-    kind: str  # window, start, stop, calibrate, end
+    kind: str  # window, start, stop, calibrate, end; prepare: the next window's links raised ahead
     what: str | int | None  # the attack id, or the window index
     late_ms: float
     took_ms: float

@@ -21,6 +21,7 @@ import json
 import platform
 import shutil
 import statistics
+import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -174,6 +175,7 @@ class _State:
         self.clients: list[dict] = []
         self.delay_stats: dict | None = None
         self.sampler: WindowSampler | None = None
+        self.starter: _Background | None = None  # the clients' start, in the background
         self.exit_status, self.exit_reason = 1, "not finished"
         self.info: RunInfo | None = None
         self.wind_down_errors: list[str] = []
@@ -215,7 +217,9 @@ def _play(st: _State, opt: RunOptions, notify: Callable[[Progress], None]) -> No
         _apply_window(st, 0)
     st.t0 = time.time()
     notify(WindowApplied(window=0, t0_unix=st.t0, n_windows=len(plan.windows)))
-    st.traffic.start_clients()
+    # Starting a hundred client loops took 6 s on a loaded machine: in the background, so that the
+    # schedule (window 1 at t0 + 5 s) never waits for it.
+    starter = st.starter = _Background(st.traffic.start_clients)
     events = schedule(plan)
     _prepare_next(st, opt, events)
     for k, ev in enumerate(events):
@@ -243,6 +247,27 @@ def _play(st: _State, opt: RunOptions, notify: Callable[[Progress], None]) -> No
             st.sampler.end()
         _prepare_next(st, opt, events[k + 1:])
     st.timings["schedule_s"] = time.time() - st.t0
+    starter.join()
+
+
+class _Background:
+    """A call in a thread; `join()` waits for it and raises what it raised."""
+
+    def __init__(self, fn: Callable[[], object]) -> None:
+        self.error: BaseException | None = None
+        self.thread = threading.Thread(target=self._run, args=(fn,), daemon=True)
+        self.thread.start()
+
+    def _run(self, fn: Callable[[], object]) -> None:
+        try:
+            fn()
+        except BaseException as e:  # handed to the main thread by join()
+            self.error = e
+
+    def join(self) -> None:
+        self.thread.join()
+        if self.error is not None:
+            raise self.error
 
 
 def _prepare_next(st: _State, opt: RunOptions, upcoming: list[_Event]) -> None:
@@ -258,18 +283,23 @@ def _prepare_next(st: _State, opt: RunOptions, upcoming: list[_Event]) -> None:
         return
     w = st.plan.windows[nxt.obj]
     until = st.t0 + upcoming[0].t_s - PREPARE_MARGIN_S  # never delay the next event
+    t = time.time()
     with urgent(CONTROL_RT_PRIORITY if opt.urgent else 0):
         st.emu.plan_forwarding(w.links, st.executor.routes_for(w), st.executor.wormholes_for(w))
-        _, ready = st.emu.prepare_links(w.links, wait_s=max(0.0, until - time.time()))
+        raised, ready = st.emu.prepare_links(w.links, wait_s=max(0.0, until - time.time()))
     if not ready and upcoming[0] is nxt:
         st.wind_down_errors.append(f"window {nxt.obj}: links not operational when it began")
+    if raised:
+        st.events.append({"t_s": round(t - st.t0, 6), "kind": "prepare", "what": nxt.obj, "late_ms": 0.0,
+                          "took_ms": round((time.time() - t) * 1000, 3)})
 
 
 def _wind_down(st: _State, opt: RunOptions) -> None:
     """Stop everything in order, keeping going past errors (the core's teardown is the backstop)."""
     t = time.time()
     errors = []
-    for step in (lambda: st.executor and st.executor.stop_all(),
+    for step in (lambda: st.starter and st.starter.thread.join(60.0),  # no client starts after the stop
+                 lambda: st.executor and st.executor.stop_all(),
                  lambda: st.executor and st.executor.collect(),
                  lambda: st.traffic and setattr(st, "clients", [c.to_dict() for c in st.traffic.stop()]),
                  lambda: setattr(st, "delay_stats", _delay_stats(st.emu)),

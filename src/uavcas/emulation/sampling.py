@@ -2,7 +2,7 @@
 
 A window change must be quick (issue #14: <= 250 ms at 100 UAVs); reading back every port's
 rate, loss and delay took up to 1 s more under load. `WindowSampler` does it in a background
-thread at normal priority after each change, together with a snapshot of every port's kernel
+thread after each change (at real-time priority just below the change itself, see `_work`), together with a snapshot of every port's kernel
 counters (`Shaper.counters`). A window's counters are the difference between the snapshot taken
 right after it was applied and the next one (the next window's change, or `end()` at the end of
 the schedule), so each lands in that window's shaping.jsonl records.
@@ -57,11 +57,12 @@ class WindowSampler:
                         self.final = self.shaper.counters(sorted({x.port for smp in self.samples for x in smp.shapes}))
                     continue
                 ports = [s.port for s in shapes]
-                with urgent(SNAPSHOT_RT_PRIORITY):  # promptly: the snapshot marks the window's edge
+                # Promptly: the snapshot marks the window's edge. And the read-back too: its dumps
+                # hold the kernel's RTNL lock, which a window change waits for; at normal priority
+                # on a loaded machine they held it for hundreds of ms (priority inversion).
+                with urgent(SNAPSHOT_RT_PRIORITY):
                     counters = self.shaper.counters(ports)
-                records = []
-                if self.readback:
-                    records = self.shaper.records(window, shapes, self.shaper.readback(ports))
+                    records = self.shaper.records(window, shapes, self.shaper.readback(ports)) if self.readback else []
                 self.samples.append(_Sample(window, shapes, records, counters))
             except Exception as e:  # a failed read must not end the run: it is reported
                 self.errors.append(f"window {window}: {type(e).__name__}: {e}")
