@@ -45,7 +45,11 @@ def test_both_verdict_loops_hold_the_planned_delay(impl, monkeypatch):
     assert stats["impl"] == impl
     assert stats["packets"] >= 2 * 380 and stats["unknown_port"] == 0
     assert stats["kernel_ts"] == stats["packets"]  # every packet timed from its receive stamp
-    assert abs(r["delays_ms"]["median"] - 8.0) <= 1.0, r  # two hops of 4 ms
+    # two hops of 4 ms: never early (load only makes a loop late); on time within 1 ms for the
+    # compiled loop, within 5 ms for the Python fallback (it is CFS-scheduled: on a machine
+    # loaded with 30 runnable tasks its median was 22 ms, which is why the compiled loop exists)
+    assert r["delays_ms"]["min"] >= 8.0 - 0.2, r
+    assert r["delays_ms"]["median"] - 8.0 <= (1.0 if impl == "c" else 5.0), r
 
 
 @pytest.mark.parametrize("impl", IMPLS)
@@ -103,8 +107,11 @@ def test_a_real_run_is_audited(tmp_path):
     assert [e.window for e in epochs] == [0, 1] and epochs[0].next_hop["uav0"]["bs0"] == "uav1"
     sent = [r for r in rd.read_shaping() if r["sent_packets"]]
     assert sent and all(r["queue_drops"] is not None and r["loss_drops"] == 0 for r in sent)
-    crossings = sum(lw.n for lw in f.links if lw.window == 0 and (lw.src, lw.dst) == ("uav0", "uav1"))
-    counted = sum(r["sent_packets"] for r in sent if r["window"] == 0 and (r["src"], r["dst"]) == ("uav0", "uav1"))
-    assert counted >= crossings > 0  # the kernel counted at least the packets the captures show
+    assert {r["window"] for r in sent} == {0, 1}
+    # the kernel's count and the captures agree (the counters' window edges are the sampler's
+    # snapshots, a few ms off the forwarding's, and traffic runs on a little after the last one)
+    crossings = sum(lw.n for lw in f.links if (lw.src, lw.dst) == ("uav0", "uav1"))
+    counted = sum(r["sent_packets"] for r in sent if (r["src"], r["dst"]) == ("uav0", "uav1"))
+    assert crossings > 100 and abs(counted - crossings) <= 0.1 * crossings, (counted, crossings)
     assert json.loads(rd.run_json.read_text())["fidelity"]["verdict"] in ("pass", "fail")
     assert info.timings.links_ready_s is not None and time.time() - info.t_end_unix < 600

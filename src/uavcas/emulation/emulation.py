@@ -191,7 +191,8 @@ class Emulation:
 
         With `keep_links_up` set, links that leave the window stay up (no forwarding entry
         points at them, so no frame reaches them; taking a port down waits for an RCU grace
-        period, ~30 ms each under load, which a window change need not wait for).
+        period, ~30 ms each under load, which a window change need not wait for). Links raised
+        ahead by `prepare_links` for a later window stay up either way.
         """
         t0 = time.perf_counter()
         self._links, self._routes, self._wormholes = list(links), [list(r) for r in routes], list(wormholes)
@@ -199,27 +200,26 @@ class Emulation:
         created = self.fabric.ensure_links(active)
         t1 = time.perf_counter()
         shapes = self.shapes(links)
-        keep = self._prepared - active  # raised for the next window: stay up
-        up = [f"link set {p} up" for p in Fabric._ports(sorted(active - self.fabric.up))]
+        keep = self._prepared - active  # raised ahead for the next window (prepare_links): stay up
+        down, up = self.fabric.toggle_lines(active | keep)
+        if self.keep_links_up:
+            down = []
         n_up, n_down = len(active - self._active), len(self._active - active)
         self.forwarding = self.plan_forwarding(links, self._routes, self._wormholes)
         want = self.fabric.desired_fdb(self.forwarding)
         fdb = self.fabric.fdb_lines(want)
         t2 = time.perf_counter()
-        # Three phases: (1) shaping in place + links coming up (those `prepare_links` did not
-        # raise ahead); (2) forwarding; (3) links going down (unless `keep_links_up`). A
-        # link is shaped and up before the forwarding sends it a frame, and the forwarding has
-        # left a link before it goes down, so only packets in flight on a vanishing link are lost.
+        # Two concurrent phases: (1) shaping in place + links going down; (2) links coming up +
+        # forwarding. A link is thus shaped before its first frame, and traffic only loses the
+        # few milliseconds between the phases on paths that change.
         t_begin = time.time()
-        stage = self.shaper.apply(shapes, also=[kernel.Batch("ip", self.fabric.ns, up)])
+        stage = self.shaper.apply(shapes, also=[kernel.Batch("ip", self.fabric.ns, down)])
         t3 = time.perf_counter()
-        kernel.run_batch("bridge", self.fabric.ns, fdb)
+        kernel.run_batches([kernel.Batch("ip", self.fabric.ns, up), kernel.Batch("bridge", self.fabric.ns, fdb)])
+        self.fabric.up = (self.fabric.up if self.keep_links_up else set()) | active | keep
         self.fabric.fdb = want
-        self._log_forwarding(t_begin, window_index)
         self._active, self._prepared = active, keep
-        self.fabric.up |= active
-        if not self.keep_links_up:
-            self.retire_links()
+        self._log_forwarding(t_begin, window_index)
         t4 = time.perf_counter()
         timings = {"create_s": t1 - t0, "compute_s": t2 - t1, "phase1_s": t3 - t2, **stage, "phase2_s": t4 - t3,
                    "total_s": t4 - t0}
@@ -231,14 +231,6 @@ class Emulation:
             timings["readback_s"] = time.perf_counter() - t4
         return WindowReport(window_index, timings, n_up, n_down, created, fdb_changes, self.forwarding.rejected,
                             records)
-
-    def retire_links(self) -> int:
-        """Take down the links that are up but neither active nor prepared; returns how many."""
-        old = sorted(self.fabric.up - self._active - self._prepared)
-        if old:
-            kernel.run_batch("ip", self.fabric.ns, [f"link set {p} down" for p in Fabric._ports(old)])
-            self.fabric.up -= set(old)
-        return len(old)
 
     def prepare_links(self, links: Sequence["Link"], wait_s: float = 1.0) -> tuple[int, bool]:
         """Create and raise, ahead of their window, the links of `links` that are not up yet, and

@@ -37,20 +37,16 @@ import argparse
 import ctypes
 import errno
 import gc
-import hashlib
 import heapq
 import json
 import os
 import select
-import shutil
 import signal
 import socket
 import struct
-import subprocess
-import sys
 import time
-from pathlib import Path
 
+from .delayhelper import build_helper
 from .priority import DELAY_RT_PRIORITY
 
 NETLINK_NETFILTER = 12
@@ -69,7 +65,6 @@ TFD_NONBLOCK, TFD_CLOEXEC = 0o4000, 0o2000000
 PR_SET_TIMERSLACK = 29
 SO_TIMESTAMP = 29  # asm-generic/socket.h (Python's socket module does not export it)
 LAG_BUCKETS_US = (25, 50, 100, 200, 500, 1000, 2000, 5000, 10000, 10**9)
-SOURCE = Path(__file__).with_name("nfqdelay.c")
 IMPL_ENV = "UAVCAS_DELAY_IMPL"  # auto | c | python: which verdict loop a daemon started by a shaper runs
 # Released this much before due: the verdict's own path (reinjection, rate stage, veth) until
 # the next switch stamps the frame, measured here at ~10-20 us.
@@ -363,36 +358,6 @@ def request(ctl_path: str, req: dict, timeout_s: float = 2.0) -> dict:
     if not reply.get("ok"):
         raise RuntimeError(f"delay daemon: {reply.get('error')}")
     return reply
-
-
-# the compiled helper ------------------------------------------------------------------------
-def helper_path() -> Path:
-    """Where the helper for this source lives (the source's hash names it: edits rebuild it)."""
-    digest = hashlib.sha256(SOURCE.read_bytes()).hexdigest()[:12]
-    base = Path(sys.prefix) / "libexec" / "uavcas"
-    if not os.access(base if base.exists() else Path(sys.prefix), os.W_OK):
-        base = Path.home() / ".cache" / "uavcas"
-    return base / f"uavcas-nfqdelay-{digest}"
-
-
-def build_helper(force: bool = False) -> Path | None:
-    """Compile the helper if needed; None when there is no C compiler or it fails (-> Python)."""
-    path = helper_path()
-    if path.exists() and not force:
-        return path
-    cc = os.environ.get("CC") or shutil.which("cc") or shutil.which("gcc")
-    if cc is None:
-        return None
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.{os.getpid()}")
-    res = subprocess.run([cc, "-O2", "-Wall", "-o", str(tmp), str(SOURCE)], capture_output=True, text=True)
-    if res.returncode != 0:
-        tmp.unlink(missing_ok=True)
-        print(f"nfqdelay: C helper did not build, using the Python loop: {res.stderr.strip()[-300:]}",
-              file=sys.stderr)
-        return None
-    os.replace(tmp, path)  # atomic: a concurrent run sees the old binary or the new one
-    return path
 
 
 def main(argv: list[str] | None = None) -> None:

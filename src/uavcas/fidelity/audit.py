@@ -24,13 +24,13 @@ from pathlib import Path
 
 import numpy as np
 
-from uavcas.flows.follow import Crossings, Followed, Timeline, follow_run, node_of_point
+from uavcas.flows.follow import Followed, Timeline, follow_run, node_of_point
 from uavcas.flows.packets import PacketTable
 from uavcas.rundir import RunDir, RunInfo
 from uavcas.twin.model import Plan
 
 from . import fifo
-from .model import Check, Counters, DelayErrors, Fidelity, GapDistortion, LinkWindow, Tolerances
+from .model import Check, Counters, Fidelity, GapDistortion, LinkWindow, Tolerances
 
 QUEUE_FULL_SLACK = 1  # a tail drop happens with the queue at its limit; allow one frame of model error
 TRANSITION_S = 0.05  # margin around a forwarding change (held packets, queues draining)
