@@ -35,6 +35,7 @@ class WindowSampler:
         self.samples: list[_Sample] = []
         self.final: dict[str, PortCounters] | None = None
         self.errors: list[str] = []
+        self._ports: set[str] = set()  # every port of every window so far
         self._jobs: queue.Queue = queue.Queue()
         self._thread = threading.Thread(target=self._work, name="window-sampler", daemon=True)
         self._thread.start()
@@ -54,14 +55,15 @@ class WindowSampler:
             try:
                 if window == "end":
                     with urgent(SNAPSHOT_RT_PRIORITY):
-                        self.final = self.shaper.counters(sorted({x.port for smp in self.samples for x in smp.shapes}))
+                        self.final = self.shaper.counters(sorted(self._ports))
                     continue
                 ports = [s.port for s in shapes]
+                self._ports.update(ports)  # the previous window's ports end here too
                 # Promptly: the snapshot marks the window's edge. And the read-back too: its dumps
                 # hold the kernel's RTNL lock, which a window change waits for; at normal priority
                 # on a loaded machine they held it for hundreds of ms (priority inversion).
                 with urgent(SNAPSHOT_RT_PRIORITY):
-                    counters = self.shaper.counters(ports)
+                    counters = self.shaper.counters(sorted(self._ports))
                     records = self.shaper.records(window, shapes, self.shaper.readback(ports)) if self.readback else []
                 self.samples.append(_Sample(window, shapes, records, counters))
             except Exception as e:  # a failed read must not end the run: it is reported
