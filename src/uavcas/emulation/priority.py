@@ -16,9 +16,10 @@ wake-up preempts CFS work at once:
   for the length of a run. Packet processing that overflows an interrupt's budget is handed to
   ksoftirqd, a normal CFS thread: under a load of 20-40 runnable tasks, frames already stamped
   by the receiving port then waited 2-5 ms for it (100 UAVs: per-hop delay error p99 2.2-3.7
-  ms; with the boost 0.23 ms). It is machine-wide: the original policies are saved in
-  `RUN_ROOT/softirq.json` by the first run that boosts, and restored by the last live run to
-  finish (a run killed with SIGKILL leaves the boost in place until the next run ends).
+  ms; with the boost 0.23 ms). It is machine-wide: the original policies and the runs holding
+  the boost are kept in `RUN_ROOT/softirq.json`; the last holder to finish restores them (a run
+  killed with SIGKILL leaves the boost in place until another run ends, or until
+  `release_softirq()` finds no live holder).
 
 Real-time time is bounded by the kernel's RT throttling (sched_rt_runtime_us: 95 % of each
 second), so a runaway cannot freeze the machine. Where SCHED_FIFO is refused (no CAP_SYS_NICE)
@@ -27,6 +28,7 @@ second), so a runaway cannot freeze the machine. Where SCHED_FIFO is refused (no
 
 from __future__ import annotations
 
+import fcntl
 import json
 import os
 from collections.abc import Iterator
@@ -43,6 +45,7 @@ SOFTIRQ_RT_PRIORITY = 9
 CONTROL_RT_PRIORITY = 5
 FALLBACK_NICE = -15
 SOFTIRQ_STATE = "softirq.json"
+SOFTIRQ_LOCK = "softirq.lock"
 
 
 @contextmanager
@@ -95,41 +98,65 @@ def softirq_threads() -> dict[int, tuple[int, int]]:
 def softirq_boost(prefix: str, priority: int = SOFTIRQ_RT_PRIORITY) -> Iterator[bool]:
     """Softirq threads at SCHED_FIFO `priority` while the block runs (see the module docstring).
 
-    Yields whether the boost is in place. Restores the saved policies unless another uavcas run
-    is still live.
+    Yields whether the boost is in place. `RUN_ROOT/softirq.json` holds the threads' original
+    policies and the prefixes of the runs holding the boost; the last holder to leave (holders
+    whose run is no longer live are dropped) restores the originals.
     """
     if priority <= 0:
         yield False
         return
-    state = RUN_ROOT / SOFTIRQ_STATE
-    threads = softirq_threads()
     boosted = False
     try:
-        if not state.exists():
-            RUN_ROOT.mkdir(parents=True, exist_ok=True)
-            atomic_write_text(state, json.dumps({str(p): list(v) for p, v in threads.items()}) + "\n")
-        for pid in threads:
-            os.sched_setscheduler(pid, os.SCHED_FIFO, os.sched_param(priority))
-        boosted = bool(threads)
+        with _state() as state:
+            if not state.get("original"):
+                state["original"] = {str(p): list(v) for p, v in softirq_threads().items()}
+            state["holders"] = sorted(set(state.get("holders", [])) | {prefix})
+            for pid in state["original"]:
+                os.sched_setscheduler(int(pid), os.SCHED_FIFO, os.sched_param(priority))
+            boosted = bool(state["original"])
     except OSError:
         pass
     try:
         yield boosted
     finally:
-        others = [p for p in cleanup.registered_prefixes() if p != prefix and cleanup.is_live(p)]
-        if not others and state.exists():
-            restore_softirq(state)
+        release_softirq(prefix)
 
 
-def restore_softirq(state: Path) -> None:
-    """Put the softirq threads back as `state` saved them, then remove it."""
-    try:
-        saved = json.loads(state.read_text())
-    except (OSError, ValueError):
-        saved = {}
-    for pid, (policy, prio) in saved.items():
+def release_softirq(prefix: str | None = None) -> bool:
+    """Leave the boost (as `prefix`); restore the original policies when no live run holds it.
+
+    Returns whether they were restored. With `prefix` None only dead holders are dropped: what
+    a clean-up after a killed run may call.
+    """
+    with _state() as state:
+        if not state:
+            return False
+        holders = [h for h in state.get("holders", []) if h != prefix and cleanup.is_live(h)]
+        state["holders"] = holders
+        if holders:
+            return False
+        for pid, (policy, prio) in state.get("original", {}).items():
+            try:
+                os.sched_setscheduler(int(pid), policy, os.sched_param(prio))
+            except OSError:
+                continue
+        state.clear()
+        return True
+
+
+@contextmanager
+def _state() -> Iterator[dict]:
+    """The boost's state file, read and written under an exclusive lock (runs end concurrently)."""
+    RUN_ROOT.mkdir(parents=True, exist_ok=True)
+    path = RUN_ROOT / SOFTIRQ_STATE
+    with open(RUN_ROOT / SOFTIRQ_LOCK, "a") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
         try:
-            os.sched_setscheduler(int(pid), policy, os.sched_param(prio))
-        except OSError:
-            continue
-    state.unlink(missing_ok=True)
+            state = json.loads(path.read_text()) if path.exists() else {}
+        except ValueError:
+            state = {}
+        yield state
+        if state:
+            atomic_write_text(path, json.dumps(state) + "\n")
+        else:
+            path.unlink(missing_ok=True)
