@@ -14,11 +14,13 @@ if ((quick)); then
   run $PY benchmarks/flows_throughput.py --packets 200000 --flows 20000
   run $PY benchmarks/emulation_bench.py --quick --json "$out/emulation.json"
   run $PY benchmarks/run_families.py --uavs 10 --windows 3 --out "$out/runs" --json "$out/families.json"
+  run $PY benchmarks/fidelity_bench.py --cases 20-ddos --json "$out/fidelity.json"
   run $PY benchmarks/ids_bench.py --runs 200 --epochs 5
 else
   run $PY benchmarks/flows_throughput.py
   run $PY benchmarks/emulation_bench.py --json "$out/emulation.json"
   run $PY benchmarks/run_families.py --out "$out/runs" --json "$out/families.json"
+  run $PY benchmarks/fidelity_bench.py --json "$out/fidelity.json"
   run $PY benchmarks/ids_bench.py
 fi
 rm -rf "$out/runs"  # pcaps of the family runs: about 1 GB per 20-UAV minute

@@ -47,4 +47,11 @@ extras="${UAVCAS_EXTRAS:-test,dl}"
 log "pip: installing uavcas[$extras] into .venv"
 .venv/bin/python -m pip install -q --upgrade pip >/dev/null 2>&1 || true
 .venv/bin/python -m pip install -q -e ".[$extras]"
+# The delay stage's compiled verdict loop (uavcas.emulation.nfqdelay); without a C compiler the
+# pure-Python loop runs instead.
+if .venv/bin/python -m uavcas.emulation.nfqdelay --build >/dev/null 2>&1; then
+  log "delay stage: compiled verdict loop built"
+else
+  log "delay stage: no C compiler, the pure-Python verdict loop will be used"
+fi
 log "ready: $(.venv/bin/uavcas --version)"

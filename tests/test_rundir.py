@@ -26,7 +26,7 @@ def run_dir(tmp_path_factory):
 def test_paths_and_the_one_list_of_run_files(tmp_path):
     rd = RunDir(tmp_path)
     assert [p.name for p in rd.files()] == ["plan.json", "run.json", "attacks.jsonl", "shaping.jsonl",
-                                          "forwarding.jsonl"]
+                                          "forwarding.jsonl", "fidelity.json"]
     assert (rd.pcap_dir, rd.logs_dir) == (tmp_path / "pcap", tmp_path / "logs")
     assert not rd.holds_run() and rd.read_info() is None and rd.read_attacks() == []
     rd.shaping_jsonl.write_text("")

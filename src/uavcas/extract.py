@@ -42,6 +42,7 @@ class ShardInfo:
     extracted_unix: float
     profile: str | None = None  # twin profile the run's plan was made with, and its SHA-256
     profile_sha256: str | None = None
+    fidelity: str | None = None  # the run's fidelity verdict (run.json), None: never audited
 
 
 @dataclass(frozen=True)
@@ -131,6 +132,7 @@ def extract_detailed(
             extracted_unix=time.time(),
             profile=plan.profile,
             profile_sha256=plan.profile_sha256,
+            fidelity=info.fidelity.verdict if info is not None and info.fidelity is not None else None,
         ),
     )
     return Extracted(shard, ex.packets, ex.flows, followed, truth)

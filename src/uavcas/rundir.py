@@ -5,6 +5,7 @@
     RUN_DIR/attacks.jsonl   the attack log (uavcas.events records)
     RUN_DIR/shaping.jsonl   per-window shaping records of every link
     RUN_DIR/forwarding.jsonl  every forwarding table installed, with when (ForwardingEpoch)
+    RUN_DIR/fidelity.json   the fidelity audit (uavcas.fidelity.Fidelity), summarised in run.json
     RUN_DIR/pcap/           one capture per switch
     RUN_DIR/logs/           tool logs (curl results, stderr)
 
@@ -17,7 +18,7 @@ from __future__ import annotations
 import json
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Literal
 
 from pydantic import BaseModel, ConfigDict, ValidationError
 
@@ -50,6 +51,7 @@ class Timings(_Strict):
     schedule_s: float | None = None
     stop_s: float | None = None
     teardown_s: float | None = None
+    links_ready_s: float | None = None  # window 0's links raised and operational, before t0
     schedule_lateness_ms: Lateness | None = None
 
 
@@ -65,7 +67,7 @@ class WindowApply(_Strict):
 
 class ScheduledEvent(_Strict):
     t_s: float
-    kind: str  # window, start, stop, calibrate, end
+    kind: str  # window, start, stop, calibrate, end; prepare: the next window's links raised ahead
     what: str | int | None  # the attack id, or the window index
     late_ms: float
     took_ms: float
@@ -99,6 +101,17 @@ class ForwardingEpoch(_Strict):
     next_hop: dict[str, dict[str, str]]
 
 
+class FidelitySummary(_Strict):
+    """What run.json keeps of the run's fidelity audit (fidelity.json holds all of it)."""
+
+    verdict: Literal["pass", "fail", "error"]  # error: the audit itself could not be made
+    failed: list[str]  # the checks that failed
+    delay_error_p50_ms: float | None = None
+    delay_error_p90_ms: float | None = None
+    delay_error_p99_ms: float | None = None
+    error: str | None = None
+
+
 class RunInfo(_Strict):
     """run.json: the run's identity, outcome, environment and measurements."""
 
@@ -130,6 +143,7 @@ class RunInfo(_Strict):
     run_id: str | None = None  # set by whoever names runs (e.g. a campaign); else the dir's name
     profile: str | None = None  # twin profile of the plan (plan.json has it too) and its SHA-256
     profile_sha256: str | None = None
+    fidelity: FidelitySummary | None = None  # set by the audit (uavcas.fidelity), None: not audited
 
     def to_json(self) -> str:
         return self.model_dump_json(indent=1, exclude_none=False) + "\n"
@@ -139,7 +153,8 @@ class RunInfo(_Strict):
 class RunDir:
     root: Path
 
-    FILES = ("plan.json", "run.json", "attacks.jsonl", "shaping.jsonl", "forwarding.jsonl")  # the small files of a run
+    # the small files of a run
+    FILES = ("plan.json", "run.json", "attacks.jsonl", "shaping.jsonl", "forwarding.jsonl", "fidelity.json")
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "root", Path(self.root))
@@ -174,6 +189,10 @@ class RunDir:
     def holds_run(self) -> bool:
         """Whether any file of a run is there (a directory uavcas may reuse for a run)."""
         return any(p.exists() for p in self.files())
+
+    @property
+    def fidelity_json(self) -> Path:
+        return self.root / "fidelity.json"
 
     @property
     def forwarding_jsonl(self) -> Path:

@@ -148,13 +148,14 @@ def test_nft_loss_rewrites_only_the_given_port_chains():
     assert "oifname vmap @ports" in table and "type filter hook forward" in table
     assert nft_port_init_lines(["l0-1", "l1-0"]) == [
         "add chain bridge uavcas_shape p_l0_1", "add chain bridge uavcas_shape p_l1_0",
+        "add counter bridge uavcas_shape c_l0_1", "add counter bridge uavcas_shape c_l1_0",
         'add element bridge uavcas_shape ports { "l0-1" : jump p_l0_1, "l1-0" : jump p_l1_0 }']
     assert nft_loss_lines({"l0-1": 0.05, "l1-0": 0.0, "l3-1": 1.0}) == [
         "flush chain bridge uavcas_shape p_l0_1",
-        "add rule bridge uavcas_shape p_l0_1 numgen random mod 1000000 < 50000 counter drop",
+        "add rule bridge uavcas_shape p_l0_1 numgen random mod 1000000 < 50000 counter name c_l0_1 drop",
         "flush chain bridge uavcas_shape p_l1_0",
         "flush chain bridge uavcas_shape p_l3_1",
-        "add rule bridge uavcas_shape p_l3_1 counter drop"]
+        "add rule bridge uavcas_shape p_l3_1 counter name c_l3_1 drop"]
 
 
 def test_tc_rate_parsing_and_queue():

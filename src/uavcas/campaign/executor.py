@@ -27,8 +27,10 @@ def run_local(
     retries: int,
     on_retry: Callable[[RunOutcome, int], None] | None = None,
     min_attack_fraction: float = 0.0,
+    fidelity: str = "flag",
 ) -> Iterator[RunOutcome]:
-    """Run entries `jobs` at a time into their run directories; retry a failure `retries` times."""
+    """Run entries `jobs` at a time into their run directories; retry a failure `retries` times
+    (and a run whose fidelity failed, with `fidelity="retry"`: see `task.execute_entry`)."""
     tries = Retries(retries, on_retry)
     by_index = {e.index: e for e in entries}
     pending = list(entries)
@@ -37,7 +39,7 @@ def run_local(
         tries.started(e.index)
         cdir.reset(e.index)
         return pool.submit(execute_entry, e, str(cdir.run_dir(e.index)), profile,
-                           min_attack_fraction=min_attack_fraction)
+                           min_attack_fraction=min_attack_fraction, fidelity=fidelity)
 
     with ThreadPoolExecutor(max_workers=max(1, jobs)) as pool:
         running: set[Future] = set()
@@ -61,6 +63,7 @@ def run_dask(
     on_retry: Callable[[RunOutcome, int], None] | None = None,
     connect_timeout_s: float = 30.0,
     min_attack_fraction: float = 0.0,
+    fidelity: str = "flag",
 ) -> Iterator[RunOutcome]:
     """Submit every entry to the scheduler at `address` (tcp://HOST:8786); yield as they finish."""
     from distributed import Client, as_completed
@@ -78,6 +81,7 @@ def run_dask(
                 profile,
                 return_files=True,
                 min_attack_fraction=min_attack_fraction,
+                fidelity=fidelity,
                 resources={"emulator": 1},
                 pure=False,
                 key=f"uavcas-run-{e.index}-try{n}",

@@ -25,7 +25,8 @@ class Retries:
         return self.tries[index]
 
     def again(self, out: _Outcome) -> bool:
-        if out.ok or self.tries.get(out.index, 0) > self.retries:
+        """A failed run, or a finished one asking for a retry (`retry`: its fidelity failed)."""
+        if (out.ok and not getattr(out, "retry", False)) or self.tries.get(out.index, 0) > self.retries:
             return False
         if self.on_retry:
             self.on_retry(out, self.tries[out.index])

@@ -19,6 +19,7 @@ from .layout import CampaignDir, CampaignError
 from .task import RunOutcome
 
 DEFAULT_RETRIES = 2
+FIDELITY_POLICIES = ("flag", "retry")  # what becomes of a run whose fidelity audit failed
 
 
 @dataclass
@@ -59,12 +60,15 @@ def run_campaign(
     retries: int = DEFAULT_RETRIES,
     console: Console | None = None,
     min_attack_fraction: float = 0.0,
+    fidelity: str = "flag",
 ) -> CampaignResult:
     from uavcas.dataset.store import rebuild
 
     console = console or Console(stderr=True)
     if jobs < 1:
         raise CampaignError(f"--jobs must be >= 1, got {jobs}")
+    if fidelity not in FIDELITY_POLICIES:
+        raise CampaignError(f"--fidelity must be one of {', '.join(FIDELITY_POLICIES)}, got {fidelity!r}")
     if scheduler is None:
         preflight_local()
     cdir = CampaignDir(Path(out_dir))
@@ -81,7 +85,8 @@ def run_campaign(
     t0 = time.monotonic()
 
     def on_retry(out: RunOutcome, attempt: int) -> None:
-        console.print(f"[yellow]run {out.index} failed (try {attempt}/{retries + 1}): {out.error}; retrying[/]")
+        why = "fidelity failed" if out.ok else f"failed: {out.error}"
+        console.print(f"[yellow]run {out.index} {why} (try {attempt}/{retries + 1}); retrying[/]")
 
     columns = (
         TextColumn("[bold]campaign[/]"), BarColumn(), MofNCompleteColumn(),
@@ -96,14 +101,18 @@ def run_campaign(
 
             progress.update(task, status=status())
             outcomes = (
-                run_dask(todo, scheduler, profile, retries, on_retry, min_attack_fraction=min_attack_fraction)
+                run_dask(todo, scheduler, profile, retries, on_retry, min_attack_fraction=min_attack_fraction,
+                         fidelity=fidelity)
                 if scheduler
-                else run_local(todo, cdir, jobs, profile, retries, on_retry, min_attack_fraction=min_attack_fraction)
+                else run_local(todo, cdir, jobs, profile, retries, on_retry, min_attack_fraction=min_attack_fraction,
+                               fidelity=fidelity)
             )
             for out in outcomes:
                 if out.ok:
                     _commit(cdir, out)
                     result.done.append(out.index)
+                    if out.fidelity == "fail":
+                        console.print(f"[yellow]run {out.index} kept, flagged: fidelity failed[/]")
                 else:
                     result.failed.append(out)
                     console.print(f"[red]run {out.index} failed after {retries + 1} tries: {out.error}[/]")

@@ -35,6 +35,8 @@ class RunOutcome:
     n_flows: int = 0
     class_counts: dict[str, int] = field(default_factory=dict)
     files: dict[str, bytes] = field(default_factory=dict)  # RunDir.FILES, when returned
+    fidelity: str | None = None  # the run's fidelity verdict (pass, fail, error; None: not audited)
+    retry: bool = False  # a finished run to try again (its fidelity failed and the policy retries)
 
     def summary(self) -> dict:
         """outcome.json: everything but the bytes."""
@@ -51,8 +53,13 @@ def execute_entry(
     labels: str = "ours",
     return_files: bool = False,
     min_attack_fraction: float = 0.0,
+    fidelity: str = "flag",
 ) -> RunOutcome:
-    """Run one manifest entry into `run_dir` (a temporary directory when None) and extract it."""
+    """Run one manifest entry into `run_dir` (a temporary directory when None) and extract it.
+
+    `fidelity`: what a run whose fidelity audit failed becomes: "flag" (kept, its verdict in the
+    dataset card) or "retry" (tried again like a failed run; the last try is kept, flagged).
+    """
     import pyarrow.parquet as pq
 
     from uavcas.dataset.parquet import to_table
@@ -80,6 +87,8 @@ def execute_entry(
         pq.write_table(to_table(shard.frame, meta=asdict(shard.info)), buf, compression="zstd")
         out.shard = buf.getvalue()
         out.n_flows, out.class_counts = shard.info.n_flows, dict(shard.info.class_counts)
+        out.fidelity = shard.info.fidelity
+        out.retry = fidelity == "retry" and out.fidelity == "fail"
         if return_files:
             out.files = {p.name: p.read_bytes() for p in RunDir(base).files() if p.exists()}
         out.ok = True

@@ -7,6 +7,7 @@ import typer
 from uavcas import __version__
 
 from . import analyze as _analyze
+from . import audit as _audit
 from . import calibrate as _calibrate
 from . import bench as _bench
 from . import campaign as _campaign
@@ -26,7 +27,8 @@ app = typer.Typer(
     pretty_exceptions_enable=False,
 )
 
-for _module in (_plan, _campaign, _dataset, _flows, _emulate, _analyze, _bench, _report, _run, _calibrate, _channel):
+for _module in (_plan, _campaign, _dataset, _flows, _emulate, _analyze, _bench, _report, _run, _calibrate,
+                _channel, _audit):
     _module.register(app)
 
 

@@ -45,6 +45,9 @@ def run_cmd(
     scheduler: str = typer.Option(None, "--scheduler", help="Dask scheduler, e.g. tcp://HOST:8786."),
     profile: str = typer.Option(None, "--profile", help="Twin profile name or JSON path."),
     retries: int = typer.Option(2, "--retries", min=0, help="Extra tries for a failed run."),
+    fidelity: str = typer.Option("flag", "--fidelity",
+                                 help="A run whose fidelity audit fails: 'flag' (keep it, counted in dataset.json) "
+                                      "or 'retry' (try again up to --retries, then keep the last, flagged)."),
     report: bool = typer.Option(True, "--report/--no-report", help="Write DATASET_DIR/report/index.html at the end."),
     min_attack_fraction: float = typer.Option(
         0.0, "--min-attack-fraction", min=0.0, max=1.0,
@@ -72,7 +75,7 @@ def run_cmd(
 
             load_profile(profile)
         result = run_campaign(entries, out, jobs=jobs, scheduler=scheduler, profile=profile, retries=retries,
-                              min_attack_fraction=min_attack_fraction)
+                              min_attack_fraction=min_attack_fraction, fidelity=fidelity)
     except (CampaignError, ValueError) as e:
         raise fail(str(e).splitlines()[0]) from None
     except KeyboardInterrupt:

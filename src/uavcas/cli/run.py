@@ -13,6 +13,7 @@ from pathlib import Path
 import typer
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
+from .audit import fidelity_line
 from .common import console, fail, plan_or_fail
 
 
@@ -26,6 +27,8 @@ def run_cmd(
     telemetry: bool = typer.Option(False, "--telemetry", help="Add a 10 Hz MAVLink-like UDP stream per UAV."),
     prefix: str = typer.Option(None, "--prefix", help="Namespace prefix (default: random)."),
     think_s: float = typer.Option(0.5, "--think-s", min=0.0, help="Mean pause between a BS's image fetches."),
+    audit: bool = typer.Option(True, "--audit/--no-audit",
+                               help="Audit the run's fidelity at the end (fidelity.json; `uavcas audit` later)."),
 ) -> None:
     """Realise a scenario's plan on real Linux stacks, attack it, capture every switch."""
     p = plan_or_fail(config, seed, windows, window_s, profile)
@@ -49,7 +52,7 @@ def run_cmd(
 
     from uavcas.emulation.runner import RunOptions, realize
 
-    opts = RunOptions(prefix=prefix, telemetry=telemetry, think_mean_s=think_s)
+    opts = RunOptions(prefix=prefix, telemetry=telemetry, think_mean_s=think_s, audit=audit)
     console.print(f"[bold]{p.config}[/] seed={seed}: {len(p.nodes)} nodes, {len(p.windows)} windows x "
                   f"{p.window_s:g} s, shaper {feats.shaper} -> {out}", highlight=False)
     for a in p.attacks:
@@ -94,6 +97,8 @@ def run_cmd(
     console.print(f"{len(art.pcaps)} pcaps, {info.packets_captured if info else 0} packets captured, "
                   f"{info.capture_drops if info else None} dropped; wall {time.time() - started:.1f} s; "
                   f"exit {art.exit_status} ({art.exit_reason})", highlight=False)
+    if info is not None and info.fidelity is not None:
+        console.print(fidelity_line(info.fidelity), highlight=False)
     if art.exit_status != 0:
         raise typer.Exit(art.exit_status)
 

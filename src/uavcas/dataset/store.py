@@ -99,6 +99,9 @@ def rebuild(out_dir: Path) -> dict:
         # Twin profiles the runs were planned with: name -> the SHA-256s of their JSON.
         "profiles": {name: sorted({r.get("profile_sha256") for r in runs if r.get("profile") == name} - {None})
                      for name in sorted({r["profile"] for r in runs if r.get("profile")})},
+        # runs by fidelity verdict (uavcas.fidelity): how many failed their audit
+        "fidelity": {v: sum(1 for r in runs if (r.get("fidelity") or "unaudited") == v)
+                     for v in ("pass", "fail", "error", "unaudited")},
         "runs": runs,
         "versions": package_versions("numpy", "pandas", "pyarrow"),
     }

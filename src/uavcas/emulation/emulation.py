@@ -23,6 +23,8 @@ from typing import TYPE_CHECKING, Literal
 if TYPE_CHECKING:  # only typed against the plan: importing uavcas.twin pulls the whole planner
     from uavcas.twin.model import Link, Plan
 
+from uavcas.rundir import ForwardingEpoch
+
 from . import cleanup, kernel
 from .controller import Detour, Forwarding, compute
 from .fabric import Fabric, LinkKey, SwitchPorts, key
@@ -76,6 +78,11 @@ class Emulation:
         self.fabric = Fabric(self.naming, self.specs, self.shaper)
         self.window: int | None = None
         self.forwarding: Forwarding | None = None
+        self.forwarding_log: list[ForwardingEpoch] = []  # every table installed, with when
+        self._fwd_memo: dict[tuple, Forwarding] = {}
+        self._active: set[LinkKey] = set()  # links of the last apply
+        self._prepared: set[LinkKey] = set()  # raised ahead of the next window (prepare_links)
+        self.keep_links_up = False  # see apply_links
         self._links: list["Link"] = []
         self._routes: list[list[str]] = []
         self._wormholes: list[Detour] = []
@@ -182,7 +189,13 @@ class Emulation:
     def apply_links(self, links: Sequence["Link"], routes: Iterable[Sequence[str]] = (),
                     wormholes: Iterable["Detour | Sequence[str]"] = (), window_index: int = -1) -> WindowReport:
         """Make `links` (and only them) active with their shaping, then forwarding for them, with
-        the given wormhole detours diverting (`controller`)."""
+        the given wormhole detours diverting (`controller`).
+
+        With `keep_links_up` set, links that leave the window stay up (no forwarding entry
+        points at them, so no frame reaches them; taking a port down waits for an RCU grace
+        period, ~30 ms each under load, which a window change need not wait for). Links raised
+        ahead by `prepare_links` for a later window stay up either way.
+        """
         t0 = time.perf_counter()
         self._links, self._routes = list(links), [list(r) for r in routes]
         self._wormholes = [Detour.of(w) for w in wormholes]
@@ -190,8 +203,12 @@ class Emulation:
         created = self.fabric.ensure_links(active)
         t1 = time.perf_counter()
         shapes = self.shapes(links)
-        down, up = self.fabric.toggle_lines(active)
-        self.forwarding = self._compute()
+        keep = self._prepared - active  # raised ahead for the next window (prepare_links): stay up
+        down, up = self.fabric.toggle_lines(active | keep)
+        if self.keep_links_up:
+            down = []
+        n_up, n_down = len(active - self._active), len(self._active - active)
+        self.forwarding = self.plan_forwarding(links, self._routes, self._wormholes)
         want = self.fabric.desired_fdb(self.forwarding)
         fdb = self.fabric.fdb_lines(want)
         t2 = time.perf_counter()
@@ -201,16 +218,20 @@ class Emulation:
         # Two concurrent phases: (1) shaping in place + links going down; (2) links coming up +
         # forwarding. A link is thus shaped before its first frame, and traffic only loses the
         # few milliseconds between the phases on paths that change.
+        t_begin = time.time()
         stage = self.shaper.apply(shapes, also=[kernel.Batch("ip", self.fabric.ns, down)])
         t3 = time.perf_counter()
         kernel.run_batches([kernel.Batch("ip", self.fabric.ns, up), kernel.Batch("bridge", self.fabric.ns, fdb)])
-        self.fabric.up, self.fabric.fdb = active, want
+        self.fabric.up = (self.fabric.up if self.keep_links_up else set()) | active | keep
+        self.fabric.fdb = want
+        self._active, self._prepared = active, keep
         if not stopping:
             self.fabric.apply_detours(self.forwarding.detours)
+        self._log_forwarding(t_begin, window_index)
         t4 = time.perf_counter()
         timings = {"create_s": t1 - t0, "compute_s": t2 - t1, "phase1_s": t3 - t2, **stage, "phase2_s": t4 - t3,
                    "total_s": t4 - t0}
-        n_up, n_down, fdb_changes = len(up) // 2, len(down) // 2, len(fdb)
+        fdb_changes = len(fdb)
         records: list[ShapingRecord] = []
         if self.readback:
             applied = self.shaper.readback([s.port for s in shapes])
@@ -219,9 +240,41 @@ class Emulation:
         return WindowReport(window_index, timings, n_up, n_down, created, fdb_changes, self.forwarding.rejected,
                             records)
 
-    def _compute(self) -> Forwarding:
-        return compute(self.names, [(lk.a, lk.b) for lk in self._links], self._routes, self._wormholes,
-                       [(lk.a, lk.b) for lk in self._links if lk.detour])
+    def prepare_links(self, links: Sequence["Link"], wait_s: float = 1.0) -> tuple[int, bool]:
+        """Create and raise, ahead of their window, the links of `links` that are not up yet, and
+        wait up to `wait_s` for every link prepared so far to be operational (call it again to
+        wait more).
+
+        A raised link carries nothing until the forwarding points at it (flooding and learning
+        are off), and the kernel attaches a port's queue only once its link-watch work has seen
+        the carrier (up to seconds on a loaded machine; frames sent before are dropped): raising
+        links in idle time and waiting here keeps that off the window change. Returns how many,
+        and whether they all became operational within `wait_s`.
+        """
+        active = {key(self.index[lk.a], self.index[lk.b]) for lk in links}
+        self.fabric.ensure_links(active)
+        new = sorted(active - self.fabric.up)
+        if new:
+            kernel.run_batch("ip", self.fabric.ns, [f"link set {p} up" for p in Fabric._ports(new)])
+            self.fabric.up |= set(new)
+        self._prepared = (self._prepared | set(new)) & active
+        waiting = Fabric._ports(sorted(self._prepared))
+        ok = self.fabric.wait_operational(waiting, wait_s) if waiting else True
+        return len(new), ok
+
+    def plan_forwarding(self, links: Sequence["Link"], routes: Iterable[Sequence[str]] = (),
+                        wormholes: Iterable["Detour | Sequence[str]"] = ()) -> Forwarding:
+        """The forwarding for these links, routes and detours (memoised: a runner computes the
+        next window's ahead, in idle time, so that the change itself does not wait for it)."""
+        links = list(links)
+        key = (tuple((lk.a, lk.b) for lk in links), tuple(tuple(r) for r in routes),
+               tuple(Detour.of(w) for w in wormholes), tuple((lk.a, lk.b) for lk in links if lk.detour))
+        fwd = self._fwd_memo.get(key)
+        if fwd is None:
+            if len(self._fwd_memo) > 8:
+                self._fwd_memo.clear()
+            fwd = self._fwd_memo[key] = compute(self.names, list(key[0]), key[1], key[2], key[3])
+        return fwd
 
     def shapes(self, links: Sequence["Link"]) -> list[Shape]:
         out = []
@@ -234,13 +287,15 @@ class Emulation:
     def set_wormholes(self, detours: Iterable["Detour | Sequence[str]"]) -> int:
         """Re-route the current links with these wormhole detours (FDB and detour table only)."""
         self._wormholes = [Detour.of(d) for d in detours]
-        self.forwarding = self._compute()
+        self.forwarding = self.plan_forwarding(self._links, self._routes, self._wormholes)
+        t_begin = time.time()
         stopping = self._stopping_detours()
         if stopping:
             self.fabric.apply_detours(self.forwarding.detours)
         changes = self.fabric.apply_forwarding(self.forwarding)
         if not stopping:
             self.fabric.apply_detours(self.forwarding.detours)
+        self._log_forwarding(t_begin, self.forwarding_log[-1].window if self.forwarding_log else -1)
         return changes
 
     def _stopping_detours(self) -> bool:
@@ -249,6 +304,10 @@ class Emulation:
         detour diverts only once its path is in place (alias entries outlive their detour, so
         frames already diverted still arrive)."""
         return {(d.victim, d.bs) for d in self.forwarding.detours} <= set(self.fabric.detours_active)
+
+    def _log_forwarding(self, t_begin: float, window: int) -> None:
+        self.forwarding_log.append(ForwardingEpoch(t_begin_unix=t_begin, t_unix=time.time(), window=window,
+                                                   next_hop=self.forwarding.next_hop))
 
     # processes and hooks -------------------------------------------------------------------
     def ns(self, node: str) -> str:

@@ -13,6 +13,7 @@ Every step is one batched call per tool: `ip -batch`, `bridge -batch`, `tc -batc
 
 from __future__ import annotations
 
+import json
 import subprocess
 import time
 from collections.abc import Iterable, Sequence
@@ -127,6 +128,20 @@ class Fabric:
         kernel.run_batch("ip", self.ns, down + up)
         self.up = set(active)
         return len(up) // 2, len(down) // 2
+
+    def wait_operational(self, ports: Sequence[str], timeout_s: float = 1.0) -> bool:
+        """Wait until these ports' operational state is up (their queues attached); False on timeout."""
+        want = set(ports)
+        deadline = time.monotonic() + timeout_s
+        while want:
+            t = time.monotonic()
+            out = kernel.run(["ip", "-n", self.ns, "-j", "link", "show"]).stdout
+            want -= {d["ifname"] for d in json.loads(out or "[]") if d.get("operstate") == "UP"}
+            took = time.monotonic() - t
+            if not want or time.monotonic() + took + 0.01 > deadline:  # another look would overrun
+                break
+            time.sleep(0.01)
+        return not want
 
     def desired_fdb(self, fwd: Forwarding) -> dict[tuple[int, str], str]:
         want: dict[tuple[int, str], str] = {}

@@ -21,6 +21,7 @@ import json
 import platform
 import shutil
 import statistics
+import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -38,9 +39,15 @@ from .apps.traffic import BenignTraffic
 from .apps.versions import tool_versions
 from .attacks import AttackExecutor
 from .emulation import Emulation
+from .priority import CONTROL_RT_PRIORITY, SOFTIRQ_RT_PRIORITY, softirq_boost, urgent
+from .sampling import WindowSampler
 
 if TYPE_CHECKING:
     from uavcas.twin.model import Plan
+
+LINKS_READY_S = 10.0  # longest wait for window 0's links to become operational (before t0)
+PREPARE_MARGIN_S = 0.05  # preparing the next window stops this long before the next event
+
 
 @dataclass(frozen=True)
 class RunOptions:
@@ -49,6 +56,9 @@ class RunOptions:
     think_mean_s: float = 0.5  # mean pause between a BS's image fetches
     n_images: int = 24
     keep_logs: bool = True  # copy tool logs (curl results, stderr) to OUT/logs
+    urgent: bool = True  # window changes and attack actions at real-time priority (emulation.priority)
+    softirq_boost: bool = True  # the kernel's softirq threads at real-time priority during the run
+    audit: bool = True  # audit a finished run's fidelity (uavcas.fidelity): fidelity.json + run.json summary
 
 
 @dataclass
@@ -106,12 +116,15 @@ def realize(plan: "Plan", out_dir: str | Path, options: RunOptions = RunOptions(
     notify = on_event or (lambda e: None)
     st = _State(plan, out, time.time())
     try:
-        with Emulation(plan, prefix=options.prefix, features=features) as emu:
+        with Emulation(plan, prefix=options.prefix, features=features, readback=False) as emu:
             st.emu = emu
+            emu.keep_links_up = True  # see _prepare_next
+            st.sampler = WindowSampler(emu.shaper)
             st.timings["setup_s"] = time.time() - st.wall0
             notify(SetupDone(prefix=emu.prefix, seconds=st.timings["setup_s"]))
             try:
-                _play(st, options, notify)
+                with softirq_boost(emu.prefix, SOFTIRQ_RT_PRIORITY if options.softirq_boost else 0):
+                    _play(st, options, notify)
                 st.exit_status, st.exit_reason = 0, "ok"
             finally:
                 _wind_down(st, options)
@@ -129,7 +142,20 @@ def realize(plan: "Plan", out_dir: str | Path, options: RunOptions = RunOptions(
     finally:
         _write_outputs(st)
         notify(RunDone(exit_status=st.exit_status, reason=st.exit_reason))
+    if st.exit_status == 0 and options.audit:
+        _audit(st)
     return st.artifacts()
+
+
+def _audit(st: _State) -> None:
+    """The run's fidelity audit (default tolerances for its swarm); a failure to audit is recorded."""
+    from uavcas.fidelity import record_audit_error, write_fidelity
+
+    try:
+        write_fidelity(st.out)
+    except Exception as e:  # the run itself succeeded: keep it, and say the audit could not be made
+        record_audit_error(st.out, f"{type(e).__name__}: {e}")
+    st.info = RunDir(st.out).read_info()
 
 
 class _State:
@@ -148,6 +174,8 @@ class _State:
         self.capture_stats: list[CaptureRecord] = []
         self.clients: list[dict] = []
         self.delay_stats: dict | None = None
+        self.sampler: WindowSampler | None = None
+        self.starter: _Background | None = None  # the clients' start, in the background
         self.exit_status, self.exit_reason = 1, "not finished"
         self.info: RunInfo | None = None
         self.wind_down_errors: list[str] = []
@@ -161,7 +189,7 @@ def _apply_window(st: _State, i: int) -> None:
     w = st.plan.windows[i]
     st.executor.window = w
     rep = st.emu.apply_links(w.links, [r.hops for r in w.routes], st.executor.wormholes_for(w), window_index=w.index)
-    st.shaping += [r.to_dict() for r in rep.records]
+    st.sampler.window_applied(w.index, st.emu.shapes(w.links))
     st.windows.append({"window": w.index, "t_unix": time.time(), "links_up": rep.links_up,
                        "links_down": rep.links_down, "fdb_changes": rep.fdb_changes, "rejected": rep.rejected,
                        "timings_s": {k: round(v, 6) for k, v in rep.timings_s.items()}})
@@ -180,35 +208,99 @@ def _play(st: _State, opt: RunOptions, notify: Callable[[Progress], None]) -> No
     st.executor = AttackExecutor(emu, plan, work, dur, on_event=lambda r: notify(AttackLogged(record=r)))
     st.executor.prepare()
     st.timings["apps_s"] = time.time() - t
-    _apply_window(st, 0)
+    with urgent(CONTROL_RT_PRIORITY if opt.urgent else 0):
+        t_links = time.time()
+        _, ready = emu.prepare_links(plan.windows[0].links, wait_s=LINKS_READY_S)
+        st.timings["links_ready_s"] = time.time() - t_links
+        if not ready:
+            st.wind_down_errors.append(f"window 0: links not operational after {LINKS_READY_S:g} s")
+        _apply_window(st, 0)
     st.t0 = time.time()
     notify(WindowApplied(window=0, t0_unix=st.t0, n_windows=len(plan.windows)))
-    st.traffic.start_clients(st.t0)
-    for ev in schedule(plan):
+    # Starting a hundred client loops took 6 s on a loaded machine: in the background, so that the
+    # schedule (window 1 at t0 + 5 s) never waits for it.
+    t0 = st.t0
+    starter = st.starter = _Background(lambda: st.traffic.start_clients(t0))
+    events = schedule(plan)
+    _prepare_next(st, opt, events)
+    for k, ev in enumerate(events):
         target = st.t0 + ev.t_s
-        time.sleep(max(0.0, target - time.time()))
-        late_ms = (time.time() - target) * 1000
+        # sleeping at real-time priority too: the wake-up is not queued behind the load
+        with urgent(CONTROL_RT_PRIORITY if opt.urgent else 0, inherit=ev.kind == "window"):
+            time.sleep(max(0.0, target - time.time()))
+            late_ms = (time.time() - target) * 1000
+            t_ev = time.time()
+            if ev.kind == "window":
+                _apply_window(st, ev.obj)
+            elif ev.kind == "start":
+                st.executor.start(ev.obj)
+            elif ev.kind == "stop":
+                st.executor.stop(ev.obj)
+            elif ev.kind == "calibrate":
+                st.executor.calibrate(ev.obj)
+            took_ms = (time.time() - t_ev) * 1000
         st.lateness_ms.append(late_ms)
-        t_ev = time.time()
-        if ev.kind == "window":
-            _apply_window(st, ev.obj)
-            notify(WindowApplied(window=ev.obj, n_windows=len(plan.windows)))
-        elif ev.kind == "start":
-            st.executor.start(ev.obj)
-        elif ev.kind == "stop":
-            st.executor.stop(ev.obj)
-        elif ev.kind == "calibrate":
-            st.executor.calibrate(ev.obj)
         st.events.append({"t_s": ev.t_s, "kind": ev.kind, "what": getattr(ev.obj, "attack_id", ev.obj),
-                          "late_ms": round(late_ms, 3), "took_ms": round((time.time() - t_ev) * 1000, 3)})
+                          "late_ms": round(late_ms, 3), "took_ms": round(took_ms, 3)})
+        if ev.kind == "window":
+            notify(WindowApplied(window=ev.obj, n_windows=len(plan.windows)))
+        elif ev.kind == "end":
+            st.sampler.end()
+        _prepare_next(st, opt, events[k + 1:])
     st.timings["schedule_s"] = time.time() - st.t0
+    starter.join()
+
+
+class _Background:
+    """A call in a thread; `join()` waits for it and raises what it raised."""
+
+    def __init__(self, fn: Callable[[], object]) -> None:
+        self.error: BaseException | None = None
+        self.thread = threading.Thread(target=self._run, args=(fn,), daemon=True)
+        self.thread.start()
+
+    def _run(self, fn: Callable[[], object]) -> None:
+        try:
+            fn()
+        except BaseException as e:  # handed to the main thread by join()
+            self.error = e
+
+    def join(self) -> None:
+        self.thread.join()
+        if self.error is not None:
+            raise self.error
+
+
+def _prepare_next(st: _State, opt: RunOptions, upcoming: list[_Event]) -> None:
+    """Between events: raise the next window's new links and compute its forwarding, so that the
+    change itself neither waits for them nor drops frames on links not yet operational.
+
+    Links that left the plan stay up, with no forwarding entry pointing at them (no frame
+    reaches them): taking a port down costs ~30 ms under load (an RCU grace period each), which
+    would only delay the schedule.
+    """
+    nxt = next((e for e in upcoming if e.kind == "window"), None)
+    if nxt is None:
+        return
+    w = st.plan.windows[nxt.obj]
+    until = st.t0 + upcoming[0].t_s - PREPARE_MARGIN_S  # never delay the next event
+    t = time.time()
+    with urgent(CONTROL_RT_PRIORITY if opt.urgent else 0):
+        st.emu.plan_forwarding(w.links, [r.hops for r in w.routes], st.executor.wormholes_for(w))
+        raised, ready = st.emu.prepare_links(w.links, wait_s=max(0.0, until - time.time()))
+    if not ready and upcoming[0] is nxt:
+        st.wind_down_errors.append(f"window {nxt.obj}: links not operational when it began")
+    if raised:
+        st.events.append({"t_s": round(t - st.t0, 6), "kind": "prepare", "what": nxt.obj, "late_ms": 0.0,
+                          "took_ms": round((time.time() - t) * 1000, 3)})
 
 
 def _wind_down(st: _State, opt: RunOptions) -> None:
     """Stop everything in order, keeping going past errors (the core's teardown is the backstop)."""
     t = time.time()
     errors = []
-    for step in (lambda: st.executor and st.executor.stop_all(),
+    for step in (lambda: st.starter and st.starter.thread.join(60.0),  # no client starts after the stop
+                 lambda: st.executor and st.executor.stop_all(),
                  lambda: st.executor and st.executor.collect(),
                  lambda: st.traffic and setattr(st, "clients", [c.to_dict() for c in st.traffic.stop()]),
                  lambda: setattr(st, "delay_stats", _delay_stats(st.emu)),
@@ -223,8 +315,12 @@ def _wind_down(st: _State, opt: RunOptions) -> None:
         logs = st.emu.naming.run_dir / "apps" / "logs"
         if logs.is_dir():
             shutil.copytree(logs, RunDir(st.out).logs_dir, dirs_exist_ok=True)
+        daemon_log = st.emu.naming.run_dir / "nfqdelay.log"
+        if daemon_log.is_file():
+            RunDir(st.out).logs_dir.mkdir(exist_ok=True)
+            shutil.copy(daemon_log, RunDir(st.out).logs_dir / daemon_log.name)
     st.timings["stop_s"] = time.time() - t
-    st.wind_down_errors = errors
+    st.wind_down_errors += errors
 
 
 def _delay_stats(emu: Emulation) -> dict | None:
@@ -236,8 +332,13 @@ def _write_outputs(st: _State) -> None:
     ex = st.executor
     rd = RunDir(st.out)
     atomic_write_text(rd.attacks_jsonl, attack_log_text(ex.log_lines() if ex else []))
+    if st.sampler is not None:
+        st.shaping = [r.to_dict() for r in st.sampler.close()]
+        st.wind_down_errors += st.sampler.errors
     atomic_write_text(rd.shaping_jsonl, "".join(json.dumps(r) + "\n" for r in st.shaping))
     emu = st.emu
+    if emu is not None:
+        atomic_write_text(rd.forwarding_jsonl, "".join(e.model_dump_json() + "\n" for e in emu.forwarding_log))
     lat = st.lateness_ms
     drops = [c.dropped_by_kernel for c in st.capture_stats]
     now = time.time()

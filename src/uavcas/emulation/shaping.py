@@ -11,7 +11,10 @@ loss, and both directions are independent. Backends, chosen by probing the kerne
   rewritten atomically for changed ports only; the NFQUEUE delay daemon (`nfqdelay`) for delay.
 
 Each backend reads back what the kernel/daemon actually hold; `records()` turns planned vs
-applied into typed `ShapingRecord`s (one line of shaping.jsonl each).
+applied into typed `ShapingRecord`s (one line of shaping.jsonl each). `counters()` reads each
+port's kernel counters (packets sent by the rate stage, queue-tail drops, random-loss drops:
+named nft counters, which survive the per-window rewrite of a port's rule); the runner reads
+them at every window change and logs the deltas per window in shaping.jsonl.
 """
 
 from __future__ import annotations
@@ -29,9 +32,9 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 
 from . import kernel, nfqdelay
+from .counters import NFT_TABLE, PortCounters, read_link_drops, read_nft_counters, read_qdisc_counters
 
 LOSS_SCALE = 1_000_000  # loss resolution: 1e-6
-NFT_TABLE = "uavcas_shape"
 QUEUE_MS = 50.0  # pfifo sized to ~50 ms at the link rate: no bufferbloat, room for TCP
 DEFAULT_RATE_MBPS = 1000.0
 
@@ -70,6 +73,11 @@ class ShapingRecord:
     applied_rate_mbps: float | None
     applied_delay_ms: float | None
     applied_loss: float | None
+    # kernel counters over the window (filled in at the window's end; None: not read)
+    sent_packets: int | None = None
+    queue_drops: int | None = None
+    loss_drops: int | None = None
+    link_drops: int | None = None
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -130,8 +138,13 @@ def nft_table_ruleset(table: str = NFT_TABLE) -> str:
             f"    oifname vmap @ports\n  }}\n}}\n")
 
 
+def nft_counter(port: str) -> str:
+    return "c_" + port.replace("-", "_")
+
+
 def nft_port_init_lines(ports: Sequence[str], table: str = NFT_TABLE) -> list[str]:
     lines = [f"add chain bridge {table} {nft_chain(p)}" for p in ports]
+    lines += [f"add counter bridge {table} {nft_counter(p)}" for p in ports]
     if ports:
         elems = ", ".join(f'"{p}" : jump {nft_chain(p)}' for p in ports)
         lines.append(f"add element bridge {table} ports {{ {elems} }}")
@@ -144,9 +157,10 @@ def nft_loss_lines(loss_by_port: dict[str, float], table: str = NFT_TABLE) -> li
         thr = min(LOSS_SCALE, round(loss * LOSS_SCALE))
         lines.append(f"flush chain bridge {table} {nft_chain(port)}")
         if thr >= LOSS_SCALE:  # `numgen mod N < N` is refused by nft; a dead link drops everything
-            lines.append(f"add rule bridge {table} {nft_chain(port)} counter drop")
+            lines.append(f"add rule bridge {table} {nft_chain(port)} counter name {nft_counter(port)} drop")
         elif thr > 0:
-            lines.append(f"add rule bridge {table} {nft_chain(port)} numgen random mod {LOSS_SCALE} < {thr} counter drop")
+            lines.append(f"add rule bridge {table} {nft_chain(port)} numgen random mod {LOSS_SCALE} < {thr} "
+                         f"counter name {nft_counter(port)} drop")
     return lines
 
 
@@ -209,6 +223,10 @@ class Shaper(ABC):
     def readback(self, ports: Sequence[str]) -> dict[str, Applied]:
         """What the kernel (and daemon) hold now for these ports."""
 
+    def counters(self, ports: Sequence[str]) -> dict[str, PortCounters]:
+        """Cumulative kernel counters per port (empty where the backend cannot read them)."""
+        return {}
+
     def records(self, window: int, shapes: Sequence[Shape], applied: dict[str, Applied]) -> list[ShapingRecord]:
         out = []
         for s in shapes:
@@ -260,6 +278,12 @@ class NetemShaper(Shaper):
             loss = opt.get("loss-random", {}).get("loss", 0.0) if netem.get(p) is not None else None
             out[p] = Applied(rates.get(p), None if delay_s is None else delay_s * 1000, loss)
         return out
+
+    def counters(self, ports: Sequence[str]) -> dict[str, PortCounters]:
+        # netem drops random losses and a full queue alike: one count, reported as loss drops
+        qd, link = read_qdisc_counters(self.fabric_ns), read_link_drops(self.fabric_ns)
+        return {p: PortCounters(qd[p]["htb"].get("packets"), None, qd[p].get("netem", {}).get("drops"), link.get(p))
+                for p in ports if "htb" in qd.get(p, {})}
 
 
 class FallbackShaper(Shaper):
@@ -349,6 +373,12 @@ class FallbackShaper(Shaper):
         losses = read_nft_losses(self.fabric_ns)
         table = nfqdelay.request(self.ctl_path, {"op": "get"})["table"] if self.daemon else {}
         return {p: Applied(rates.get(p), table[p] / 1000 if p in table else None, losses.get(p, 0.0)) for p in ports}
+
+    def counters(self, ports: Sequence[str]) -> dict[str, PortCounters]:
+        qd, link = read_qdisc_counters(self.fabric_ns), read_link_drops(self.fabric_ns)
+        nft = read_nft_counters(self.fabric_ns)
+        return {p: PortCounters(qd[p]["htb"].get("packets"), qd[p].get("pfifo", {}).get("drops"), nft.get(p, 0),
+                                link.get(p)) for p in ports if "htb" in qd.get(p, {})}
 
     def daemon_stats(self) -> dict:
         return nfqdelay.request(self.ctl_path, {"op": "get"})["stats"]

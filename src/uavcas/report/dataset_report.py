@@ -111,6 +111,9 @@ def write_report(dataset_dir: str | Path, out_dir: str | Path) -> Path:
             f"<h2>Example topology: run {html.escape(run_id)}</h2><p><code>{html.escape(plan.config)}</code> seed {plan.seed}</p>"
             + "".join(_img(p, out) for p in figs)
         )
+    from .fidelity import fidelity_section
+
+    sections.append(fidelity_section(dataset_dir, out, card))
     feat_figs = _feature_figure(df, out)
     sections.append("<h2>Flow features per class</h2>" + "".join(_img(p, out) for p in feat_figs))
     links = "".join(f'<li><a href="{html.escape(str(p.relative_to(out)))}">{html.escape(p.name)}</a></li>' for p in sorted(out.rglob("*.png")))

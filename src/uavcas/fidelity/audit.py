@@ -1,0 +1,340 @@
+"""`audit(run_dir) -> Fidelity`: follow every packet of a run and hold each hop to the plan.
+
+Per hop crossing (a packet seen at switch i, then at the next switch j; `uavcas.flows.follow`)
+the measured hop delay is compared with the FIFO model of the plan (`fifo`): the delay error.
+Per link direction and window: delay-error quantiles, loss split into queue-tail and random
+(the model's queue was full / was not when the packet vanished) against the planned loss,
+throughput in saturated bins (the model's queue never empty for the whole bin) against the
+planned rate, and the kernel's drop counters where the run logged them. Per flow: how much the
+emulator moved inter-packet gaps end to end. The pooled figures and the schedule (window change
+time, lateness from run.json) are checked against `Tolerances`; any failed check fails the run.
+
+Losses during a change of forwarding (a window change or an attack re-routing: from
+`TRANSITION_S` before the change began to `TRANSITION_S` after it ended) and losses on a link
+that left the plan before the packet could have arrived are counted apart as transition losses
+(`lost` includes them, random loss does not): the plan says nothing about packets in flight
+while the topology changes, and the window-change check bounds how long that lasts.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from uavcas.flows.follow import Followed, Timeline, follow_run, node_of_point
+from uavcas.flows.packets import PacketTable
+from uavcas.rundir import RunDir, RunInfo
+from uavcas.twin.model import Plan
+
+from . import fifo
+from .model import Check, Counters, Fidelity, GapDistortion, LinkWindow, Tolerances
+
+QUEUE_FULL_SLACK = 1  # a tail drop happens with the queue at its limit; allow one frame of model error
+TRANSITION_S = 0.05  # margin around a forwarding change (held packets, queues draining)
+
+
+@dataclass
+class _Planned:
+    """Planned link parameters by (window, i, j) as dense arrays (NaN: no such link)."""
+
+    delay_ms: np.ndarray
+    rate_mbps: np.ndarray
+    loss: np.ndarray
+
+    @classmethod
+    def of(cls, plan: Plan) -> "_Planned":
+        n, w = len(plan.nodes), len(plan.windows)
+        idx = {x.name: x.index for x in plan.nodes}
+        arrs = [np.full((w, n, n), np.nan) for _ in range(3)]
+        for win in plan.windows:
+            for lk in win.links:
+                i, j = idx[lk.a], idx[lk.b]
+                for a, v in zip(arrs, (lk.delay_ms, lk.rate_mbps, lk.loss)):
+                    a[win.index, i, j] = a[win.index, j, i] = v
+        return cls(*arrs)
+
+
+def _q(x: np.ndarray, p: float) -> float | None:
+    return round(float(np.percentile(x, p)), 4) if x.shape[0] else None
+
+
+def delay_errors(err_ms: np.ndarray) -> dict:
+    return {"n": int(err_ms.shape[0]), "delay_error_p1_ms": _q(err_ms, 1), "delay_error_p50_ms": _q(err_ms, 50),
+            "delay_error_p90_ms": _q(err_ms, 90), "delay_error_p99_ms": _q(err_ms, 99),
+            "delay_error_p999_ms": _q(err_ms, 99.9),
+            "delay_error_max_ms": round(float(err_ms.max()), 4) if err_ms.shape[0] else None,
+            "late_over_1ms": round(float((err_ms > 1.0).mean()), 6) if err_ms.shape[0] else None}
+
+
+def audit(run_dir: str | Path, tolerances: Tolerances | None = None, table: PacketTable | None = None) -> Fidelity:
+    """Audit one run directory (see the module docstring); nothing is written.
+
+    `tolerances`: default `Tolerances.for_swarm` of the plan's number of UAVs.
+    """
+    rd = RunDir(Path(run_dir))
+    plan, info = rd.read_plan(), rd.read_info()
+    if tolerances is None:
+        tolerances = Tolerances.for_swarm(sum(n.kind == "uav" for n in plan.nodes))
+    table, fol = follow_run(rd.root, tolerances.max_hop_s, table=table)
+    epochs = rd.read_forwarding()
+    if epochs:
+        timeline = Timeline.from_epochs(plan, epochs)
+    else:
+        timeline = Timeline.from_plan(plan, info.t0_unix if info and info.t0_unix is not None else 0.0)
+    return _Audit(plan, info, rd, table, fol, timeline, tolerances).report()
+
+
+class _Audit:
+    def __init__(self, plan: Plan, info: RunInfo | None, rd: RunDir, table: PacketTable, fol: Followed,
+                 timeline: Timeline, tol: Tolerances) -> None:
+        self.plan, self.info, self.rd, self.table, self.fol, self.tl, self.tol = plan, info, rd, table, fol, timeline, tol
+        self.planned = _Planned.of(plan)
+        index = {x.name: x.index for x in plan.nodes}
+        self.point_node = np.array([index.get(node_of_point(p) or "", -1) for p in fol.points] or [-1], dtype=np.int64)
+        self.names = [x.name for x in plan.nodes]
+        self.n = len(self.names)
+        self.t0 = info.t0_unix if info is not None and info.t0_unix is not None else float(timeline.t_unix[0])
+        self._crossings()
+        self._losses()
+
+    def _window_of_link(self, t: np.ndarray, w: np.ndarray, i: np.ndarray, j: np.ndarray) -> np.ndarray:
+        """The window whose plan holds link i-j at time t: the one in force or, during a change-over,
+        the one being installed (links come up in the middle of an apply); -1: neither."""
+        e = self.tl.epoch_at(t)
+        e2 = np.minimum(e + 1, self.tl.t_unix.shape[0] - 1)
+        w2 = self.tl.window[e2].astype(np.int64)
+        has, has2 = self._has(w, i, j), self._has(w2, i, j)
+        return np.where(has, w, np.where(has2 & (t >= self.tl.t_begin_unix[e2] - TRANSITION_S), w2, -1))
+
+    def _has(self, w: np.ndarray, i: np.ndarray, j: np.ndarray) -> np.ndarray:
+        W = self.planned.delay_ms.shape[0]
+        ok = (i >= 0) & (j >= 0) & (w >= 0) & (w < W)
+        return ok & ~np.isnan(self.planned.delay_ms[np.clip(w, 0, W - 1), np.maximum(i, 0), np.maximum(j, 0)])
+
+    def _param(self, arr: np.ndarray, w: np.ndarray, i: np.ndarray, j: np.ndarray) -> np.ndarray:
+        ok = w >= 0
+        return np.where(ok, arr[np.maximum(w, 0), np.maximum(i, 0), np.maximum(j, 0)], np.nan)
+
+    # per crossing ----------------------------------------------------------------------------
+    def _crossings(self) -> None:
+        c = self.fol.crossings()
+        i, j = self.point_node[c.from_point], self.point_node[c.to_point]
+        w = self._window_of_link(c.t_from, c.window.astype(np.int64), i, j)
+        d_ms, rate = self._param(self.planned.delay_ms, w, i, j), self._param(self.planned.rate_mbps, w, i, j)
+        length = self.table["frame_len"][c.row_from].astype(np.float64)
+        ready = c.t_from + d_ms / 1000.0
+        direction = np.where(w >= 0, i * self.n + j, -1)
+        order = np.lexsort((c.t_from, ready, direction))
+        order = order[direction[order] >= 0]
+        start = np.full(len(c), np.nan)
+        self.model: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}  # direction -> ready, start, rows
+        for g in np.split(order, np.flatnonzero(np.diff(direction[order])) + 1) if order.shape[0] else []:
+            start[g] = fifo.serve(ready[g], length[g], rate[g], self.tol.burst_bytes)
+            self.model[int(direction[g[0]])] = (ready[g], start[g], g)
+        self.c, self.ci, self.cj, self.cw = c, i, j, w
+        self.c_len, self.c_start = length, start
+        self.err_ms = (c.t_to - start) * 1000.0
+
+    # losses ----------------------------------------------------------------------------------
+    def _losses(self) -> None:
+        from uavcas.emulation.shaping import queue_limit_pkts
+
+        lo = self.fol.losses
+        routed = lo.to_point >= 0
+        i = self.point_node[lo.from_point]
+        j = np.where(routed, self.point_node[np.maximum(lo.to_point, 0)], -1)
+        w = self._window_of_link(lo.t_s, lo.window.astype(np.int64), i, j)
+        d = np.nan_to_num(self._param(self.planned.delay_ms, w, i, j))
+        t_ready = lo.t_s + d / 1000.0
+        # the link left the plan before the packet could have arrived, or forwarding was changing
+        down = (w >= 0) & ~self._has(self.tl.window_at(t_ready + TRANSITION_S).astype(np.int64), i, j)
+        for b, e in zip(self.tl.t_begin_unix[1:], self.tl.t_unix[1:]):
+            down |= (lo.t_s >= b - TRANSITION_S) & (lo.t_s <= e + TRANSITION_S)
+        tail = np.zeros(len(lo), dtype=bool)
+        rate = self._param(self.planned.rate_mbps, w, i, j)
+        for k in np.flatnonzero((w >= 0) & ~down):
+            m = self.model.get(int(i[k] * self.n + j[k]))
+            if m is not None:
+                held = fifo.backlog(m[0], m[1], np.array([t_ready[k]]))[0]
+                tail[k] = held >= queue_limit_pkts(float(rate[k])) - QUEUE_FULL_SLACK
+        self.li, self.lj, self.lw, self.l_transition, self.l_tail = i, j, w, down, tail
+
+    # aggregates --------------------------------------------------------------------------------
+    def _saturation(self, direction: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Saturated bins of one direction: (bin start times, measured/planned rate, window)."""
+        ready, start, rows = self.model[direction]
+        busy = fifo.busy_intervals(ready, start)
+        bs = self.tol.saturated_bin_s
+        if busy.shape[0] == 0:
+            e = np.zeros(0)
+            return e, e, e.astype(np.int64)
+        k0 = np.ceil((busy[:, 0] - self.t0) / bs).astype(np.int64)
+        k1 = np.floor((busy[:, 1] - self.t0) / bs).astype(np.int64)
+        bins = np.concatenate([np.arange(a, b) for a, b in zip(k0, k1) if b > a] or [np.zeros(0, np.int64)])
+        if bins.shape[0] == 0:
+            e = np.zeros(0)
+            return e, e, e.astype(np.int64)
+        kb = np.floor((self.c.t_to[rows] - self.t0) / bs).astype(np.int64)
+        sel = np.isin(kb, bins)
+        bits = {}
+        for k, L in zip(kb[sel].tolist(), self.c_len[rows][sel].tolist()):
+            bits[k] = bits.get(k, 0.0) + L * 8.0
+        t_bin = self.t0 + bins * bs
+        i, j = divmod(direction, self.n)
+        w_a = self.tl.window_at(t_bin).astype(np.int64)
+        w_b = self.tl.window_at(t_bin + bs).astype(np.int64)
+        same = (w_a == w_b) & self._has(w_a, np.full_like(w_a, i), np.full_like(w_a, j))
+        rate = self._param(self.planned.rate_mbps, np.where(same, w_a, -1), np.full_like(w_a, i), np.full_like(w_a, j))
+        got = np.array([bits.get(k, 0.0) for k in bins.tolist()]) / bs / 1e6
+        keep = same & ~np.isnan(rate)
+        return t_bin[keep], got[keep] / rate[keep], w_a[keep]
+
+    def _gaps(self) -> GapDistortion:
+        c, ok = self.c, ~np.isnan(self.err_ms)
+        npk = self.fol.n_packets
+        if len(c) == 0:
+            return GapDistortion(gaps=0, gap_p50_ms=None, shift_p50_ms=None, shift_p90_ms=None, shift_over_half_gap=None)
+        e2e = np.bincount(c.pid, weights=np.where(ok, self.err_ms, 0.0), minlength=npk)
+        bad = np.bincount(c.pid, weights=(~ok).astype(float), minlength=npk) > 0
+        ncross = np.bincount(c.pid, minlength=npk)
+        first = self.fol.order[self.fol.offsets[:-1]]
+        last = self.fol.order[self.fol.offsets[1:] - 1]
+        use = (ncross > 0) & ~bad
+        t = self.table
+        keys = [t[k][first] for k in ("src_hi", "src_lo", "dst_hi", "dst_lo", "proto", "sport", "dport")]
+        keys.append(t["point"][last])
+        t_first, t_last = t["ts_s"][first], t["ts_s"][last]
+        pids = np.flatnonzero(use)
+        o = pids[np.lexsort((t_first[pids], *[k[pids] for k in reversed(keys)]))]
+        same = np.ones(max(o.shape[0] - 1, 0), dtype=bool)
+        for k in keys:
+            same &= k[o][1:] == k[o][:-1]
+        p, q = o[:-1][same], o[1:][same]
+        shift = e2e[q] - e2e[p]
+        gap_model = (t_last[q] - t_last[p]) * 1000.0 - shift
+        a = np.abs(shift)
+        return GapDistortion(gaps=int(p.shape[0]), gap_p50_ms=_q(gap_model, 50), shift_p50_ms=_q(a, 50),
+                             shift_p90_ms=_q(a, 90),
+                             shift_over_half_gap=round(float((a > 0.5 * np.abs(gap_model)).mean()), 6) if a.shape[0] else None)
+
+    def _links(self, sat: dict[tuple[int, int, int], np.ndarray]) -> list[LinkWindow]:
+        n = self.n
+        ck = np.where(self.cw >= 0, (self.cw * n + self.ci) * n + self.cj, -1)
+        lk = np.where(self.lw >= 0, (self.lw * n + self.li) * n + self.lj, -1)
+        keys = np.union1d(np.unique(ck[ck >= 0]), np.unique(lk[lk >= 0]))
+        order = np.argsort(ck, kind="stable")
+        bounds = np.searchsorted(ck[order], keys), np.searchsorted(ck[order], keys, side="right")
+        counters = self._counters()
+        out = []
+        for key, a, b in zip(keys.tolist(), *bounds):
+            rows = order[a:b]
+            w, rest = divmod(key, n * n)
+            i, j = divmod(rest, n)
+            err = self.err_ms[rows]
+            meas = (self.c.t_to[rows] - self.c.t_from[rows]) * 1000.0
+            model = (self.c_start[rows] - self.c.t_from[rows]) * 1000.0
+            mine = lk == key
+            lost, tail, down = int(mine.sum()), int((mine & self.l_tail).sum()), int((mine & self.l_transition).sum())
+            cnt = counters.get((w, self.names[i], self.names[j]))
+            if cnt is not None and cnt.queue_drops:
+                # the kernel's own count of tail drops wins where the model's queue was not full
+                tail = min(lost - down, max(tail, cnt.queue_drops))
+            rnd = lost - tail - down
+            p = float(self.planned.loss[w, i, j])
+            offered = rows.shape[0] + rnd
+            sigma = _sigma(rnd, offered, p)
+            ratios = sat.get((w, i, j), np.zeros(0))
+            de = delay_errors(err)
+            ok = _delay_ok(de, self.tol) and abs(sigma or 0.0) <= self.tol.loss_sigma
+            out.append(LinkWindow(
+                verdict="pass" if ok else "fail", src=self.names[i], dst=self.names[j], window=w, **de,
+                planned_delay_ms=float(self.planned.delay_ms[w, i, j]), planned_rate_mbps=float(self.planned.rate_mbps[w, i, j]),
+                planned_loss=p, measured_delay_p50_ms=_q(meas, 50), model_delay_p50_ms=_q(model, 50), lost=lost,
+                lost_tail=tail, lost_transition=down, loss_random=round(rnd / offered, 6) if offered else None,
+                loss_sigma=None if sigma is None else round(sigma, 3), saturated_bins=int(ratios.shape[0]),
+                throughput_ratio_p50=_q(ratios, 50), counters=cnt))
+        return out
+
+    def _counters(self) -> dict[tuple[int, str, str], Counters]:
+        out = {}
+        for r in self.rd.read_shaping():
+            fields = {k: r.get(k) for k in Counters.model_fields}
+            if any(v is not None for v in fields.values()):
+                out[(r["window"], r["src"], r["dst"])] = Counters(**fields)
+        return out
+
+    def report(self) -> Fidelity:
+        tol = self.tol
+        sat: dict[tuple[int, int, int], np.ndarray] = {}
+        all_ratios = []
+        for direction in self.model:
+            _, ratio, w = self._saturation(direction)
+            i, j = divmod(direction, self.n)
+            for wk in np.unique(w).tolist():
+                sat[(wk, i, j)] = ratio[w == wk]
+            all_ratios.append(ratio)
+        ratios = np.concatenate(all_ratios) if all_ratios else np.zeros(0)
+        links = self._links(sat)
+        err = self.err_ms[~np.isnan(self.err_ms)]
+        pooled = delay_errors(err)
+        rnd_obs = sum(lw.lost - lw.lost_tail - lw.lost_transition for lw in links)
+        exp = var = 0.0
+        for lw in links:
+            offered = lw.n + (lw.lost - lw.lost_tail - lw.lost_transition)
+            exp += offered * lw.planned_loss
+            var += offered * lw.planned_loss * (1 - lw.planned_loss)
+        sigma = _sigma_pooled(rnd_obs, exp, var)
+        change = [a.timings_s.get("total_s", 0.0) * 1000 for a in self.info.window_applies] if self.info else []
+        late = [e.late_ms for e in self.info.schedule] if self.info else []
+        checks = [
+            Check(name="delay_error_p50_ms", value=pooled["delay_error_p50_ms"], limit=tol.delay_error_p50_ms,
+                  ok=_le(abs(pooled["delay_error_p50_ms"] or 0.0), tol.delay_error_p50_ms)),
+            Check(name="delay_error_p90_ms", value=pooled["delay_error_p90_ms"], limit=tol.delay_error_p90_ms,
+                  ok=_le(pooled["delay_error_p90_ms"], tol.delay_error_p90_ms)),
+            Check(name="delay_error_p99_ms", value=pooled["delay_error_p99_ms"], limit=tol.delay_error_p99_ms,
+                  ok=_le(pooled["delay_error_p99_ms"], tol.delay_error_p99_ms)),
+            Check(name="delay_early_p1_ms", value=pooled["delay_error_p1_ms"], limit=-tol.delay_early_p1_ms,
+                  ok=pooled["delay_error_p1_ms"] is None or pooled["delay_error_p1_ms"] >= -tol.delay_early_p1_ms),
+            Check(name="loss_sigma", value=sigma, limit=tol.loss_sigma, ok=sigma is None or abs(sigma) <= tol.loss_sigma),
+            Check(name="throughput_rel", value=_q(ratios, 50), limit=tol.throughput_rel,
+                  ok=ratios.shape[0] == 0 or abs(float(np.median(ratios)) - 1) <= tol.throughput_rel),
+            Check(name="window_change_ms", value=round(max(change), 3) if change else None, limit=tol.window_change_ms,
+                  ok=not change or max(change) <= tol.window_change_ms),
+            Check(name="lateness_ms", value=round(max(late), 3) if late else None, limit=tol.lateness_ms,
+                  ok=not late or max(late) <= tol.lateness_ms),
+        ]
+        failed = [ch.name for ch in checks if not ch.ok]
+        return Fidelity(
+            verdict="fail" if failed else "pass", failed=failed, **pooled, packets=self.fol.n_packets,
+            crossings_unmodelled=int(np.isnan(self.err_ms).sum()), lost=len(self.fol.losses),
+            lost_tail=sum(lw.lost_tail for lw in links), lost_transition=int(self.l_transition.sum()),
+            loss_random_observed=rnd_obs, loss_random_expected=round(exp, 3),
+            loss_sigma=sigma, throughput_ratio_p50=_q(ratios, 50), saturated_bins=int(ratios.shape[0]),
+            gaps=self._gaps(), window_change_max_ms=round(max(change), 3) if change else None,
+            lateness_max_ms=round(max(late), 3) if late else None, checks=checks, tolerances=tol, links=links)
+
+
+def _delay_ok(de: dict, tol: Tolerances) -> bool:
+    return (_le(abs(de["delay_error_p50_ms"] or 0.0), tol.delay_error_p50_ms)
+            and _le(de["delay_error_p90_ms"], tol.delay_error_p90_ms)
+            and _le(de["delay_error_p99_ms"], tol.delay_error_p99_ms)
+            and (de["delay_error_p1_ms"] is None or de["delay_error_p1_ms"] >= -tol.delay_early_p1_ms))
+
+
+def _le(x: float | None, limit: float) -> bool:
+    return x is None or x <= limit
+
+
+def _sigma(observed: int, offered: int, p: float) -> float | None:
+    if offered == 0:
+        return None
+    return _sigma_pooled(observed, offered * p, offered * p * (1 - p))
+
+
+def _sigma_pooled(observed: float, expected: float, var: float) -> float:
+    """(observed - expected) in binomial standard deviations, the variance floored at one loss:
+    a lossless plan tolerates a few unexplained losses (as many as `loss_sigma`), not none."""
+    return round((observed - expected) / math.sqrt(max(var, 1.0)), 3)

@@ -1,0 +1,144 @@
+"""fidelity.json, typed: what a run's audit measured against its plan, and its verdict.
+
+Delay errors are *measured minus model* per hop crossing, in milliseconds (positive: the
+emulator was late); the model is `uavcas.fidelity.fifo`. Quantiles are of the signed error.
+"""
+
+from __future__ import annotations
+
+from typing import Literal
+
+from pydantic import BaseModel, ConfigDict, Field
+
+from uavcas.rundir import FidelitySummary
+
+SCHEMA_VERSION = 1
+Verdict = Literal["pass", "fail"]
+
+
+class _Strict(BaseModel):
+    model_config = ConfigDict(frozen=True, extra="forbid")
+
+
+# Per-hop p99 delay-error limit by swarm size (issue #14's targets): up to n UAVs -> ms.
+P99_BY_SWARM_MS: tuple[tuple[int, float], ...] = ((25, 0.5), (60, 1.0))
+P99_LARGE_SWARM_MS = 2.0
+
+
+class Tolerances(_Strict):
+    """Limits a run must keep to pass. The defaults are issue #14's targets for a 20-UAV swarm;
+    `for_swarm(n_uav)` relaxes the p99 limit for larger swarms (`P99_BY_SWARM_MS`)."""
+
+    delay_error_p50_ms: float = Field(0.1, description="|median| of the per-hop delay error")
+    delay_error_p90_ms: float = Field(0.2, description="90th percentile of the per-hop delay error")
+    delay_error_p99_ms: float = Field(0.5, description="99th percentile of the per-hop delay error")
+    delay_early_p1_ms: float = Field(0.2, description="1st percentile may be at most this early")
+    loss_sigma: float = Field(4.0, description="random loss: |observed - planned| in binomial standard deviations")
+    throughput_rel: float = Field(0.05, description="|measured/planned - 1| on saturated links (median of bins)")
+    window_change_ms: float = Field(250.0, description="longest window change (apply) of the run")
+    lateness_ms: float = Field(100.0, description="latest scheduled event of the run")
+    max_hop_s: float = Field(1.0, description="longest plausible hop (the packet follower)")
+    saturated_bin_s: float = Field(0.2, description="bin width for throughput on saturated links")
+    burst_bytes: float = Field(1600.0, description="token-bucket depth of the rate stage (HTB burst)")
+
+    @classmethod
+    def for_swarm(cls, n_uav: int, **overrides: float) -> "Tolerances":
+        """The defaults for a swarm of `n_uav` UAVs, with `overrides` (field name -> value)."""
+        p99 = next((ms for up_to, ms in P99_BY_SWARM_MS if n_uav <= up_to), P99_LARGE_SWARM_MS)
+        return cls(**{"delay_error_p99_ms": p99, **overrides})
+
+
+class DelayErrors(_Strict):
+    n: int  # hop crossings modelled
+    delay_error_p1_ms: float | None
+    delay_error_p50_ms: float | None
+    delay_error_p90_ms: float | None
+    delay_error_p99_ms: float | None
+    delay_error_p999_ms: float | None
+    delay_error_max_ms: float | None
+    late_over_1ms: float | None  # fraction of crossings more than 1 ms late
+
+
+class Counters(_Strict):
+    """Kernel counters of one port over one window (deltas): read at each window's end."""
+
+    sent_packets: int | None = None  # left the rate stage
+    queue_drops: int | None = None  # queue tail (pfifo) drops
+    loss_drops: int | None = None  # random-loss rule drops (nft)
+    link_drops: int | None = None  # dropped by the port on transmit (queue not attached yet, peer down)
+
+
+class LinkWindow(DelayErrors):
+    """One link direction (src's switch -> dst's switch) in one window.
+
+    `verdict`: the run's delay and loss checks on this link alone. Informative only, it does not
+    enter the run's verdict (quantiles of a few hundred packets are noisy).
+    """
+
+    verdict: Verdict
+    src: str
+    dst: str
+    window: int
+    planned_delay_ms: float
+    planned_rate_mbps: float
+    planned_loss: float
+    measured_delay_p50_ms: float | None  # hop delay as measured (capture to capture)
+    model_delay_p50_ms: float | None  # what the model gives the same packets
+    lost: int  # left src, never reached dst
+    lost_tail: int  # of those: the model's queue was full (queue-tail drops)
+    lost_transition: int  # of those: while forwarding changed, or the link was leaving the plan
+    loss_random: float | None  # random losses (lost - tail - transition) / packets offered to the link
+    loss_sigma: float | None  # (observed - planned random losses) / binomial sd
+    saturated_bins: int
+    throughput_ratio_p50: float | None  # measured / planned rate, median over saturated bins
+    counters: Counters | None = None
+
+
+class GapDistortion(_Strict):
+    """Inter-packet gaps inside flows, end to end: how much the emulator moved them vs the model."""
+
+    gaps: int
+    gap_p50_ms: float | None  # the model's gap
+    shift_p50_ms: float | None  # |measured gap - model gap|
+    shift_p90_ms: float | None
+    shift_over_half_gap: float | None  # fraction of gaps moved by more than half of themselves
+
+
+class Check(_Strict):
+    name: str
+    value: float | None
+    limit: float
+    ok: bool
+
+
+class Fidelity(DelayErrors):
+    """fidelity.json: the run's pooled figures, its checks and verdict, then per link and window."""
+
+    schema_version: int = SCHEMA_VERSION
+    verdict: Verdict
+    failed: list[str]  # names of the checks that failed
+    packets: int  # transmissions followed
+    crossings_unmodelled: int  # hop crossings over a link the plan did not have in that window
+    lost: int
+    lost_tail: int
+    lost_transition: int
+    loss_random_observed: int
+    loss_random_expected: float
+    loss_sigma: float
+    throughput_ratio_p50: float | None
+    saturated_bins: int
+    gaps: GapDistortion
+    window_change_max_ms: float | None
+    lateness_max_ms: float | None
+    checks: list[Check]
+    tolerances: Tolerances
+    links: list[LinkWindow]
+
+    def to_json(self) -> str:
+        return self.model_dump_json(indent=1) + "\n"
+
+
+def summary(f: Fidelity) -> FidelitySummary:
+    """The run.json summary of an audit."""
+    return FidelitySummary(verdict=f.verdict, failed=f.failed, delay_error_p50_ms=f.delay_error_p50_ms,
+                           delay_error_p90_ms=f.delay_error_p90_ms, delay_error_p99_ms=f.delay_error_p99_ms)

@@ -1,0 +1,59 @@
+"""Datasets say how many runs failed their fidelity audit; the report shows verdicts and figures."""
+
+from __future__ import annotations
+
+import json
+import shutil
+import sys
+from pathlib import Path
+
+from synth_run import build_run
+
+from uavcas.dataset.store import extract_run
+from uavcas.fidelity import audit, write_fidelity
+from uavcas.rundir import FidelitySummary, RunDir
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "fidelity"))
+from fidsynth import Traffic, build, plan  # noqa: E402
+
+
+def _set_verdict(run_dir: Path, verdict: str) -> None:
+    rd = RunDir(run_dir)
+    info = rd.read_info().model_copy(update={"fidelity": FidelitySummary(verdict=verdict, failed=["lateness_ms"])})
+    rd.run_json.write_text(info.to_json())
+
+
+def test_card_counts_runs_by_fidelity_verdict(tmp_path):
+    ds = tmp_path / "ds"
+    runs = {"a": "pass", "b": "fail", "c": "fail", "d": None}
+    for rid, verdict in runs.items():
+        rd = build_run(tmp_path / rid, run_id=rid)
+        if verdict:
+            _set_verdict(rd, verdict)
+        extract_run(rd, ds)
+    card = json.loads((ds / "dataset.json").read_text())
+    assert card["fidelity"] == {"pass": 1, "fail": 2, "error": 0, "unaudited": 1}
+    assert {r["run_id"]: r["fidelity"] for r in card["runs"]} == runs
+
+
+def test_report_shows_fidelity_verdicts_and_planned_vs_measured(tmp_path):
+    from uavcas.report.fidelity import fidelity_section
+
+    ds = tmp_path / "ds"
+    for rid, late in (("0", 0.0), ("1", 0.002)):
+        tr = Traffic()
+        for k in range(300):
+            tr.add(0.1 + 0.005 * k, 800)
+        rd = build(tmp_path / f"r{rid}", plan(loss_b=0.05), tr, error=lambda h, k, late=late: late,
+                   drop=lambda h, k: h == 1 and k % 20 == 0)
+        write_fidelity(rd.root)
+        (ds / "runs" / rid).mkdir(parents=True)
+        shutil.copy(rd.fidelity_json, ds / "runs" / rid / "fidelity.json")
+    card = {"fidelity": {"pass": 1, "fail": 1, "error": 0, "unaudited": 0}}
+    page = fidelity_section(ds, tmp_path / "out", card)
+    assert "1 pass, 1 fail" in page and page.count("<tr>") == 3
+    assert audit(tmp_path / "r1").verdict == "fail" and "delay_error_p50_ms" in page
+    assert (tmp_path / "out" / "fidelity" / "fidelity.png").stat().st_size > 10_000
+    empty = tmp_path / "empty"
+    (empty / "runs").mkdir(parents=True)
+    assert "No run of this dataset kept a fidelity.json" in fidelity_section(empty, tmp_path / "o2", {})

@@ -1,0 +1,145 @@
+"""The audit on synthetic runs whose emulator errors and losses are known (fidsynth)."""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from fidsynth import T0, Traffic, build, plan, run_info  # noqa: E402
+
+from uavcas.emulation.shaping import queue_limit_pkts  # noqa: E402
+from uavcas.fidelity import Tolerances, audit, read_fidelity, write_fidelity  # noqa: E402
+from uavcas.rundir import RunDir  # noqa: E402
+from uavcas.rundir import WindowApply  # noqa: E402
+
+
+def _steady(n=400, gap_s=0.004, t0=0.1, length=600, sport=5000) -> Traffic:
+    tr = Traffic()
+    for k in range(n):
+        tr.add(t0 + k * gap_s, length, sport)
+    return tr
+
+
+def test_a_perfect_emulator_passes_with_zero_error(tmp_path):
+    tr = _steady()
+    for k in range(40):  # a burst well over the rate: the model queues it
+        tr.add(3.0, 1000, 6000)
+    f = audit(build(tmp_path, plan(), tr).root)
+    assert f.verdict == "pass" and f.failed == []
+    assert f.n == 2 * 440 and f.packets == 440 and f.crossings_unmodelled == 0
+    for q in (f.delay_error_p1_ms, f.delay_error_p50_ms, f.delay_error_p99_ms, f.delay_error_max_ms):
+        assert abs(q) < 0.002  # pcap stamps are microseconds
+    assert f.saturated_bins == 0  # 40 kB at 1 B/us: 40 ms of queue, no whole 200 ms bin
+    lw = {(x.src, x.dst, x.window): x for x in f.links}
+    assert set(lw) == {("uav0", "uav1", 0), ("uav1", "bs0", 0)}
+    first = lw[("uav0", "uav1", 0)]
+    assert first.n == 440 and first.planned_delay_ms == 2.0 and first.lost == 0
+    # the queued burst shows in the model's delay, not in the error
+    assert first.model_delay_p50_ms == pytest.approx(first.measured_delay_p50_ms, abs=0.002)
+
+
+def test_saturated_link_throughput_is_measured_against_the_plan(tmp_path):
+    tr = Traffic()
+    for k in range(700):  # 700 kB offered at once on 1 B/us: 0.7 s of backlog
+        tr.add(0.5, 1000, 6000)
+    f = audit(build(tmp_path, plan(), tr).root)
+    assert f.saturated_bins >= 2 and f.throughput_ratio_p50 == pytest.approx(1.0, abs=0.01)
+    assert [c.ok for c in f.checks if c.name == "throughput_rel"] == [True]
+
+
+def test_late_releases_show_as_delay_error_and_fail_a_tight_tolerance(tmp_path):
+    rng = np.random.default_rng(3)
+    late = {(h, k): (3e-4 if rng.random() < 0.05 else 5e-5) for h in range(2) for k in range(400)}
+    rd = build(tmp_path, plan(), _steady(), error=lambda h, k: late[(h, k)])
+    f = audit(rd.root)
+    assert f.delay_error_p50_ms == pytest.approx(0.05, abs=0.002)
+    assert f.delay_error_p99_ms == pytest.approx(0.3, abs=0.002)
+    assert f.verdict == "pass"  # within the 20-UAV defaults: p90 0.2, p99 0.5
+    tight = audit(rd.root, Tolerances(delay_error_p99_ms=0.25))
+    assert tight.verdict == "fail" and tight.failed == ["delay_error_p99_ms"]
+    assert tight.late_over_1ms == 0.0
+
+
+def test_random_loss_is_held_to_the_planned_loss(tmp_path):
+    lossy = plan(loss_b=0.1)
+    ok = audit(build(tmp_path / "ok", lossy, _steady(), drop=lambda h, k: h == 1 and k % 10 == 3).root)
+    assert ok.loss_random_observed == 40 and ok.loss_random_expected == pytest.approx(40.0)
+    assert abs(ok.loss_sigma) < 0.5 and ok.verdict == "pass"
+    hop = next(x for x in ok.links if x.src == "uav1")
+    assert hop.lost == 40 and hop.lost_tail == 0 and hop.loss_random == pytest.approx(0.1)
+    bad = audit(build(tmp_path / "bad", lossy, _steady(), drop=lambda h, k: h == 1 and k % 10 < 3).root)
+    assert bad.loss_random_observed == 120 and bad.loss_sigma > 10 and "loss_sigma" in bad.failed
+    lossless = audit(build(tmp_path / "none", plan(), _steady(), drop=lambda h, k: h == 0 and k in (7, 9)).root)
+    assert lossless.loss_random_observed == 2 and lossless.verdict == "pass"  # a lossless plan tolerates a few
+
+
+def test_queue_tail_drops_are_told_from_random_loss(tmp_path):
+    # 100 frames at once on 8 Mbit/s: two leave at once (the bucket), `limit` wait in the queue
+    # and the emulator drops the rest at its tail
+    limit = queue_limit_pkts(8.0)
+    tr = Traffic()
+    for k in range(100):
+        tr.add(1.0, 1000, 6000)
+    f = audit(build(tmp_path, plan(), tr, drop=lambda h, k: h == 0 and k >= limit + 2).root)
+    assert f.lost == 98 - limit and f.lost_tail == f.lost and f.loss_random_observed == 0 and f.verdict == "pass"
+    # the same losses from a queue the model says was half empty are random ones
+    rd = build(tmp_path / "r", plan(), tr, drop=lambda h, k: h == 0 and k >= limit // 2)
+    g = audit(rd.root)
+    assert g.lost_tail == 0 and g.loss_random_observed == g.lost and g.failed == ["loss_sigma"]
+    # ... unless the kernel counted them as tail drops of that port in that window
+    rec = {"window": 0, "src": "uav0", "dst": "uav1", "port": "l0-1", "backend": "htb-nft-nfqueue",
+           "planned_rate_mbps": 8.0, "planned_delay_ms": 2.0, "planned_loss": 0.0, "applied_rate_mbps": 8.0,
+           "applied_delay_ms": 2.0, "applied_loss": 0.0, "sent_packets": 100 - g.lost, "queue_drops": g.lost,
+           "loss_drops": 0, "link_drops": 0}
+    rd.shaping_jsonl.write_text(json.dumps(rec) + "\n")
+    h = audit(rd.root)
+    assert h.lost_tail == g.lost and h.loss_random_observed == 0 and h.verdict == "pass"
+    assert next(lw for lw in h.links if lw.src == "uav0").counters.queue_drops == g.lost
+
+
+def test_losses_at_a_window_change_are_counted_apart(tmp_path):
+    tr = _steady(n=100, t0=4.8)  # 4.8 .. 5.2 s: across the change at 5 s
+    f = audit(build(tmp_path, plan(), tr, drop=lambda h, k: h == 1 and k in (45, 50, 55)).root)
+    assert f.lost == 3 and f.lost_transition == 3 and f.loss_random_observed == 0
+
+
+def test_gap_distortion_end_to_end(tmp_path):
+    tr = _steady(n=200, gap_s=0.01)
+    # every other packet 3 ms late on its last hop: gaps of 10 ms become 13 / 7 ms
+    f = audit(build(tmp_path, plan(), tr, error=lambda h, k: 0.003 if h == 1 and k % 2 else 0.0).root)
+    assert f.gaps.gaps == 199 and f.gaps.gap_p50_ms == pytest.approx(10.0, abs=0.01)
+    assert f.gaps.shift_p50_ms == pytest.approx(3.0, abs=0.01) and f.gaps.shift_over_half_gap == 0.0
+    worse = audit(build(tmp_path / "w", plan(), tr, error=lambda h, k: 0.006 if h == 1 and k % 2 else 0.0).root)
+    assert worse.gaps.shift_over_half_gap == 1.0
+
+
+def test_schedule_checks_come_from_run_json(tmp_path):
+    slow = WindowApply(window=1, t_unix=T0 + 5, links_up=0, links_down=0, fdb_changes=0, rejected=[],
+                       timings_s={"total_s": 0.4})
+    rd = build(tmp_path, plan(), _steady(n=50), info=run_info(window_applies=[slow]))
+    f = audit(rd.root)
+    assert f.window_change_max_ms == pytest.approx(400.0) and f.failed == ["window_change_ms"]
+
+
+def test_write_fidelity_writes_the_file_and_the_run_json_summary(tmp_path):
+    rd = build(tmp_path, plan(), _steady(n=80))
+    f = write_fidelity(rd.root)
+    on_disk = json.loads(rd.fidelity_json.read_text())
+    for key in ("verdict", "delay_error_p50_ms", "delay_error_p90_ms", "delay_error_p99_ms"):
+        assert key in on_disk and key in on_disk["links"][0]
+    assert read_fidelity(rd.root) == f
+    s = RunDir(rd.root).read_info().fidelity
+    assert s.verdict == f.verdict == "pass" and s.delay_error_p99_ms == f.delay_error_p99_ms
+    assert read_fidelity(tmp_path / "nowhere") is None
+
+
+def test_tolerances_by_swarm_size():
+    assert Tolerances.for_swarm(20).delay_error_p99_ms == 0.5
+    assert Tolerances.for_swarm(50).delay_error_p99_ms == 1.0
+    assert Tolerances.for_swarm(100).delay_error_p99_ms == 2.0
+    assert Tolerances.for_swarm(100, delay_error_p99_ms=0.7).delay_error_p99_ms == 0.7
