@@ -16,6 +16,7 @@ import pandas as pd
 from uavcas.flows import FlowConfig, extract_flows
 from uavcas.labels import label_flows, read_attack_log
 from uavcas.rundir import RunDir, RunDirError
+from uavcas.schema import DEFAULT_STANDARD
 
 
 @dataclass(frozen=True)
@@ -25,6 +26,8 @@ class ShardInfo:
     seed: int
     view: str
     labels: str
+    features: str
+    flow_rules: dict
     min_packets: int
     n_packets: int
     n_flows: int
@@ -52,6 +55,7 @@ def extract(
     min_packets: int | None = None,
     allow_truncated: bool = False,
     run_id: str | None = None,
+    features: str = DEFAULT_STANDARD,
 ) -> Shard:
     """Flows + labels of one run. The run id is `run_id`, else run.json's, else the dir's name."""
     rd = RunDir(Path(run_dir))
@@ -65,7 +69,7 @@ def extract(
     if not pcaps:
         raise RunDirError(f"{rd.root}: no captures in {rd.pcap_dir}")
     cfg = FlowConfig(view=view, min_packets=min_packets)  # type: ignore[arg-type]
-    ex = extract_flows(pcaps, cfg, points=[p.stem for p in pcaps], allow_truncated=allow_truncated)
+    ex = extract_flows(pcaps, cfg, points=[p.stem for p in pcaps], allow_truncated=allow_truncated, standard=features)
     t0 = info.t0_unix if info else None
     log = read_attack_log(rd.attacks_jsonl, plan, t0)
     df = label_flows(ex.packets, ex.flows, ex.frame, log, mode=labels)  # type: ignore[arg-type]
@@ -82,6 +86,8 @@ def extract(
             seed=plan.seed,
             view=view,
             labels=labels,
+            features=features,
+            flow_rules=cfg.describe(),
             min_packets=cfg.effective_min_packets,
             n_packets=len(ex.packets),
             n_flows=len(df),
