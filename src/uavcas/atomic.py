@@ -29,10 +29,11 @@ class UnsafeOutput(ValueError):
 
 def _kind(mode: int) -> str:
     for test, name in ((stat.S_ISLNK, "a symbolic link"), (stat.S_ISFIFO, "a FIFO"), (stat.S_ISCHR, "a character device"),
-                       (stat.S_ISBLK, "a block device"), (stat.S_ISSOCK, "a socket"), (stat.S_ISDIR, "a directory")):  # fmt: skip
+                       (stat.S_ISBLK, "a block device"), (stat.S_ISSOCK, "a socket"), (stat.S_ISDIR, "a directory"),
+                       (stat.S_ISREG, "a regular file")):  # fmt: skip
         if test(mode):
             return name
-    return "not a regular file"
+    return "of an unknown kind"
 
 
 def check_target(path: str | os.PathLike) -> Path:

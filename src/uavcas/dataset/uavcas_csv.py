@@ -241,10 +241,11 @@ def _list_array(values: np.ndarray, lengths: np.ndarray, pa_type, null: np.ndarr
     return pd.arrays.ArrowExtensionArray(arr)
 
 
-def _read_csv(path: Path, **kw) -> pd.DataFrame:
+def _read_csv(path: Path) -> pd.DataFrame:
+    """Every cell as text: numbers are converted by Python's float(), which is correctly rounded,
+    so a value written with repr() reads back to the same double (the round trip is exact)."""
     try:
-        # round_trip: every float parses to the exact double its text names (export writes repr)
-        return pd.read_csv(path, float_precision="round_trip", keep_default_na=False, na_values=[""], **kw)
+        return pd.read_csv(path, dtype=str, keep_default_na=False)
     except (OSError, pd.errors.ParserError, UnicodeDecodeError, ValueError) as exc:
         raise CsvFormatError(f"{path}: cannot read CSV ({str(exc).splitlines()[0]})") from None
 
@@ -287,13 +288,18 @@ def read_layout(path: Path) -> Imported:
     lacks = list(IMPORT_LACKS)
     stat = None
     if stat_path is not None:
-        stat = _read_csv(stat_path, dtype={c: str for c in META_COLUMNS[1:] + ("Label",)})
+        stat = _read_csv(stat_path)
         missing = [c for c in STAT_COLUMNS if c not in stat.columns]
         if missing:
             raise CsvFormatError(f"{stat_path}: not the authors' stat layout (missing {missing[:5]}{'...' if len(missing) > 5 else ''})")
+        try:
+            for c in ("config_idx", *PAPER_FEATURES):
+                stat[c] = np.array([float(v) for v in stat[c]], dtype=np.float64)
+        except ValueError as exc:
+            raise CsvFormatError(f"{stat_path}: {exc}") from None
     ts = None
     if ts_path is not None:
-        ts = _read_csv(ts_path, dtype=str)
+        ts = _read_csv(ts_path)
         need = [c for c in ("packet_time", "packet_size", "packet_dir", "Label") if c not in ts.columns]
         if need:
             raise CsvFormatError(f"{ts_path}: not the authors' ts layout (missing {need})")
@@ -356,7 +362,7 @@ def read_layout(path: Path) -> Imported:
     if stat is not None:
         r = row_of_stat
         cidx = stat["config_idx"].to_numpy()
-        out.loc[r, "run_id"] = [str(int(c)) for c in cidx]
+        out.loc[r, "run_id"] = [str(int(c)) for c in cidx]  # written as an integer by their script
         out.loc[r, "src_ip"] = stat["src_ip"].to_numpy()
         out.loc[r, "dst_ip"] = stat["dst_ip"].to_numpy()
         for ours, theirs, conv in (("n_uav", "num_drones", int), ("n_bs", "num_bs", int), ("payload", "payload", str),

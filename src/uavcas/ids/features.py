@@ -23,7 +23,8 @@ def check_feature_columns(columns: Iterable[str]) -> list[str]:
     """Return `columns` as a list if every one is a schema feature; raise otherwise."""
     cols = list(columns)
     meta = [c for c in cols if c in schema.METADATA_COLUMNS]
-    other = [c for c in cols if c not in schema.FEATURES and c not in meta]
+    known = set(schema.FEATURES) | set(schema.PAPER_FEATURES)  # either feature standard
+    other = [c for c in cols if c not in known and c not in meta]
     if meta or other:
         raise MetadataLeakError(
             f"not flow features (never used by the IDS): {meta + other}"
@@ -39,7 +40,8 @@ def feature_matrix(df: pd.DataFrame, columns: Iterable[str] | None = None) -> np
     inf (a rate over a zero duration) and NaN become 0: the estimators need finite input and a
     zero rate is what CICFlowMeter writes for a one-packet flow.
     """
-    cols = check_feature_columns(columns if columns is not None else [f for f in schema.FEATURES if f in df.columns])
+    standard = schema.feature_columns(df.attrs.get("feature_standard", schema.DEFAULT_STANDARD))
+    cols = check_feature_columns(columns if columns is not None else [f for f in standard if f in df.columns])
     missing = [c for c in cols if c not in df.columns]
     if missing:
         raise ValueError(f"feature columns missing from the dataset: {missing}")
