@@ -32,7 +32,9 @@ def test_flood_flows_are_dos_only_inside_window(synth_run_dir):
     outside = pair.drop(inside.index)
     assert len(inside) == N_FLOOD and (inside.label == "DoS").all() and inside.label_dos.all()
     assert (inside.label_source == "flood-packets").all()
-    assert len(outside) == 2 and (outside.label == "Benign").all() and (outside.label_source == "none").all()
+    # two sessions outside, each two flows (the server's FIN ends the first; flows.assemble rule 4a)
+    assert outside.src_port.nunique() == 2 and len(outside) == 4
+    assert (outside.label == "Benign").all() and (outside.label_source == "none").all()
     # the victim's other flows are not DoS
     assert not df[(df.src_ip == IPS["bs0"])].label_dos.any()
 
@@ -41,12 +43,13 @@ def test_replay_and_blackhole(synth_run_dir):
     df = _labelled(synth_run_dir)
     rep = df[df.label_replay]
     assert len(rep) == 1 and rep.iloc[0].src_port == 41001 and rep.iloc[0].label_source == "replay-injections"
-    assert rep.iloc[0].packets == 12 + 3  # the session plus the three injected packets
+    # the session's trailing FIN flow (2 packets) plus the three injected packets, 1.3 s later
+    assert rep.iloc[0].packets == 2 + 3
     bh = df[df.label_blackhole]
-    assert len(bh) == 1 and bh.iloc[0].dst_ip == IPS["uav3"] and bh.iloc[0].label == "Blackhole"
+    assert len(bh) == 2 and (bh.dst_ip == IPS["uav3"]).all() and (bh.label == "Blackhole").all()  # session + FIN tail
     assert T0 + BLACKHOLE_WINDOW[0] <= bh.iloc[0].first_ts < T0 + BLACKHOLE_WINDOW[1]
     counts = df.label.value_counts().to_dict()
-    assert counts == {"DoS": N_FLOOD, "Benign": 12, "Replay": 1, "Blackhole": 1}
+    assert counts == {"DoS": N_FLOOD, "Benign": 25, "Replay": 1, "Blackhole": 2}
     assert set(LABEL_COLUMNS) <= set(df.columns)
 
 
@@ -55,7 +58,7 @@ def test_paper_ip_membership(synth_run_dir):
     assert (df.label_source == "ip-membership").all()
     # no time gating: the benign uav1 -> uav0 sessions outside the window are DoS too
     pair = df[(df.src_ip == IPS["uav1"])]
-    assert (pair.label == "DoS").all() and len(pair) == N_FLOOD + 2
+    assert (pair.label == "DoS").all() and len(pair) == N_FLOOD + 2 * 2
     assert (df[df.dst_ip == IPS["uav3"]].label == "Blackhole+Replay").all()
 
 
@@ -108,6 +111,6 @@ def test_wormhole_window_and_ddos(synth_run_dir, tmp_path):
     (run / "attacks.jsonl").write_text(lines)
     df = _labelled(run)
     worm = df[df.label_wormhole]
-    assert len(worm) == 1 and worm.iloc[0].src_port == 40000 and worm.iloc[0].label == "Wormhole"
-    assert worm.iloc[0].label_source == "victim-window"
+    assert len(worm) == 2 and (worm.src_port == 40000).all() and (worm.label == "Wormhole").all()  # session + FIN tail
+    assert (worm.label_source == "victim-window").all()
     assert (df.label == "DDoS").sum() == N_FLOOD and not df.label_dos.any()
