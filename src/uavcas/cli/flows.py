@@ -36,20 +36,29 @@ def _report_warnings(report) -> None:
         _warn(st.warnings())
 
 
-def _ts_text(ns) -> list[str]:
-    """Exact decimal Unix seconds (9 digits) from integer ns: CSV keeps the capture's resolution."""
-    return [f"{v // 1_000_000_000}.{v % 1_000_000_000:09d}" for v in ns.tolist()]
+def _ns_decimal(ns):
+    """int64 Unix ns -> Arrow decimal128(28, 9) seconds: exact, written with all 9 digits."""
+    import numpy as np
+    import pyarrow as pa
+
+    ns = np.asarray(ns, dtype=np.int64)
+    words = np.zeros((ns.shape[0], 2), dtype=np.int64)
+    words[:, 0], words[:, 1] = ns, np.where(ns < 0, -1, 0)  # the unscaled 128-bit integer
+    return pa.Array.from_buffers(pa.decimal128(28, 9), ns.shape[0], [None, pa.py_buffer(words.tobytes())])
 
 
-def _csv_frame(df, features):
+def _csv_table(df, features):
+    """The CSV columns of a flow frame as an Arrow table (Arrow's writer is what keeps CSV fast)."""
+    import pyarrow as pa
+
+    from uavcas.dataset.parquet import frame_to_arrow
     from uavcas.flows import CSV_LEAD_COLUMNS
 
-    out = df[list(CSV_LEAD_COLUMNS) + list(features) + ["capture_point"]].copy()
+    t = frame_to_arrow(df[list(CSV_LEAD_COLUMNS) + list(features)])
     first = df["first_ts_ns"].to_numpy()
     last = first + (df["duration_s"].to_numpy() * 1e9).round().astype("int64")
-    out.insert(len(out.columns) - 1, "first_ts", _ts_text(first))
-    out.insert(len(out.columns) - 1, "last_ts", _ts_text(last))
-    return out
+    t = t.append_column("first_ts", _ns_decimal(first)).append_column("last_ts", _ns_decimal(last))
+    return t.append_column("capture_point", pa.array(df["capture_point"].astype(str).tolist(), pa.string()))
 
 
 def _empty_frame(features: str):
@@ -110,19 +119,27 @@ def flows_cmd(
             err_console.print(f"wrote {report.flows} flows to {out}", highlight=False)
             return
         if fmt == "csv":
+            import pyarrow.csv as pacsv
+
             cols = feature_columns(features)
 
             def write_csv(fh) -> None:
-                k = -1
-                for k, df in enumerate(frames):
-                    _csv_frame(df, cols).to_csv(fh, index=False, header=k == 0)
-                if k < 0:  # no flow: the header alone
-                    _csv_frame(_empty_frame(features), cols).to_csv(fh, index=False)
+                writer = None
+                for df in frames:
+                    t = _csv_table(df, cols)
+                    writer = writer or pacsv.CSVWriter(fh, t.schema, write_options=pacsv.WriteOptions(quoting_style="needed"))
+                    writer.write_table(t)
+                if writer is None:  # no flow: the header alone
+                    t = _csv_table(_empty_frame(features), cols)
+                    writer = pacsv.CSVWriter(fh, t.schema, write_options=pacsv.WriteOptions(quoting_style="needed"))
+                writer.close()
 
             if out is None:
-                write_csv(sys.stdout)
+                sys.stdout.flush()
+                write_csv(sys.stdout.buffer)
+                sys.stdout.buffer.flush()
             else:
-                with atomic_path(out) as tmp, open(tmp, "w", newline="") as fh:
+                with atomic_path(out) as tmp, open(tmp, "wb") as fh:
                     write_csv(fh)
             _report_warnings(report)
             return

@@ -121,25 +121,26 @@ def _iter_pcap(path: Path, fh, allow: bool, chunk_bytes: int) -> Iterator[RawCap
         append = offs.append
         off = 0
         truncated_at = None
-        # The hot loop only follows the chain of captured lengths; every other header field is
-        # then gathered for all records of the block at once with numpy.
-        while off < n:
-            if off + 16 > n:
-                if eof:
-                    truncated_at = _stop(path, allow, base + off, f"truncated record header ({n - off} of 16 bytes)")
-                break
-            incl = unpack(data, off + 8)[0]
-            if incl > MAX_RECORD_BYTES:
-                truncated_at = _stop(path, allow, base + off, f"corrupt record header (captured length {incl})")
-                eof = True
-                break
-            end = off + 16 + incl
+        # The hot loop only follows the chain of captured lengths (as lean as Python allows: it
+        # is what bounds the reading speed); every other header field is then gathered for all
+        # records of the block at once with numpy. It stops at the first record not wholly inside
+        # the block, which the checks below tell apart: the next block's, truncated, or corrupt.
+        lim = n - 16
+        while off <= lim:
+            end = off + 16 + unpack(data, off + 8)[0]
             if end > n:
-                if eof:
-                    truncated_at = _stop(path, allow, base + off, f"truncated packet record ({n - off - 16} of {incl} bytes)")
                 break
             append(off)
             off = end
+        if off < n:
+            incl = unpack(data, off + 8)[0] if off + 16 <= n else None
+            if incl is not None and incl > MAX_RECORD_BYTES:
+                truncated_at = _stop(path, allow, base + off, f"corrupt record header (captured length {incl})")
+                eof = True
+            elif eof and incl is None:
+                truncated_at = _stop(path, allow, base + off, f"truncated record header ({n - off} of 16 bytes)")
+            elif eof:
+                truncated_at = _stop(path, allow, base + off, f"truncated packet record ({n - off - 16} of {incl} bytes)")
         hdr_at = np.asarray(offs, dtype=np.int64)
         raw = np.frombuffer(data, dtype=np.uint8)
         if offs:
