@@ -34,7 +34,7 @@ import numpy as np
 
 from uavcas.schema import FEATURES
 
-from .groupstats import GroupStats, gaps
+from .groupstats import GroupStats, direction_stats, gaps, length_and_flag_stats
 
 ACTIVITY_TIMEOUT_US = 5_000_000  # CICFlowMeter's activityTimeout
 # (name, TCP flag bit) in the order of schema.FEATURES; CICFlowMeter's "CWE" is CWR.
@@ -107,45 +107,24 @@ def cic_features(
             "Flow IAT Std": iat.std,
             "Flow IAT Max": iat.max,
             "Flow IAT Min": iat.min,
-            "Min Packet Length": lens.min,
-            "Max Packet Length": lens.max,
-            "Packet Length Mean": lens.mean,
-            "Packet Length Std": lens.std,
-            "Packet Length Variance": lens.var,
+            **length_and_flag_stats(lens, g, flags, FLAG_BITS, n),
         }
-        for name, bit in FLAG_BITS:
-            feats[name] = np.bincount(g, weights=((flags & bit) != 0).astype(np.float64), minlength=n)
         feats["Down/Up Ratio"] = np.where(fw.count > 0, np.floor(bw.count / np.maximum(fw.count, 1)), 0.0)
         feats["Average Packet Size"] = np.where(count > 0, lens.sum / np.maximum(count, 1), 0.0)
     feats["Active Mean"] = active.mean
     feats["Idle Mean"] = idle.mean
     feats["Idle Max"] = idle.max
-    two_f, two_b = fw.count > 1, bw.count > 1
     feats.update(
         {
             "Total Fwd Packets": fw.count,
             "Total Backward Packets": bw.count,
             "Total Length of Fwd Packets": fw.sum,
             "Total Length of Bwd Packets": bw.sum,
-            "Fwd Packet Length Max": fw.max,
-            "Fwd Packet Length Min": fw.min,
-            "Fwd Packet Length Mean": fw.mean,
-            "Fwd Packet Length Std": fw.std,
-            "Bwd Packet Length Max": bw.max,
-            "Bwd Packet Length Min": bw.min,
-            "Bwd Packet Length Mean": bw.mean,
-            "Bwd Packet Length Std": bw.std,
-            "Fwd IAT Total": np.where(two_f, fiat.sum, 0.0),
-            "Fwd IAT Mean": np.where(two_f, fiat.mean, 0.0),
-            "Fwd IAT Std": np.where(two_f, fiat.std, 0.0),
-            "Fwd IAT Max": np.where(two_f, fiat.max, 0.0),
-            "Bwd IAT Total": np.where(two_b, biat.sum, 0.0),
-            "Bwd IAT Mean": np.where(two_b, biat.mean, 0.0),
-            "Bwd IAT Std": np.where(two_b, biat.std, 0.0),
-            "Bwd IAT Max": np.where(two_b, biat.max, 0.0),
             "Fwd Header Length": np.bincount(g[fwd], weights=header[fwd].astype(np.float64), minlength=n),
             "Bwd Header Length": np.bincount(g[bwd], weights=header[bwd].astype(np.float64), minlength=n),
         }
     )
-    assert tuple(feats) == FEATURES
+    feats.update(direction_stats(fw, bw, fiat, biat, iat_max=True))
+    assert set(feats) == set(FEATURES), set(feats) ^ set(FEATURES)
+    feats = {k: feats[k] for k in FEATURES}
     return feats

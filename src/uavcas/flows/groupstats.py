@@ -38,3 +38,30 @@ def gaps(t: np.ndarray, group: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Consecutive differences of `t` within each group, and the group of each difference."""
     same = group[1:] == group[:-1]
     return np.diff(t)[same], group[1:][same]
+
+
+def direction_stats(fw: GroupStats, bw: GroupStats, fiat: GroupStats, biat: GroupStats, iat_max: bool) -> dict[str, np.ndarray]:
+    """The per-direction length and IAT statistics both feature standards share (same names).
+
+    IAT statistics need two packets in the direction (0 otherwise); `iat_max` adds Fwd/Bwd IAT Max.
+    """
+    out: dict[str, np.ndarray] = {}
+    for side, s in (("Fwd", fw), ("Bwd", bw)):
+        out.update({f"{side} Packet Length Max": s.max, f"{side} Packet Length Min": s.min,
+                    f"{side} Packet Length Mean": s.mean, f"{side} Packet Length Std": s.std})  # fmt: skip
+    for side, s, pk in (("Fwd", fiat, fw), ("Bwd", biat, bw)):
+        two = pk.count > 1
+        out.update({f"{side} IAT Total": np.where(two, s.sum, 0.0), f"{side} IAT Mean": np.where(two, s.mean, 0.0),
+                    f"{side} IAT Std": np.where(two, s.std, 0.0)})  # fmt: skip
+        if iat_max:
+            out[f"{side} IAT Max"] = np.where(two, s.max, 0.0)
+    return out
+
+
+def length_and_flag_stats(lens: GroupStats, g: np.ndarray, flags: np.ndarray, bits, n: int) -> dict[str, np.ndarray]:
+    """Min/Max/Mean/Std/Variance of the packet lengths and one count per (name, TCP flag bit)."""
+    out = {"Min Packet Length": lens.min, "Max Packet Length": lens.max, "Packet Length Mean": lens.mean,
+           "Packet Length Std": lens.std, "Packet Length Variance": lens.var}  # fmt: skip
+    for name, bit in bits:
+        out[name] = np.bincount(g, weights=((flags & bit) != 0).astype(np.float64), minlength=n)
+    return out

@@ -31,7 +31,7 @@ import numpy as np
 
 from uavcas.schema import PAPER_FEATURES
 
-from .groupstats import GroupStats, gaps
+from .groupstats import GroupStats, direction_stats, gaps, length_and_flag_stats
 
 FLAG_BITS: tuple[tuple[str, int], ...] = (
     ("FIN Flag Count", 0x01), ("SYN Flag Count", 0x02), ("RST Flag Count", 0x04), ("PSH Flag Count", 0x08),
@@ -84,17 +84,10 @@ def paper_features(
         "Flow IAT Std": iat.std,
         "Flow IAT Max": iat.max,
         "Flow IAT Min": iat.min,
-        "Min Packet Length": allp.min,
-        "Max Packet Length": allp.max,
-        "Packet Length Mean": allp.mean,
-        "Packet Length Std": allp.std,
-        "Packet Length Variance": allp.var,
+        **length_and_flag_stats(allp, g, flags, FLAG_BITS, n),
     }
-    for name, bit in FLAG_BITS:
-        feats[name] = np.bincount(g, weights=((flags & bit) != 0).astype(np.float64), minlength=n)
     feats["Header Length"] = HEADER_BYTES * count
     feats["Average Packet Size"] = allp.sum / np.maximum(count, 1)
-    two_f, two_b = fw.count > 1, bw.count > 1
     feats.update(
         {
             "Total Fwd Packets": fw.count,
@@ -103,25 +96,13 @@ def paper_features(
             "Total Length of Bwd Packets": bw.sum,
             "Fwd Packets/s": rate(fw.count),
             "Bwd Packets/s": rate(bw.count),
-            "Fwd Packet Length Max": fw.max,
-            "Fwd Packet Length Min": fw.min,
-            "Fwd Packet Length Mean": fw.mean,
-            "Fwd Packet Length Std": fw.std,
-            "Bwd Packet Length Max": bw.max,
-            "Bwd Packet Length Min": bw.min,
-            "Bwd Packet Length Mean": bw.mean,
-            "Bwd Packet Length Std": bw.std,
-            "Fwd IAT Total": np.where(two_f, fiat.sum, 0.0),
-            "Fwd IAT Mean": np.where(two_f, fiat.mean, 0.0),
-            "Fwd IAT Std": np.where(two_f, fiat.std, 0.0),
-            "Bwd IAT Total": np.where(two_b, biat.sum, 0.0),
-            "Bwd IAT Mean": np.where(two_b, biat.mean, 0.0),
-            "Bwd IAT Std": np.where(two_b, biat.std, 0.0),
             "Fwd Header Length": HEADER_BYTES * fw.count,
             "Bwd Header Length": HEADER_BYTES * bw.count,
         }
     )
-    assert tuple(feats) == PAPER_FEATURES
+    feats.update(direction_stats(fw, bw, fiat, biat, iat_max=False))
+    assert set(feats) == set(PAPER_FEATURES), set(feats) ^ set(PAPER_FEATURES)
+    feats = {k: feats[k] for k in PAPER_FEATURES}
     short = count < 2
     if short.any():
         feats = {k: np.where(short, np.nan, v) for k, v in feats.items()}

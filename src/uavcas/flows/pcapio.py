@@ -99,6 +99,23 @@ def _as_buf(data: bytes) -> np.ndarray:
     return np.frombuffer(data, dtype=np.uint8)
 
 
+class _Blocks:
+    """Blocks of a file, each prefixed with the bytes the previous block left unconsumed."""
+
+    def __init__(self, fh, chunk_bytes: int, base: int):
+        self.fh, self.chunk_bytes, self.base = fh, chunk_bytes, base  # base: file offset of data[0]
+        self.pending = b""
+
+    def next(self) -> tuple[bytes, bool]:
+        block = self.fh.read(self.chunk_bytes)
+        self.data = self.pending + block if self.pending else block
+        return self.data, len(block) < self.chunk_bytes
+
+    def consumed(self, off: int) -> None:
+        self.pending = self.data[off:]
+        self.base += off
+
+
 def _iter_pcap(path: Path, fh, allow: bool, chunk_bytes: int) -> Iterator[RawCapture]:
     head = fh.read(24)
     if len(head) < 24:
@@ -109,14 +126,11 @@ def _iter_pcap(path: Path, fh, allow: bool, chunk_bytes: int) -> Iterator[RawCap
     snaplen = struct.unpack_from(endian + "I", head, 16)[0]
     linktype = struct.unpack_from(endian + "I", head, 20)[0] & 0x0FFFFFFF  # upper bits: FCS info
     unpack = struct.Struct(endian + "I").unpack_from
-    pending = b""
-    base = 24  # file offset of pending[0]
+    blocks = _Blocks(fh, chunk_bytes, 24)
     record = 0
     while True:
-        block = fh.read(chunk_bytes)
-        eof = len(block) < chunk_bytes
-        data = pending + block if pending else block
-        n = len(data)
+        data, eof = blocks.next()
+        base, n = blocks.base, len(data)
         offs: list[int] = []
         append = offs.append
         off = 0
@@ -157,8 +171,7 @@ def _iter_pcap(path: Path, fh, allow: bool, chunk_bytes: int) -> Iterator[RawCap
         record += len(offs)
         if eof or truncated_at is not None:
             return
-        pending = data[off:]
-        base += off
+        blocks.consumed(off)
 
 
 def _tsresol_divisor(options: bytes, endian: str) -> int:
@@ -191,14 +204,11 @@ def ticks_to_ns(ticks: np.ndarray, div: np.ndarray) -> np.ndarray:
 def _iter_pcapng(path: Path, fh, allow: bool, chunk_bytes: int) -> Iterator[RawCapture]:
     ifaces: list[tuple[int, int, int]] = []  # (linktype, snaplen, ticks per second)
     endian = "<"
-    pending = b""
-    base = 0
+    blocks = _Blocks(fh, chunk_bytes, 0)
     record = 0
     while True:
-        block = fh.read(chunk_bytes)
-        eof = len(block) < chunk_bytes
-        data = pending + block if pending else block
-        n = len(data)
+        data, eof = blocks.next()
+        base, n = blocks.base, len(data)
         offs: list[int] = []
         caps: list[int] = []
         wires: list[int] = []
@@ -279,5 +289,4 @@ def _iter_pcapng(path: Path, fh, allow: bool, chunk_bytes: int) -> Iterator[RawC
         record += len(offs)
         if eof or truncated_at is not None:
             return
-        pending = data[off:]
-        base += off
+        blocks.consumed(off)
