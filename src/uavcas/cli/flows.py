@@ -124,15 +124,19 @@ def flows_cmd(
             cols = feature_columns(features)
 
             def write_csv(fh) -> None:
+                # the header plain (fixed names, no commas), the rows by Arrow (strings quoted)
+                opts = pacsv.WriteOptions(include_header=False, quoting_style="needed")
                 writer = None
                 for df in frames:
                     t = _csv_table(df, cols)
-                    writer = writer or pacsv.CSVWriter(fh, t.schema, write_options=pacsv.WriteOptions(quoting_style="needed"))
+                    if writer is None:
+                        fh.write((",".join(t.schema.names) + "\n").encode())
+                        writer = pacsv.CSVWriter(fh, t.schema, write_options=opts)
                     writer.write_table(t)
                 if writer is None:  # no flow: the header alone
-                    t = _csv_table(_empty_frame(features), cols)
-                    writer = pacsv.CSVWriter(fh, t.schema, write_options=pacsv.WriteOptions(quoting_style="needed"))
-                writer.close()
+                    fh.write((",".join(_csv_table(_empty_frame(features), cols).schema.names) + "\n").encode())
+                else:
+                    writer.close()
 
             if out is None:
                 sys.stdout.flush()

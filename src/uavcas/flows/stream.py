@@ -13,10 +13,10 @@ an earlier-starting flow is still open.
 
 Memory is then bounded by one block, the packets of the open flows (bounded by the timeouts),
 and the finished rows waiting for an earlier flow to end, not by the capture's size. Views
-without termination (`hostpair`) keep every flow open until the end: they stream the reading and
-decoding but hold all packets. Several capture points are de-duplicated across files
-(`assemble` rule 2), which needs every packet at once: `iter_flow_frames` then reads them into
-memory (block by block) and yields one frame.
+without termination (`hostpair`) keep every flow open until the end, and several capture points
+are de-duplicated across files (`assemble` rule 2): both need every packet at once, so
+`iter_flow_frames` then reads them into memory (still block by block, never the whole file) and
+yields one frame.
 """
 
 from __future__ import annotations
@@ -133,14 +133,16 @@ def iter_flow_frames(
 ) -> Iterator[pd.DataFrame]:
     """Frames of flows in order of first packet, `flow_id` numbering them across frames.
 
-    One capture file: streamed (bounded memory). Several (capture points to de-duplicate): read
-    into memory and yielded as one frame.
+    One capture file: streamed (bounded memory). Several (capture points to de-duplicate), or flow
+    rules that never end a flow (every packet is kept to the end anyway): read into memory, block
+    by block, and yielded as one frame.
     """
     paths = [Path(p) for p in paths]
     names = list(points) if points is not None else [p.stem for p in paths]
     report = report if report is not None else StreamReport()
     next_id = 0
-    if len(paths) == 1:
+    ends = cfg.idle_ns or cfg.active_ns or cfg.effective_fin_rst or cfg.effective_syn_restart
+    if len(paths) == 1 and ends:
         frames = _stream_one(paths[0], names[0], cfg, standard, sequences, report, allow_truncated, chunk_bytes)
     else:
         pk = read_packets(paths, names, allow_truncated=allow_truncated, chunk_bytes=chunk_bytes)
