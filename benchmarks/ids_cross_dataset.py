@@ -6,7 +6,9 @@ baselines on our dataset and on the external samples, one column per dataset.
 
 Without DATASET_DIR a 20k-flow synthetic uavcas dataset stands in for ours. External samples go
 through `uavcas.dataset.read.load_any` (the one dataset reader); they have no runs, so their split
-is a stratified flow-level one (stated in each protocol's notes).
+is a stratified flow-level one (stated in each protocol's notes). Every dataset must hold the
+`cic` feature standard (CICFlowMeter's definitions and units, as CICIDS2017 itself), so the
+columns compare the same quantities; a `paper`-standard dataset is refused.
 """
 
 from __future__ import annotations
@@ -44,7 +46,10 @@ def main() -> int:
                       n_threads=args.threads or None)
     cols = {}
     for path in [*args.external, ours]:
-        res = run_protocol(load_any(path), "binary", cfg)
+        df = load_any(path)
+        if df.attrs.get("feature_standard", "cic") != "cic":
+            raise SystemExit(f"{path}: {df.attrs['feature_standard']} features; the comparison needs cic (extract --features cic)")
+        res = run_protocol(df, "binary", cfg)
         df = results_frame(res)
         w = df[(df["metric"] == "f1_weighted") & (df["class"] == "")].set_index("model")["value"]
         cols[Path(path).name] = w * 100

@@ -1,12 +1,64 @@
-"""Atomic file output: write beside the target, fsync, rename. Readers never see half a file."""
+"""Atomic, non-destructive file output: the one home of how uavcas writes an output path.
+
+Rules (every writer of the package goes through here):
+- The data goes to a temporary file beside the target (same directory, so the final rename is
+  atomic), is fsynced, and is renamed onto the target. Readers never see half a file; on any
+  error the temporary file is removed and the target is left as it was.
+- Writing never destroys what the tool did not create: an existing target that is not a regular
+  file (a symbolic link, a FIFO, a device, a socket, a directory) is refused with `UnsafeOutput`
+  before anything is written, and checked again just before the rename. `os.replace` would
+  otherwise turn `--out /dev/null` (as root) or a symlink into a regular file.
+- An output directory (`ensure_out_dir`) must be a directory (a symlink to one is fine: writing
+  inside it destroys nothing) or not exist yet; a FIFO, device or regular file in its place, or a
+  dangling symlink, is refused the same way.
+"""
 
 from __future__ import annotations
 
 import contextlib
 import os
+import stat
 import tempfile
 from collections.abc import Iterator
 from pathlib import Path
+
+
+class UnsafeOutput(ValueError):
+    """An output path that would replace something that is not a regular file (exit 2)."""
+
+
+def _kind(mode: int) -> str:
+    for test, name in ((stat.S_ISLNK, "a symbolic link"), (stat.S_ISFIFO, "a FIFO"), (stat.S_ISCHR, "a character device"),
+                       (stat.S_ISBLK, "a block device"), (stat.S_ISSOCK, "a socket"), (stat.S_ISDIR, "a directory"),
+                       (stat.S_ISREG, "a regular file")):  # fmt: skip
+        if test(mode):
+            return name
+    return "of an unknown kind"
+
+
+def check_target(path: str | os.PathLike) -> Path:
+    """`path` if it is absent or a regular file (never following a symlink); else UnsafeOutput."""
+    path = Path(path)
+    try:
+        st = os.lstat(path)
+    except FileNotFoundError:
+        return path
+    if not stat.S_ISREG(st.st_mode):
+        raise UnsafeOutput(f"refusing to write {path}: it is {_kind(st.st_mode)} (uavcas only replaces regular files)")
+    return path
+
+
+def ensure_out_dir(path: str | os.PathLike) -> Path:
+    """Create output directory `path` (and parents) unless it already is a directory."""
+    path = Path(path)
+    try:
+        st = os.lstat(path)
+    except FileNotFoundError:
+        path.mkdir(parents=True, exist_ok=True)
+        return path
+    if stat.S_ISDIR(st.st_mode) or (stat.S_ISLNK(st.st_mode) and path.is_dir()):
+        return path
+    raise UnsafeOutput(f"refusing to use {path} as an output directory: it is {_kind(st.st_mode)}")
 
 
 @contextlib.contextmanager
@@ -16,8 +68,8 @@ def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
     For writers that want a file name (pyarrow, matplotlib): `with atomic_path(p) as tmp: f(tmp)`.
     On an exception the temporary file is removed and `path` is left as it was.
     """
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
+    path = check_target(path)
+    ensure_out_dir(path.parent)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp" + path.suffix, dir=path.parent)
     os.close(fd)
     tmp_path = Path(tmp)
@@ -29,6 +81,7 @@ def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
         yield tmp_path
         with open(tmp_path, "rb+") as fh:
             os.fsync(fh.fileno())
+        check_target(path)  # something may have appeared there while we were writing
         os.replace(tmp_path, path)
     finally:
         tmp_path.unlink(missing_ok=True)

@@ -20,6 +20,7 @@ from uavcas.flows import FlowConfig, Flows, PacketTable, extract_flows
 from uavcas.flows.follow import Followed, follow_run
 from uavcas.labels import PacketTruth, TruthContext, label_flows, packet_truth, read_attack_log, rule_text
 from uavcas.rundir import RunDir, RunDirError
+from uavcas.schema import DEFAULT_STANDARD
 from uavcas.vocabulary import EFFECTS
 
 
@@ -30,6 +31,8 @@ class ShardInfo:
     seed: int
     view: str
     labels: str
+    features: str
+    flow_rules: dict
     min_packets: int
     n_packets: int
     n_flows: int
@@ -82,6 +85,7 @@ def extract_detailed(
     allow_truncated: bool = False,
     run_id: str | None = None,
     min_attack_fraction: float = 0.0,
+    features: str = DEFAULT_STANDARD,
 ) -> Extracted:
     """Flows + labels of one run, with the packet-level results (for audits and tests). The run id
     is `run_id`, else run.json's, else the directory's name."""
@@ -99,7 +103,7 @@ def extract_detailed(
     if t0 is None:
         raise RunDirError(f"{rd.run_json}: no t0_unix (an unfinished run?): packets cannot be placed in the plan")
     cfg = FlowConfig(view=view, min_packets=min_packets, window_t0_unix=t0, window_s=plan.window_s)  # type: ignore[arg-type]
-    ex = extract_flows(pcaps, cfg, points=[p.stem for p in pcaps], allow_truncated=allow_truncated)
+    ex = extract_flows(pcaps, cfg, points=[p.stem for p in pcaps], allow_truncated=allow_truncated, standard=features)
     log = read_attack_log(rd.attacks_jsonl, plan, t0)
     _, followed = follow_run(rd.root, table=ex.packets)
     truth = packet_truth(TruthContext(ex.packets, log, followed, plan, t0))
@@ -120,6 +124,8 @@ def extract_detailed(
             seed=plan.seed,
             view=view,
             labels=labels,
+            features=features,
+            flow_rules=cfg.describe(),
             min_packets=cfg.effective_min_packets,
             n_packets=len(ex.packets),
             n_flows=len(df),

@@ -3,16 +3,22 @@
 It sits at the base of the package (below `flows/`, `labels/` and `dataset/`), next to the
 vocabulary it derives the class and axis columns from.
 
-The 47 flow statistics carry CICFlowMeter names so they can be compared with CICIDS-style data.
-Units: times in seconds, sizes in bytes (link-layer frame length, as tshark's frame.len), rates per
-second. The split "flow-level 25 / direction-aware 22" follows the paper's feature description.
+Feature standards (`FEATURE_STANDARDS`): a dataset's 47 feature columns follow ONE standard, named
+in its card (`dataset.json: features`):
+- `cic` (default, `FEATURES`): CICFlowMeter-4.0's definitions and units exactly (times in
+  microseconds, lengths = TCP/UDP payload bytes; `uavcas.flows.cic`), so they compare with
+  CICIDS2017-style data;
+- `paper` (`PAPER_FEATURES`): the authors' 47 as their generator computes them (times in seconds,
+  lengths = frame bytes; `uavcas.flows.paper`), the columns of their `UAV-CAS_stat.csv`.
+Several names occur in both with different meanings (`Flow Duration` is us in one, s in the
+other): never mix standards; `feature_columns(standard)` gives a standard's columns.
 """
 
 from __future__ import annotations
 
 from uavcas import vocabulary as _v
 
-SCHEMA_VERSION = 1
+SCHEMA_VERSION = 2  # 2: feature standards, first_ts_ns
 
 # Direction-independent statistics over all packets of the flow.
 FLOW_FEATURES: tuple[str, ...] = (
@@ -72,8 +78,33 @@ DIRECTION_FEATURES: tuple[str, ...] = (
 FEATURES: tuple[str, ...] = FLOW_FEATURES + DIRECTION_FEATURES
 assert len(FLOW_FEATURES) == 25 and len(DIRECTION_FEATURES) == 22 and len(set(FEATURES)) == 47
 
-# Idle/active split of CICFlowMeter: a gap longer than this ends an active period.
-ACTIVITY_TIMEOUT_S = 5.0
+# The authors' 47 (Scripts/6-build_stat_csv.py FEATURE_NAMES): 25 flow-level, then 22 by direction.
+PAPER_FEATURES: tuple[str, ...] = (
+    "Flow Duration", "Total Packets", "Total Length of Packets", "Flow Bytes/s", "Flow Packets/s",
+    "Flow IAT Total", "Flow IAT Mean", "Flow IAT Std", "Flow IAT Max", "Flow IAT Min",
+    "Min Packet Length", "Max Packet Length", "Packet Length Mean", "Packet Length Std",
+    "Packet Length Variance", "FIN Flag Count", "SYN Flag Count", "RST Flag Count", "PSH Flag Count",
+    "ACK Flag Count", "URG Flag Count", "CWE Flag Count", "ECE Flag Count", "Header Length",
+    "Average Packet Size",
+    "Total Fwd Packets", "Total Bwd Packets", "Total Length of Fwd Packets", "Total Length of Bwd Packets",
+    "Fwd Packets/s", "Bwd Packets/s", "Fwd Packet Length Max", "Fwd Packet Length Min",
+    "Fwd Packet Length Mean", "Fwd Packet Length Std", "Bwd Packet Length Max", "Bwd Packet Length Min",
+    "Bwd Packet Length Mean", "Bwd Packet Length Std", "Fwd IAT Total", "Fwd IAT Mean", "Fwd IAT Std",
+    "Bwd IAT Total", "Bwd IAT Mean", "Bwd IAT Std", "Fwd Header Length", "Bwd Header Length",
+)  # fmt: skip
+assert len(PAPER_FEATURES) == 47 and len(set(PAPER_FEATURES)) == 47
+
+FEATURE_STANDARDS: dict[str, tuple[str, ...]] = {"cic": FEATURES, "paper": PAPER_FEATURES}
+DEFAULT_STANDARD = "cic"
+
+
+def feature_columns(standard: str = DEFAULT_STANDARD) -> tuple[str, ...]:
+    """The 47 feature columns of a feature standard ('cic' or 'paper')."""
+    try:
+        return FEATURE_STANDARDS[standard]
+    except KeyError:
+        raise ValueError(f"unknown feature standard {standard!r}; known: {', '.join(FEATURE_STANDARDS)}") from None
+
 
 # The vocabulary's words, re-exported: the dataset's class and label columns derive from them.
 BENIGN, CLASSES, FAMILIES, FAMILY_CLASS, PAIRS = _v.BENIGN, _v.CLASSES, _v.FAMILIES, _v.FAMILY_CLASS, _v.PAIRS
@@ -92,8 +123,9 @@ ID_COLUMNS: tuple[str, ...] = (
     "dst_ip",
     "dst_port",
     "protocol",
-    "first_ts",
+    "first_ts",  # float64 Unix s of the first packet (convenience; rounded to ~0.2 us)
     "last_ts",
+    "first_ts_ns",  # int64 Unix ns of the first packet: exact; packet times = this + seq_time_s
     "capture_point",
 )
 COUNT_COLUMNS: tuple[str, ...] = ("packets", "bytes", "duration_s")

@@ -46,7 +46,12 @@ def _cli(*args: str, **kw) -> subprocess.CompletedProcess:
 
 
 def _services(ds: Path) -> dict[str, set]:
-    t = pq.read_table(ds / "flows.parquet", columns=["run_id", "src_ip", "dst_ip", "dst_port", "protocol", "label"]).to_pandas()
+    cols = ["run_id", "src_ip", "dst_ip", "dst_port", "protocol", "label", "seq_flags"]
+    t = pq.read_table(ds / "flows.parquet", columns=cols).to_pandas()
+    # connections as opened (a TCP flow starting with a SYN, or any other protocol): the pieces a
+    # FIN/RST cuts off (flows.assemble rule 4a) depend on retransmission timing, not on the service
+    opening = [p != 6 or (len(f) > 0 and (int(f[0]) & 0x12) == 0x02) for p, f in zip(t.protocol, t.seq_flags)]
+    t = t[opening]
     return {rid: set(map(tuple, g[["src_ip", "dst_ip", "dst_port", "protocol", "label"]].to_numpy().tolist()))
             for rid, g in t.groupby("run_id")}
 

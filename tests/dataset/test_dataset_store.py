@@ -11,8 +11,7 @@ from typer.testing import CliRunner
 
 from uavcas.cli import app
 from uavcas.dataset.parquet import COLUMNS, arrow_schema, read_flows
-from uavcas.dataset.uavcas_csv import read_uavcas_csv
-from uavcas.schema import CLASSES, FEATURES, METADATA_COLUMNS, SEQUENCE_COLUMNS
+from uavcas.schema import CLASSES, FEATURES, METADATA_COLUMNS, PAPER_FEATURES, SEQUENCE_COLUMNS
 
 runner = CliRunner()
 
@@ -30,7 +29,12 @@ def test_extract_info_idempotent(synth_run_dir, tmp_path):
     assert table.schema.remove_metadata() == arrow_schema()
     assert set(METADATA_COLUMNS) | set(FEATURES) | set(SEQUENCE_COLUMNS) <= set(COLUMNS)
     card = json.loads((ds / "dataset.json").read_text())
-    assert card["n_flows"] == table.num_rows == N_FLOOD + 14
+    # 13 HTTP sessions, each cut in two by the server's FIN (CICFlowMeter's rule), the blackholed
+    # fetch (one flow: nothing came back), the replayed copies (they join the session's FIN flow)
+    # and the flood
+    assert card["n_flows"] == table.num_rows == N_FLOOD + 2 * 13 + 1
+    assert card["features"]["standard"] == "cic" and card["features"]["units"]["Flow Duration"] == "us"
+    assert card["runs"][0]["flow_rules"]["idle_timeout_s"] == 15.0 and card["runs"][0]["flow_rules"]["fin_rst"]
     assert card["class_counts"]["DoS"] == N_FLOOD and set(CLASSES) <= set(card["class_counts"])
     assert card["views"] == ["5tuple"] and card["seeds"] == [7] and card["runs"][0]["run_id"] == "run-synth"
     # The twin profile the run was planned with is on the card (name -> SHA-256s; None when unrecorded).
@@ -50,24 +54,26 @@ def test_extract_info_idempotent(synth_run_dir, tmp_path):
     assert not list(ds.glob("**/*.tmp*"))
 
 
-def test_export_import_roundtrip(synth_run_dir, tmp_path):
-    ds, out = tmp_path / "ds", tmp_path / "csv"
+def test_paper_features_dataset_and_no_mixing(synth_run_dir, tmp_path):
+    ds = tmp_path / "ds"
+    assert _run("extract", synth_run_dir, "--out", ds, "--features", "paper").exit_code == 0
+    df = read_flows(ds / "flows.parquet")
+    assert df.attrs["feature_standard"] == "paper" and set(PAPER_FEATURES) <= set(df.columns)
+    assert json.loads((ds / "dataset.json").read_text())["features"]["units"]["Flow Duration"] == "s"
+    other = build_run(tmp_path / "run2", run_id="run-two")
+    r = _run("extract", other, "--out", ds)  # a cic shard beside a paper one
+    assert r.exit_code == 2 and "feature standards" in r.output
+
+
+def test_every_parquet_file_reads_with_plain_pandas(synth_run_dir, tmp_path):
+    import pandas as pd
+
+    ds = tmp_path / "ds"
     assert _run("extract", synth_run_dir, "--out", ds).exit_code == 0
-    r = _run("export", ds, "--format", "uavcas-csv", "--out", out)
-    assert r.exit_code == 0, r.output
-    ts, stat = out / "run-synth_ts.csv", out / "run-synth_stat.csv"
-    assert ts.exists() and stat.exists()
-    assert ts.read_text().splitlines()[1].count("[") == 4
-    back = read_uavcas_csv(ts)
-    orig = read_flows(ds / "flows.parquet")
-    assert len(back) == len(orig)
-    assert back.label.tolist() == orig.label.tolist() and back.label_dos.tolist() == orig.label_dos.tolist()
-    for a, b in zip(back.seq_size.tolist(), orig.seq_size.tolist()):
-        assert list(a) == list(b)
-    for a, b in zip(back.seq_time_s.tolist(), orig.seq_time_s.tolist()):
-        assert max(abs(x - y) for x, y in zip(a, b)) < 2e-6
-    for f in FEATURES:
-        assert abs(back[f] - orig[f]).max() <= 1e-9 * max(1.0, abs(orig[f]).max()), f
+    assert _run("flows", synth_run_dir / "pcap" / "s-bs0.pcap", "--format", "parquet", "--out", tmp_path / "f.parquet").exit_code == 0
+    for path in [ds / "flows.parquet", *ds.glob("shards/*.parquet"), tmp_path / "f.parquet"]:
+        df = pd.read_parquet(path)
+        assert len(df) > 0 and len(df.seq_size.iloc[0]) == df.packets.iloc[0], path
 
 
 def test_cli_errors_are_one_line(tmp_path, synth_run_dir):
@@ -94,6 +100,11 @@ def test_flows_command_formats(synth_run_dir, tmp_path):
     assert header[8 : 8 + 47] == list(FEATURES)
     assert _run("flows", pcap, "--format", "parquet", "--out", tmp_path / "f.parquet").exit_code == 0
     assert pq.read_table(tmp_path / "f.parquet").num_rows == len(r.output.splitlines()) - 1
+    # first_ts with nanosecond digits (a float64 %g would keep 10 s)
+    row = dict(zip(header, next(__import__("csv").reader(r.output.splitlines()[1:2]))))
+    assert len(row["first_ts"].split(".")[1]) == 9 and row["first_ts"].startswith("1700000")
+    paper = _run("flows", pcap, "--format", "csv", "--features", "paper")
+    assert paper.exit_code == 0 and paper.output.splitlines()[0].split(",")[8:8 + 47] == list(PAPER_FEATURES)
     t = _run("flows", pcap, "--view", "hostpair", "--min-packets", "2")
     assert t.exit_code == 0 and "10.10.0.2" in t.output
     assert _run("flows", pcap, "--format", "xml").exit_code == 2
@@ -108,3 +119,67 @@ def test_extract_run_id_override_names_shard_rows_and_card(synth_run_dir, tmp_pa
     assert info.run_id == "17" and (ds / "shards" / "17.parquet").exists()
     assert set(read_flows(ds / "flows.parquet").run_id) == {"17"}
     assert json.loads((ds / "dataset.json").read_text())["runs"][0]["run_id"] == "17"
+
+
+def test_out_never_replaces_a_symlink_fifo_or_directory(synth_run_dir, tmp_path):
+    import os
+    import stat
+
+    pcap = synth_run_dir / "pcap" / "s-bs0.pcap"
+    victim = tmp_path / "victim.txt"
+    victim.write_text("precious")
+    link = tmp_path / "link.csv"
+    link.symlink_to(victim)
+    fifo = tmp_path / "fifo.csv"
+    os.mkfifo(fifo)
+    folder = tmp_path / "folder"
+    folder.mkdir()
+    for target in (link, fifo, folder):
+        for fmt in ("csv", "parquet", "table"):
+            r = _run("flows", pcap, "--format", fmt, "--out", target)
+            assert r.exit_code == 2 and "refusing" in r.output, (target, fmt, r.output)
+    assert link.is_symlink() and os.readlink(link) == str(victim) and victim.read_text() == "precious"
+    assert stat.S_ISFIFO(os.lstat(fifo).st_mode) and folder.is_dir() and not any(folder.iterdir())
+    assert not [p for p in tmp_path.iterdir() if p.name.startswith(".")]  # no temporary left behind
+    ds = tmp_path / "ds"
+    assert _run("extract", synth_run_dir, "--out", ds).exit_code == 0
+    r = _run("export", ds, "--format", "uavcas-csv", "--out", fifo)
+    assert r.exit_code == 2 and stat.S_ISFIFO(os.lstat(fifo).st_mode)
+    out = tmp_path / "csv"
+    out.mkdir()
+    (out / "UAV-CAS_ts.csv").symlink_to(victim)
+    r = _run("export", ds, "--format", "uavcas-csv", "--out", out)
+    assert r.exit_code == 2 and (out / "UAV-CAS_ts.csv").is_symlink() and victim.read_text() == "precious"
+    r = _run("extract", synth_run_dir, "--out", fifo)
+    assert r.exit_code == 2 and stat.S_ISFIFO(os.lstat(fifo).st_mode)
+
+
+def test_snaplen_and_orphans_are_reported_on_stderr(tmp_path):
+    import struct
+
+    from scapy.layers.inet import IP, TCP, UDP, fragment
+    from scapy.layers.l2 import Ether
+    from scapy.packet import Raw
+    from scapy.utils import wrpcap
+
+    pk = []
+    for k in range(5):
+        p = Ether() / IP(src="10.0.0.1", dst="10.0.0.2") / TCP(sport=1000 + k, dport=80, flags="S")
+        p.time = 1_700_000_000 + k
+        pk.append(p)
+    frag = [Ether() / f for f in fragment(IP(src="10.0.0.1", dst="10.0.0.2", id=9) / UDP() / Raw(b"y" * 1200), fragsize=400)]
+    for f in frag:
+        f.time = 1_700_000_010
+    wrpcap(str(tmp_path / "x.pcap"), pk + frag[1:])  # the first fragment is missing
+    data = (tmp_path / "x.pcap").read_bytes()
+    cut = bytearray(data[:16]) + struct.pack("<I", 40) + data[20:24]
+    off = 24
+    while off < len(data):
+        s, f, incl, orig = struct.unpack_from("<IIII", data, off)
+        keep = min(incl, 40 if off < 24 + 2 * (16 + len(pk[0])) else incl)  # the first two records cut
+        cut += struct.pack("<IIII", s, f, keep, orig) + data[off + 16 : off + 16 + keep]
+        off += 16 + incl
+    (tmp_path / "cut.pcap").write_bytes(bytes(cut))
+    r = runner.invoke(app, ["flows", str(tmp_path / "cut.pcap"), "--format", "csv"])
+    assert r.exit_code == 0
+    assert "2 of" in r.output and "transport header cut" in r.output and "first fragment" in r.output

@@ -11,7 +11,7 @@ from typer.testing import CliRunner
 
 from uavcas.cli import app
 from uavcas.dataset.read import FORMATS, detect_format, load_any, select_view
-from uavcas.schema import FEATURES
+from uavcas.schema import FEATURES, PAPER_FEATURES
 
 runner = CliRunner()
 
@@ -34,18 +34,23 @@ def dataset_and_csv(synth_run_dir, tmp_path_factory):
 def test_ours_and_the_authors_csv_give_the_same_flows(dataset_and_csv, tmp_path):
     ds, csv = dataset_and_csv
     assert detect_format(ds) == detect_format(ds / "flows.parquet") == "uavcas"
-    assert detect_format(csv) == detect_format(csv / "run-synth_ts.csv") == "uavcas-csv"
+    assert detect_format(csv) == detect_format(csv / "UAV-CAS_ts.csv") == detect_format(csv / "UAV-CAS_stat.csv") == "uavcas-csv"
     ours, theirs = load_any(ds), load_any(csv)
     assert ours.attrs["source"] == "uavcas" and theirs.attrs["source"] == "uavcas-csv"
-    # the file pair's name is the run id, so grouped splits keep working on the authors' layout
-    assert set(theirs["run_id"]) == {"run-synth", "run-two", "run-three"} == set(ours["run_id"])
-    assert theirs["label"].tolist() == ours["label"].tolist()
-    assert (theirs[list(FEATURES)] - ours[list(FEATURES)]).abs().max().max() < 1e-6
-    assert theirs.attrs["absent_features"] == []
-    # without its _stat.csv the features are absent, and said to be
-    shutil.copy(csv / "run-two_ts.csv", tmp_path)
-    alone = load_any(tmp_path / "run-two_ts.csv")
-    assert alone.attrs["absent_features"] == list(FEATURES) and set(alone["run_id"]) == {"run-two"}
+    assert ours.attrs["feature_standard"] == "cic" and theirs.attrs["feature_standard"] == "paper"
+    # the layout keeps flows of >= 2 packets, in dataset order, with their labels
+    kept = ours[ours.packets >= 2].reset_index(drop=True)
+    assert theirs["label"].tolist() == kept["label"].tolist()
+    assert theirs["packets"].tolist() == kept["packets"].tolist()
+    # the stat rows (>= 10 packets) carry a run id (config_idx = the run's rank here) and features
+    long = theirs[theirs.packets >= 10]
+    assert long["run_id"].nunique() == 3 and long["Total Packets"].tolist() == long["packets"].tolist()
+    assert theirs.attrs["absent_features"] == [] and "src_port" in theirs.attrs["lacks"]
+    # the ts file alone: sequences, no features, and said to be
+    (tmp_path / "only").mkdir()
+    shutil.copy(csv / "UAV-CAS_ts.csv", tmp_path / "only")
+    alone = load_any(tmp_path / "only")
+    assert alone.attrs["absent_features"] == list(PAPER_FEATURES) and len(alone) == len(theirs)
 
 
 def test_external_samples_get_our_names_and_one_group_per_row(tmp_path):
@@ -54,7 +59,7 @@ def test_external_samples_get_our_names_and_one_group_per_row(tmp_path):
     (tmp_path / "unsw.csv").write_text(UNSW)
     cic = load_any(tmp_path / "cic")
     assert cic.attrs["source"] == "cicids2017" and cic["label"].tolist() == ["Benign", "DDoS"]
-    assert cic["Flow Duration"].tolist() == [2.0, 0.001] and cic["run_id"].is_unique
+    assert cic["Flow Duration"].tolist() == [2_000_000, 1000] and cic["run_id"].is_unique
     assert "Fwd Header Length" in cic.attrs["absent_features"] and "Flow Duration" not in cic.attrs["absent_features"]
     unsw = load_any(tmp_path / "unsw.csv")
     assert unsw.attrs["source"] == "unsw-nb15" and unsw["label"].tolist() == ["Benign", "DoS"]
@@ -71,8 +76,8 @@ def test_unknown_or_missing_input_is_refused(tmp_path):
         load_any(tmp_path / "absent")
     with pytest.raises(ValueError, match="unknown format"):
         load_any(tmp_path, fmt="pcap")
-    (tmp_path / "r_ts.csv").write_text("timestamps,sizes,flags\n\"[1.0, 2.0]\",\"[60, 60]\",\"[2, 16]\"\n")
-    with pytest.raises(ValueError, match="label"):
+    (tmp_path / "UAV-CAS_ts.csv").write_text("packet_time,packet_size\n\"[1.0, 2.0]\",\"[60, 60]\"\n")
+    with pytest.raises(ValueError, match="packet_dir"):
         load_any(tmp_path)
     assert set(FORMATS) == {"uavcas", "uavcas-csv", "cicids2017", "unsw-nb15"}
 

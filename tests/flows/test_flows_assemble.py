@@ -1,18 +1,24 @@
-"""Flow assembly: keys, direction, vantage-point de-duplication, timeouts, caps, minimum size."""
+"""Flow assembly: keys, direction, vantage-point de-duplication, termination, caps, numbering."""
 
 from __future__ import annotations
 
 import numpy as np
+import pandas as pd
 import pytest
 from pcapgen import A, B, C, http_session, ipv6_session, syn_flood, tcp, udp, write
 
-from uavcas.flows import FlowConfig, extract_flows
+from uavcas.flows import FlowConfig, StreamReport, extract_flows, iter_flow_frames
+
+# one flow per key: the paper's granularity, used where a test is about keys, not termination
+WHOLE = dict(idle_timeout_s=0, active_timeout_s=0, fin_rst=False, syn_restart=False)
+# CICFlowMeter's own segmentation: FIN/RST and its 120 s flow timeout only
+CIC_RULES = dict(idle_timeout_s=0, syn_restart=False)
 
 
 def test_syn_flood_one_flow_per_source_port(tmp_path):
     pk = http_session(0.0, A, B) + syn_flood(20, t0=1.0, attacker=C, victim=B)
     path = write(tmp_path / "f.pcap", sorted(pk, key=lambda p: p.time))
-    df = extract_flows([path]).frame
+    df = extract_flows([path], FlowConfig(**WHOLE)).frame
     flood = df[df.src_ip == C]
     assert len(flood) == 20 and set(flood.packets) == {1} and set(flood["SYN Flag Count"]) == {1.0}
     assert set(flood.dst_port) == {80} and flood.src_port.nunique() == 20
@@ -26,9 +32,54 @@ def test_syn_flood_one_flow_per_source_port(tmp_path):
     assert hp2.packets.tolist() == [20]
 
 
+def test_fin_and_rst_end_a_flow_as_cicflowmeter(tmp_path):
+    # http_session: client FIN+ACK comes AFTER the server's: the server's (backward) FIN ends
+    # the flow, the client's FIN+ACK and the last ACK form CICFlowMeter's trailing flow.
+    s = http_session(0.0, A, B)
+    df = extract_flows([write(tmp_path / "h.pcap", s)]).frame
+    assert df.packets.tolist() == [len(s) - 2, 2]
+    assert df["FIN Flag Count"].tolist() == [1, 1] and df.src_ip.tolist() == [A, A]
+    # a forward FIN does not end the flow; any RST does, in either direction
+    pk = [tcp(0, A, B, 1, 2, "S"), tcp(0.1, B, A, 2, 1, "SA"), tcp(0.2, A, B, 1, 2, "FA"), tcp(0.3, B, A, 2, 1, "A"),
+          tcp(0.4, B, A, 2, 1, "R"), tcp(0.5, A, B, 1, 2, "A"), tcp(0.6, A, B, 1, 2, "R"), tcp(0.7, B, A, 2, 1, "A")]
+    df = extract_flows([write(tmp_path / "r.pcap", pk)]).frame
+    assert df.packets.tolist() == [5, 2, 1]
+    # a flow's first packet never ends it (FlowGenerator checks flags only when adding a packet)
+    assert extract_flows([write(tmp_path / "r1.pcap", [tcp(0, A, B, 1, 2, "R"), tcp(0.1, A, B, 1, 2, "R")])]).frame.packets.tolist() == [2]
+    off = extract_flows([write(tmp_path / "h2.pcap", s)], FlowConfig(fin_rst=False)).frame
+    assert off.packets.tolist() == [len(s)]
+
+
+def test_new_syn_starts_a_new_flow_but_a_retransmission_does_not(tmp_path):
+    pk = [tcp(0, C, B, 2000, 80, "S", seq=111), tcp(0.5, C, B, 2000, 80, "S", seq=111),  # retransmitted SYN
+          tcp(3.0, C, B, 2000, 80, "S", seq=999),  # hping3 restarted on the same port: a new attempt
+          tcp(3.1, B, C, 80, 2000, "SA", seq=5), tcp(3.2, C, B, 2000, 80, "S", seq=999)]  # fmt: skip
+    path = write(tmp_path / "s.pcap", pk)
+    assert extract_flows([path]).frame.packets.tolist() == [2, 3]
+    assert extract_flows([path], FlowConfig(syn_restart=False)).frame.packets.tolist() == [5]
+
+
+def test_timeouts_defaults_and_cap(tmp_path):
+    pk = [udp(t, A, B, 1000, 2000) for t in (0, 1, 2, 200, 201, 2000, 2001)]
+    path = write(tmp_path / "t.pcap", pk)
+    assert extract_flows([path], FlowConfig(**WHOLE)).frame.packets.tolist() == [7]
+    # default: idle 15 s (NetFlow's inactive timeout), active 120 s (CICFlowMeter's flow timeout)
+    assert extract_flows([path]).frame.packets.tolist() == [3, 2, 2]
+    idle = extract_flows([path], FlowConfig(idle_timeout_s=120, active_timeout_s=0)).frame
+    assert idle.packets.tolist() == [3, 2, 2]
+    act = extract_flows([path], FlowConfig(idle_timeout_s=0, active_timeout_s=1.5)).frame
+    assert act.packets.tolist() == [2, 1, 2, 2]
+    gap = [udp(t, A, B, 1, 2) for t in (0, 14.9, 29.8, 44.6, 100)]  # gaps < 15 s never end it
+    assert extract_flows([write(tmp_path / "g.pcap", gap)]).frame.packets.tolist() == [4, 1]
+    cap = extract_flows([path], FlowConfig(max_packets=4, **WHOLE)).frame
+    assert cap.packets.tolist() == [4] and cap.duration_s.iloc[0] == pytest.approx(200)
+    long = [udp(t, A, B, 1, 2) for t in np.arange(0, 300, 10.0)]  # 10 s apart for 300 s
+    assert extract_flows([write(tmp_path / "l.pcap", long)], FlowConfig(**CIC_RULES)).frame.packets.tolist() == [13, 13, 4]
+
+
 def test_direction_initiator_and_synack_first(tmp_path):
     pk = http_session(0.0, A, B)[1:]  # the SYN was not captured: first packet is the SYN-ACK
-    df = extract_flows([write(tmp_path / "s.pcap", pk)]).frame
+    df = extract_flows([write(tmp_path / "s.pcap", pk)], FlowConfig(**WHOLE)).frame
     r = df.iloc[0]
     assert (r.src_ip, r.src_port, r.dst_ip, r.dst_port) == (A, 40000, B, 80)
     assert r["Total Fwd Packets"] == 4 and r["Total Backward Packets"] == len(pk) - 4
@@ -47,36 +98,58 @@ def test_vantage_point_dedup(tmp_path):
     for p in p2:
         p.time += 0.0002
     w1, w2 = write(tmp_path / "s-a.pcap", p2), write(tmp_path / "s-b.pcap", p1)
-    ex = extract_flows([w1, w2])
+    cfg = FlowConfig(**WHOLE)
+    ex = extract_flows([w1, w2], cfg)
     assert len(ex.frame) == 1
     r = ex.frame.iloc[0]
     assert r.packets == len(s) and r.capture_point == "s-b"  # most packets wins over the name
-    tie = extract_flows([write(tmp_path / "s-z.pcap", p1), write(tmp_path / "s-c.pcap", p1)]).frame.iloc[0]
+    tie = extract_flows([write(tmp_path / "s-z.pcap", p1), write(tmp_path / "s-c.pcap", p1)], cfg).frame.iloc[0]
     assert tie.capture_point == "s-c" and tie.packets == len(s)  # ties: alphabetically first
-    both = extract_flows([w1, w2], FlowConfig(dedup=False)).frame.iloc[0]
+    both = extract_flows([w1, w2], FlowConfig(dedup=False, **WHOLE)).frame.iloc[0]
     assert both.packets == 2 * len(s) - 1
-
-
-def test_timeouts_and_cap(tmp_path):
-    pk = [udp(t, A, B, 1000, 2000) for t in (0, 1, 2, 200, 201, 2000, 2001)]
-    path = write(tmp_path / "t.pcap", pk)
-    assert extract_flows([path]).frame.packets.tolist() == [7]
-    idle = extract_flows([path], FlowConfig(idle_timeout_s=120)).frame
-    assert idle.packets.tolist() == [3, 2, 2]
-    act = extract_flows([path], FlowConfig(active_timeout_s=1.5)).frame
-    assert act.packets.tolist() == [2, 1, 2, 2]
-    cap = extract_flows([path], FlowConfig(max_packets=4)).frame
-    assert cap.packets.tolist() == [4] and cap.duration_s.iloc[0] == pytest.approx(200)
 
 
 def test_ipv6_flow(tmp_path):
     df = extract_flows([write(tmp_path / "v6.pcap", ipv6_session())]).frame
     assert len(df) == 1 and df.src_ip[0] == "2001:db8::1" and df.protocol[0] == 6
-    assert df["Fwd Header Length"][0] == 3 * (40 + 20) and df["Bwd Header Length"][0] == 60
+    assert df["Fwd Header Length"][0] == 3 * 20 and df["Bwd Header Length"][0] == 20  # L4 headers (cic)
 
 
-def test_mixed_flows_and_ordering(tmp_path):
-    pk = sorted(http_session(0.0, A, B, 40001) + http_session(0.05, C, B, 40002) + [tcp(0.07, A, B, 7, 7, "R")], key=lambda p: p.time)
+def test_flow_ids_follow_the_first_packet(tmp_path):
+    # keys sort B < C, but C's flow starts first; the RST flow sits between them in time
+    pk = sorted(http_session(0.05, A, B, 40001) + http_session(0.0, A, C, 40002) + [tcp(0.07, A, B, 7, 7, "R")],
+                key=lambda p: p.time)  # fmt: skip
     df = extract_flows([write(tmp_path / "m.pcap", pk)]).frame
-    assert len(df) == 3 and df.packets.sum() == len(pk)
-    assert (df.first_ts.diff().dropna() >= 0).all()  # flows ordered by first packet
+    assert df.packets.sum() == len(pk)
+    assert df.flow_id.tolist() == list(range(len(df)))
+    assert (np.diff(df.first_ts_ns.to_numpy()) >= 0).all()
+    assert df.dst_ip.tolist()[:3] == [C, B, B] and df.dst_port.tolist()[2] == 7
+
+
+def _mixed_capture(tmp_path, n_sessions=60, seed=3):
+    """HTTP sessions (FIN tails), reused client ports, SYN floods with reuse, UDP with idle gaps."""
+    rng = np.random.default_rng(seed)
+    pk = []
+    for k in range(n_sessions):
+        pk += http_session(float(rng.uniform(0, 60)), A, B, 41000 + k % 25, n_data=int(rng.integers(1, 6)))
+    for burst in (5.0, 25.0, 45.0):  # three bursts reusing the same 30 source ports
+        pk += [tcp(burst + 0.002 * i, C, B, 3000 + i % 30, 80, "S", seq=int(rng.integers(1, 2**31)))
+               for i in range(60)]  # fmt: skip
+    pk += [udp(float(t), A, C, 5000, 53) for t in np.sort(rng.uniform(0, 80, 80))]
+    return write(tmp_path / "mixed.pcap", sorted(pk, key=lambda p: p.time))
+
+
+@pytest.mark.parametrize("chunk", [300, 2000, 1 << 20])
+def test_streaming_gives_the_same_flows(tmp_path, chunk):
+    path = _mixed_capture(tmp_path)
+    whole = extract_flows([path]).frame
+    rep = StreamReport()
+    parts = list(iter_flow_frames([path], chunk_bytes=chunk, report=rep))
+    streamed = pd.concat(parts, ignore_index=True)
+    if chunk < 1 << 20:
+        assert len(parts) > 1  # the capture really was read in several blocks
+    assert rep.packets == whole.packets.sum() and rep.flows == len(whole)
+    flat = [c for c in whole.columns if not c.startswith("seq_")]
+    pd.testing.assert_frame_equal(whole[flat], streamed[flat], check_dtype=False)
+    for c in ("seq_time_s", "seq_size", "seq_flags", "seq_dir"):
+        assert whole[c].tolist() == streamed[c].tolist(), c

@@ -8,7 +8,9 @@ import numpy as np
 import pytest
 from pcapgen import A, B, T0, http_session, icmp, ipv6_session, sll, tcp, udp, vlan_tcp, write, write_pcapng
 from scapy.layers.inet import IP, TCP
-from scapy.layers.l2 import CookedLinuxV2
+from scapy.layers.inet6 import IPv6
+from scapy.layers.l2 import Ether
+from scapy.layers.l2 import CookedLinuxV2  # noqa: E402
 from scapy.packet import Raw
 
 from uavcas.flows import CaptureError, read_packets
@@ -93,19 +95,106 @@ def test_corrupt_and_unknown(tmp_path):
     assert len(read_packets([tmp_path / "cut.pcapng"], allow_truncated=True)) == len(http_session()) - 1
 
 
-def test_snaplen_truncated_packet_keeps_ip_fields(tmp_path):
-    p = tcp(0, A, B, 1000, 80, "PA", b"x" * 500)
-    path = write(tmp_path / "snap.pcap", [p, tcp(0.1, B, A, 80, 1000, "A")])
-    data = bytearray(path.read_bytes())
-    # shrink record 0 to 40 captured bytes (Ethernet + IP + 6 bytes of TCP): ports readable, flags not
-    struct.pack_into("<I", data, 24 + 8, 40)
-    rec1 = data[24 + 16 + len(p) :]
-    fixed = bytes(data[: 24 + 16 + 40]) + bytes(rec1)
-    (tmp_path / "snap2.pcap").write_bytes(fixed)
-    t = read_packets([tmp_path / "snap2.pcap"]).to_pandas()
-    assert len(t) == 2 and t.frame_len[0] == len(p) and t.cap_len[0] == 40
-    assert t.sport[0] == 0 and t.tcp_flags[0] == 0  # L4 header not captured: no ports rather than garbage
-    assert t.sport[1] == 80
+def _snap(path, out, snaplen):
+    """Rewrite a little-endian pcap as captured with `snaplen` (header field and every record)."""
+    data = path.read_bytes()
+    buf = bytearray(data[:16]) + struct.pack("<I", snaplen) + data[20:24]
+    off = 24
+    while off < len(data):
+        s, f, incl, orig = struct.unpack_from("<IIII", data, off)
+        keep = min(incl, snaplen)
+        buf += struct.pack("<IIII", s, f, keep, orig) + data[off + 16 : off + 16 + keep]
+        off += 16 + incl
+    out.write_bytes(bytes(buf))
+    return out
+
+
+def test_short_snaplen_is_counted_not_guessed(tmp_path):
+    sessions = [p for k in range(4) for p in http_session(0.2 * k, A, B, 40000 + k)]
+    full = write(tmp_path / "full.pcap", sessions)
+    # snap length 40 = Ethernet + IP + 6 bytes of TCP: ports readable, flags not -> left out, counted
+    t40 = read_packets([_snap(full, tmp_path / "s40.pcap", 40)])
+    assert len(t40) == 0 and t40.stats[0].l4_cut == len(sessions) and t40.stats[0].snaplen == 40
+    assert any("transport header cut" in w and "snap length 40" in w for w in t40.stats[0].warnings())
+    # snap length 30: not even the IP header
+    t30 = read_packets([_snap(full, tmp_path / "s30.pcap", 30)])
+    assert len(t30) == 0 and t30.stats[0].dropped_short == len(sessions)
+    assert any("IP header cut" in w for w in t30.stats[0].warnings())
+    # snap length 54 (Ethernet + IP + 20 bytes of TCP): every field, the payload length from the IP header
+    t54 = read_packets([_snap(full, tmp_path / "s54.pcap", 54)]).to_pandas()
+    ref = read_packets([full]).to_pandas()
+    for col in ("sport", "dport", "tcp_flags", "ip_len", "frame_len"):
+        assert t54[col].tolist() == ref[col].tolist(), col
+    assert set(t54.cap_len) == {54}
+
+
+def test_ipv6_tcp_at_snaplen_68_keeps_ports_and_flags(tmp_path):
+    full = write(tmp_path / "v6.pcap", ipv6_session())
+    t = read_packets([_snap(full, tmp_path / "v6s.pcap", 68)]).to_pandas()  # 14 bytes of TCP
+    assert list(t.sport) == [5555, 443, 5555, 5555] and list(t.tcp_flags) == [0x02, 0x12, 0x10, 0x18]
+    assert read_packets([tmp_path / "v6s.pcap"]).stats[0].l4_cut == 0
+
+
+@pytest.mark.parametrize(
+    "family",
+    [struct.pack("<I", 2), struct.pack(">I", 2), bytes.fromhex("0f000800"), struct.pack("<I", 0x0800),
+     struct.pack("<I", 24), struct.pack(">I", 30), struct.pack("<I", 10), bytes.fromhex("000086dd")],
+)  # fmt: skip
+def test_dlt_null_family_field_in_any_byte_order(tmp_path, family):
+    v6 = family in (struct.pack("<I", 24), struct.pack(">I", 30), struct.pack("<I", 10), bytes.fromhex("000086dd"))
+    ip = IPv6(src="2001:db8::1", dst="2001:db8::2") if v6 else IP(src=A, dst=B)
+    body = bytes(ip / TCP(sport=1234, dport=80, flags="S"))
+    path = tmp_path / "null.pcap"
+    rec = family + body
+    path.write_bytes(struct.pack("<IHHiIII", 0xA1B2C3D4, 2, 4, 0, 0, 65535, 0)
+                     + struct.pack("<IIII", int(T0), 0, len(rec), len(rec)) + rec)  # fmt: skip
+    t = read_packets([path])
+    assert len(t) == 1 and int(t["sport"][0]) == 1234 and int(t["ip_version"][0]) == (6 if v6 else 4)
+    bad = tmp_path / "bad.pcap"
+    rec = struct.pack("<I", 99) + body
+    bad.write_bytes(path.read_bytes()[:24] + struct.pack("<IIII", int(T0), 0, len(rec), len(rec)) + rec)
+    tb = read_packets([bad])
+    assert len(tb) == 0 and tb.stats[0].null_unknown == 1 and tb.stats[0].warnings()
+
+
+def test_fragments_join_their_datagram_and_orphans_are_counted(tmp_path):
+    from scapy.layers.inet import UDP, fragment
+
+    def datagram(t, ip_id, sport):
+        d = IP(src=A, dst=B, id=ip_id) / UDP(sport=sport, dport=53) / Raw(b"q" * 1400)
+        out = [Ether() / f for f in fragment(d, fragsize=500)]
+        for k, f in enumerate(out):
+            f.time = T0 + t + 0.001 * k
+        return out
+
+    d1, d2, d3 = datagram(0.0, 11, 4001), datagram(1.0, 12, 4001), datagram(2.0, 13, 4002)
+    pk = [d1[2], d1[0], d1[1]] + d2 + d3[1:]  # d1 reordered, d3 lost its first fragment
+    pk += [udp(3.0, A, B, 4001, 53)]
+    path = write(tmp_path / "frag.pcap", pk)
+    t = read_packets([path])
+    assert t.stats[0].orphan_fragments == len(d3) - 1 and any("first fragment" in w for w in t.stats[0].warnings())
+    df = t.to_pandas()
+    assert len(df) == len(pk) - (len(d3) - 1) and (df.sport == 4001).all() and (df.dport == 53).all()
+    from uavcas.flows import extract_flows
+
+    fr = extract_flows([path]).frame
+    assert fr.packets.tolist() == [len(d1) + len(d2) + 1] and fr.src_port.tolist() == [4001]
+    # across blocks: the same answer when the file is read a few records at a time
+    small = read_packets([path], chunk_bytes=700)
+    assert small.stats[0].orphan_fragments == len(d3) - 1 and sorted(small["ts_ns"].tolist()) == sorted(t["ts_ns"].tolist())
+
+
+def test_timestamps_are_exact_integer_nanoseconds(tmp_path):
+    from scapy.utils import wrpcap
+
+    from decimal import Decimal
+
+    p = tcp(0, A, B, 1, 2, "S")
+    p.time = Decimal(int(T0)) + Decimal("0.123456789")  # a float would already have lost the ns
+    wrpcap(str(tmp_path / "ns.pcap"), [p], nano=True)
+    t = read_packets([tmp_path / "ns.pcap"])
+    assert int(t["ts_ns"][0]) == int(T0) * 10**9 + 123456789
+    assert t["ts_ns"].dtype == np.int64
 
 
 @pytest.mark.shared

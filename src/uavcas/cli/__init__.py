@@ -46,4 +46,11 @@ def _root(
 
 
 def main() -> None:
-    app()
+    from uavcas.atomic import UnsafeOutput
+
+    try:
+        app()
+    except UnsafeOutput as exc:  # any command's --out onto a symlink, FIFO, device or directory
+        from .common import fail
+
+        raise SystemExit(fail(str(exc)).exit_code) from None

@@ -1,4 +1,4 @@
-"""`uavcas flows | extract | export | info`: captures -> flows -> labeled dataset -> files."""
+"""`uavcas flows | extract | export | import | info`: captures -> flows -> labeled dataset -> files."""
 
 from __future__ import annotations
 
@@ -12,6 +12,7 @@ from rich.table import Table
 from .common import atomic_path, console, err_console, fail
 
 TABLE_ROWS = 50  # the human-readable table shows this many flows; csv/parquet have them all
+FEATURES_HELP = "Feature standard: cic (CICFlowMeter's definitions, us) or paper (the authors' 47, s)."
 
 
 def _errors():
@@ -24,67 +25,148 @@ def _errors():
     return (CaptureError, DatasetError, LabelError, CsvFormatError, ExternalFormatError, ValueError, OSError)
 
 
-def _warn_truncations(truncations) -> None:
-    for t in truncations:
-        err_console.print(
-            f"[yellow]warning:[/] {t.path} is truncated at byte offset {t.offset}; kept the packets before it",
-            highlight=False,
-            soft_wrap=True,
-        )
+def _warn(lines) -> None:
+    for line in lines:
+        err_console.print(f"[yellow]warning:[/] {line}", highlight=False, soft_wrap=True)
+
+
+def _report_warnings(report) -> None:
+    _warn(f"{t.path} is truncated at byte offset {t.offset}; kept the packets before it" for t in report.truncations)
+    for st in report.stats:
+        _warn(st.warnings())
+
+
+def _ns_decimal(ns):
+    """int64 Unix ns -> Arrow decimal128(28, 9) seconds: exact, written with all 9 digits."""
+    import numpy as np
+    import pyarrow as pa
+
+    ns = np.asarray(ns, dtype=np.int64)
+    words = np.zeros((ns.shape[0], 2), dtype=np.int64)
+    words[:, 0], words[:, 1] = ns, np.where(ns < 0, -1, 0)  # the unscaled 128-bit integer
+    return pa.Array.from_buffers(pa.decimal128(28, 9), ns.shape[0], [None, pa.py_buffer(words.tobytes())])
+
+
+def _csv_table(df, features):
+    """The CSV columns of a flow frame as an Arrow table (Arrow's writer is what keeps CSV fast)."""
+    import pyarrow as pa
+
+    from uavcas.dataset.parquet import frame_to_arrow
+    from uavcas.flows import CSV_LEAD_COLUMNS
+
+    t = frame_to_arrow(df[list(CSV_LEAD_COLUMNS) + list(features)])
+    first = df["first_ts_ns"].to_numpy()
+    last = first + (df["duration_s"].to_numpy() * 1e9).round().astype("int64")
+    t = t.append_column("first_ts", _ns_decimal(first)).append_column("last_ts", _ns_decimal(last))
+    return t.append_column("capture_point", pa.array(df["capture_point"].astype(str).tolist(), pa.string()))
+
+
+def _empty_frame(features: str):
+    """The columns of a flow frame with no rows (a capture without a single flow)."""
+    from uavcas.flows import PacketTable, assemble, flow_frame
+    from uavcas.flows.packets import empty_columns
+
+    empty = PacketTable(empty_columns(), ("none",))
+    return flow_frame(empty, assemble(empty), standard=features)
 
 
 def flows_cmd(
     pcaps: list[Path] = typer.Argument(..., help="Capture file(s), pcap or pcapng; several = capture points."),
     view: str = typer.Option("5tuple", "--view", help="Flow key: 5tuple or hostpair (the authors')."),
+    features: str = typer.Option("cic", "--features", help=FEATURES_HELP),
     min_packets: int = typer.Option(None, "--min-packets", help="Drop smaller flows (default 1 for 5tuple, 10 for hostpair)."),
     fmt: str = typer.Option("table", "--format", help="table, csv or parquet."),
     out: Path = typer.Option(None, "--out", help="Output file (default: standard output; required for parquet)."),
     allow_truncated: bool = typer.Option(False, "--allow-truncated", help="Keep the packets before a truncation."),
-    idle_timeout: float = typer.Option(None, "--idle-timeout", help="Idle timeout in s (default: none)."),
-    active_timeout: float = typer.Option(None, "--active-timeout", help="Active timeout in s (default: none)."),
+    idle_timeout: float = typer.Option(None, "--idle-timeout", help="Idle timeout in s; 0 = none (default: 15 for 5tuple)."),
+    active_timeout: float = typer.Option(None, "--active-timeout", help="Active timeout in s; 0 = none (default: 120 for 5tuple)."),
+    fin_rst: bool = typer.Option(None, "--fin-rst/--no-fin-rst", help="End TCP flows at RST / backward FIN (default: on for 5tuple)."),
+    syn_restart: bool = typer.Option(None, "--syn-restart/--no-syn-restart", help="A new SYN starts a new flow (default: on for 5tuple)."),
 ) -> None:
-    """Flows of one capture (or of several capture points, de-duplicated)."""
-    from uavcas.flows import CSV_LEAD_COLUMNS, FlowConfig, extract_flows
-    from uavcas.schema import FEATURES
+    """Flows of one capture (streamed, bounded memory) or of several capture points (de-duplicated)."""
+    from uavcas.atomic import check_target
+    from uavcas.dataset.parquet import frame_to_arrow
+    from uavcas.flows import STANDARDS, FlowConfig, StreamReport, iter_flow_frames
+    from uavcas.schema import feature_columns
 
     if fmt not in ("table", "csv", "parquet"):
         raise fail(f"--format: {fmt!r} is not one of table, csv, parquet")
+    if features not in STANDARDS:
+        raise fail(f"--features: {features!r} is not one of {', '.join(STANDARDS)}")
     if fmt == "parquet" and out is None:
         raise fail("--format parquet needs --out FILE")
+    report = StreamReport()
     try:
-        cfg = FlowConfig(view=view, min_packets=min_packets, idle_timeout_s=idle_timeout, active_timeout_s=active_timeout)  # type: ignore[arg-type]
-        ex = extract_flows(pcaps, cfg, allow_truncated=allow_truncated, sequences=fmt == "parquet")
+        if out is not None:
+            check_target(out)
+        cfg = FlowConfig(view=view, min_packets=min_packets, idle_timeout_s=idle_timeout, active_timeout_s=active_timeout,
+                         fin_rst=fin_rst, syn_restart=syn_restart)  # type: ignore[arg-type]  # fmt: skip
+        frames = iter_flow_frames(pcaps, cfg, standard=features, sequences=fmt == "parquet",
+                                  allow_truncated=allow_truncated, report=report)  # fmt: skip
+        if fmt == "parquet":
+            import pyarrow.parquet as pq
+
+            with atomic_path(out) as tmp:
+                writer = None
+                for df in frames:
+                    t = frame_to_arrow(df)
+                    writer = writer or pq.ParquetWriter(tmp, t.schema, compression="zstd")
+                    writer.write_table(t.cast(writer.schema))
+                if writer is None:  # no flow at all: still a valid (empty) file
+                    writer = pq.ParquetWriter(tmp, frame_to_arrow(_empty_frame(features)).schema)
+                writer.close()
+            _report_warnings(report)
+            err_console.print(f"wrote {report.flows} flows to {out}", highlight=False)
+            return
+        if fmt == "csv":
+            import pyarrow.csv as pacsv
+
+            cols = feature_columns(features)
+
+            def write_csv(fh) -> None:
+                # the header plain (fixed names, no commas), the rows by Arrow (strings quoted)
+                opts = pacsv.WriteOptions(include_header=False, quoting_style="needed")
+                writer = None
+                for df in frames:
+                    t = _csv_table(df, cols)
+                    if writer is None:
+                        fh.write((",".join(t.schema.names) + "\n").encode())
+                        writer = pacsv.CSVWriter(fh, t.schema, write_options=opts)
+                    writer.write_table(t)
+                if writer is None:  # no flow: the header alone
+                    fh.write((",".join(_csv_table(_empty_frame(features), cols).schema.names) + "\n").encode())
+                else:
+                    writer.close()
+
+            if out is None:
+                sys.stdout.flush()
+                write_csv(sys.stdout.buffer)
+                sys.stdout.buffer.flush()
+            else:
+                with atomic_path(out) as tmp, open(tmp, "wb") as fh:
+                    write_csv(fh)
+            _report_warnings(report)
+            return
+        shown = []
+        for df in frames:
+            if sum(len(d) for d in shown) < TABLE_ROWS:
+                shown.append(df.head(TABLE_ROWS))
     except _errors() as exc:
         raise fail(str(exc)) from None
-    _warn_truncations(ex.packets.truncations)
-    df = ex.frame
-    if fmt == "parquet":
-        import pyarrow as pa
-        import pyarrow.parquet as pq
+    _report_warnings(report)
+    import pandas as pd
 
-        with atomic_path(out) as tmp:
-            pq.write_table(pa.Table.from_pandas(df, preserve_index=False), tmp, compression="zstd")
-        err_console.print(f"wrote {len(df)} flows to {out}", highlight=False)
-        return
-    if fmt == "csv":
-        cols = list(CSV_LEAD_COLUMNS) + list(FEATURES) + ["first_ts", "last_ts", "capture_point"]
-        text = df[cols].to_csv(index=False, float_format="%.9g")
-        if out is None:
-            sys.stdout.write(text)
-        else:
-            with atomic_path(out) as tmp:
-                tmp.write_text(text)
-        return
-    table = Table(title=f"{len(df)} flows ({view}) from {len(ex.packets)} packets")
+    head = pd.concat(shown, ignore_index=True).head(TABLE_ROWS) if shown else None
+    table = Table(title=f"{report.flows} flows ({view}) from {report.packets} packets")
     for c in ("src", "dst", "proto", "packets", "bytes", "duration_s", "point"):
         table.add_column(c, justify="right" if c in ("packets", "bytes", "duration_s") else "left")
-    for r in df.head(TABLE_ROWS).itertuples(index=False):
+    for r in head.itertuples(index=False) if head is not None else []:
         table.add_row(
             f"{r.src_ip}:{r.src_port}", f"{r.dst_ip}:{r.dst_port}", str(r.protocol),
             str(r.packets), str(r.bytes), f"{r.duration_s:.6f}", str(r.capture_point),
         )  # fmt: skip
-    if len(df) > TABLE_ROWS:
-        table.caption = f"first {TABLE_ROWS} of {len(df)} flows; use --format csv for all"
+    if report.flows > TABLE_ROWS:
+        table.caption = f"first {TABLE_ROWS} of {report.flows} flows; use --format csv for all"
     from rich.console import Console
 
     if out is None:  # addresses must not be cut: print wide even when stdout is not a terminal
@@ -92,14 +174,18 @@ def flows_cmd(
     else:
         buf = io.StringIO()
         Console(file=buf, width=160).print(table)
-        with atomic_path(out) as tmp:
-            tmp.write_text(buf.getvalue())
+        try:
+            with atomic_path(out) as tmp:
+                tmp.write_text(buf.getvalue())
+        except _errors() as exc:
+            raise fail(str(exc)) from None
 
 
 def extract_cmd(
     run_dir: Path = typer.Argument(..., help="Run directory (plan.json, run.json, attacks.jsonl, pcap/)."),
     out: Path = typer.Option(..., "--out", help="Dataset directory to add the run's shard to."),
     view: str = typer.Option("5tuple", "--view", help="Flow key: 5tuple, hostpair or window-hostpair (one flow per host pair per plan window)."),
+    features: str = typer.Option("cic", "--features", help=FEATURES_HELP),
     labels: str = typer.Option("ours", "--labels", help="ours (from each packet's effect) or paper (IP membership)."),
     min_packets: int = typer.Option(None, "--min-packets", help="Drop smaller flows (default by view)."),
     allow_truncated: bool = typer.Option(False, "--allow-truncated", help="Keep the packets before a truncation."),
@@ -111,8 +197,9 @@ def extract_cmd(
     from uavcas.dataset.store import extract_run
 
     try:
-        info = extract_run(run_dir, out, view=view, labels=labels, min_packets=min_packets, allow_truncated=allow_truncated,
-                           min_attack_fraction=min_attack_fraction)
+        info = extract_run(run_dir, out, view=view, labels=labels, min_packets=min_packets,
+                           allow_truncated=allow_truncated, features=features,
+                           min_attack_fraction=min_attack_fraction)  # fmt: skip
     except _errors() as exc:
         raise fail(str(exc)) from None
     for t in info.truncations:
@@ -125,31 +212,58 @@ def extract_cmd(
 
 def export_cmd(
     dataset_dir: Path = typer.Argument(..., help="Dataset directory."),
-    fmt: str = typer.Option("uavcas-csv", "--format", help="uavcas-csv (the authors' *_ts.csv + *_stat.csv)."),
-    out: Path = typer.Option(..., "--out", help="Directory to write to."),
+    fmt: str = typer.Option("uavcas-csv", "--format", help="uavcas-csv: the authors' UAV-CAS_stat.csv + UAV-CAS_ts.csv."),
+    out: Path = typer.Option(..., "--out", help="Directory to write the two files to."),
+    embed_config: bool = typer.Option(False, "--embed-config", help="The _cfg variants: Label = <class>|<config>."),
+    include_flags: bool = typer.Option(False, "--include-flags", help="Add the packet_flag list column to the ts file."),
+    view: str = typer.Option(None, "--view", help="The flow view to export when the dataset holds several."),
 ) -> None:
-    """Export a dataset in the authors' CSV layout, one *_ts.csv / *_stat.csv pair per run."""
+    """Export a dataset in the authors' released layout (one stat and one ts CSV)."""
+    from uavcas.atomic import ensure_out_dir
     from uavcas.dataset.parquet import read_flows
-    from uavcas.dataset.uavcas_csv import write_uavcas_csv
+    from uavcas.dataset.read import select_view
+    from uavcas.dataset.uavcas_csv import write_layout
 
     if fmt != "uavcas-csv":
         raise fail(f"--format: {fmt!r} is not supported (uavcas-csv)")
     path = dataset_dir / "flows.parquet"
-    if not path.exists():
+    if not path.is_file():
         raise fail(f"{dataset_dir}: no flows.parquet (not a dataset directory)")
     try:
+        ensure_out_dir(out)
         df = read_flows(path)
-        n = 0
-        for run_id, part in df.groupby("run_id", sort=True):
-            write_uavcas_csv(part.reset_index(drop=True), out, str(run_id))
-            n += 1
+        standard = df.attrs.get("feature_standard")
+        df = select_view(df, view)
+        df.attrs["feature_standard"] = standard
+        w = write_layout(df, out, embed_config=embed_config, include_flags=include_flags)
     except _errors() as exc:
         raise fail(str(exc)) from None
-    console.print(f"wrote {n} run(s), {len(df)} flows to {out}", highlight=False)
+    _warn(w.notes)
+    console.print(f"wrote {w.stat} ({w.n_stat} flows) and {w.ts} ({w.n_ts} flows)", highlight=False)
+
+
+def import_cmd(
+    src: Path = typer.Argument(..., help="Directory with UAV-CAS_stat.csv / UAV-CAS_ts.csv (or _cfg variants), or one of them."),
+    fmt: str = typer.Option("uavcas-csv", "--format", help="uavcas-csv: the authors' released layout."),
+    out: Path = typer.Option(..., "--out", help="New dataset directory to create."),
+) -> None:
+    """Import the authors' CSV layout (theirs as released, or ours) into a dataset directory."""
+    from uavcas.dataset.store import import_layout
+
+    if fmt != "uavcas-csv":
+        raise fail(f"--format: {fmt!r} is not supported (uavcas-csv)")
+    try:
+        card, imp = import_layout(src, out)
+    except _errors() as exc:
+        raise fail(str(exc)) from None
+    for note in imp.notes:
+        console.print(note, highlight=False)
+    err_console.print(f"the layout lacks: {', '.join(imp.lacks)}", highlight=False, soft_wrap=True)
+    console.print(f"imported {card['n_flows']} flows ({card['features']['standard']} features) -> {out}", highlight=False)
 
 
 def info_cmd(dataset_dir: Path = typer.Argument(..., help="Dataset directory.")) -> None:
-    """Class counts, views and runs of a dataset."""
+    """Class counts, feature standard, views and runs of a dataset."""
     from uavcas.dataset.store import read_card
 
     try:
@@ -163,7 +277,9 @@ def info_cmd(dataset_dir: Path = typer.Argument(..., help="Dataset directory."))
     table.add_column("share", justify="right")
     for cls, n in card.get("class_counts", {}).items():
         table.add_row(cls, str(n), f"{100.0 * n / total:.1f}%")
-    table.caption = f"views: {', '.join(card.get('views', []))}; labels: {', '.join(card.get('label_modes', []))}; schema v{card.get('schema_version')}"
+    std = card.get("features", {}).get("standard", "cic")
+    table.caption = (f"features: {std}; views: {', '.join(card.get('views', []))}; "
+                     f"labels: {', '.join(card.get('label_modes', []))}; schema v{card.get('schema_version')}")  # fmt: skip
     console.print(table)
 
 
@@ -171,4 +287,5 @@ def register(app: typer.Typer) -> None:
     app.command("flows")(flows_cmd)
     app.command("extract")(extract_cmd)
     app.command("export")(export_cmd)
+    app.command("import")(import_cmd)
     app.command("info")(info_cmd)

@@ -1,17 +1,18 @@
 """Loaders of external IDS datasets mapped onto our feature names (schema.FEATURES).
 
-Each loader returns one row per flow with the 47 feature columns (NaN where the dataset has no
-counterpart), converted to our units (seconds), plus `label` (the dataset's own class string),
-`label_binary` (0 benign / 1 attack) and `source`. Which features exist is in `MAPPED_<NAME>`.
+Each loader returns one row per flow with the 47 `cic` feature columns (schema.FEATURES; NaN
+where the dataset has no counterpart) in the `cic` standard's units (times in microseconds,
+lengths in TCP/UDP payload bytes), plus `label` (the dataset's own class string), `label_binary`
+(0 benign / 1 attack) and `source`. Which features exist is in `MAPPED_<NAME>`.
 
 - CICIDS2017: both the original CIC "MachineLearningCVE" CSVs (names with leading spaces,
-  "Total Fwd Packets") and the improved NFStream re-extraction (Engelen et al.: "Total Fwd Packet",
-  "CWR Flag Count"). Durations and IATs are microseconds there -> seconds here. Note CIC packet
-  lengths are L4 payload bytes, ours link-layer frame bytes: same names, different meaning.
-  Benign: label 'BENIGN'.
-- UNSW-NB15 (training/testing set CSVs): dur (s), spkts/dpkts, sbytes/dbytes, smean/dmean,
-  sinpkt/dinpkt (mean inter-packet time, ms -> s), rate (packets/s); derived: Flow Bytes/s,
-  Down/Up Ratio, Average Packet Size. Multiclass label = attack_cat ('Normal' = benign).
+  "Total Fwd Packets") and the improved re-extraction (Engelen et al.: "Total Fwd Packet",
+  "CWR Flag Count"). These ARE CICFlowMeter features, so values are taken as they are: our `cic`
+  standard computes the same definitions in the same units. Benign: label 'BENIGN'.
+- UNSW-NB15 (training/testing set CSVs): dur (s -> us), spkts/dpkts, sbytes/dbytes, smean/dmean,
+  sinpkt/dinpkt (mean inter-packet time, ms -> us), rate (packets/s); derived: Flow Bytes/s,
+  Down/Up Ratio, Average Packet Size. Argus-based, so only approximately the CIC quantities
+  (its byte counts include headers). Multiclass label = attack_cat ('Normal' = benign).
 """
 
 from __future__ import annotations
@@ -23,16 +24,16 @@ import pandas as pd
 
 from uavcas.schema import FEATURES
 
-US = 1e-6
+US_PER_S = 1e6
 # our name -> (candidate source names after stripping spaces, unit factor)
 _CIC: dict[str, tuple[tuple[str, ...], float]] = {
-    "Flow Duration": (("Flow Duration",), US),
+    "Flow Duration": (("Flow Duration",), 1.0),
     "Flow Bytes/s": (("Flow Bytes/s",), 1.0),
     "Flow Packets/s": (("Flow Packets/s",), 1.0),
-    "Flow IAT Mean": (("Flow IAT Mean",), US),
-    "Flow IAT Std": (("Flow IAT Std",), US),
-    "Flow IAT Max": (("Flow IAT Max",), US),
-    "Flow IAT Min": (("Flow IAT Min",), US),
+    "Flow IAT Mean": (("Flow IAT Mean",), 1.0),
+    "Flow IAT Std": (("Flow IAT Std",), 1.0),
+    "Flow IAT Max": (("Flow IAT Max",), 1.0),
+    "Flow IAT Min": (("Flow IAT Min",), 1.0),
     "Min Packet Length": (("Min Packet Length", "Packet Length Min"), 1.0),
     "Max Packet Length": (("Max Packet Length", "Packet Length Max"), 1.0),
     "Packet Length Mean": (("Packet Length Mean",), 1.0),
@@ -48,9 +49,9 @@ _CIC: dict[str, tuple[tuple[str, ...], float]] = {
     "ECE Flag Count": (("ECE Flag Count",), 1.0),
     "Down/Up Ratio": (("Down/Up Ratio",), 1.0),
     "Average Packet Size": (("Average Packet Size",), 1.0),
-    "Active Mean": (("Active Mean",), US),
-    "Idle Mean": (("Idle Mean",), US),
-    "Idle Max": (("Idle Max",), US),
+    "Active Mean": (("Active Mean",), 1.0),
+    "Idle Mean": (("Idle Mean",), 1.0),
+    "Idle Max": (("Idle Max",), 1.0),
     "Total Fwd Packets": (("Total Fwd Packets", "Total Fwd Packet"), 1.0),
     "Total Backward Packets": (("Total Backward Packets", "Total Bwd packets", "Total Bwd Packets"), 1.0),
     "Total Length of Fwd Packets": (("Total Length of Fwd Packets", "Total Length of Fwd Packet"), 1.0),
@@ -63,20 +64,20 @@ _CIC: dict[str, tuple[tuple[str, ...], float]] = {
     "Bwd Packet Length Min": (("Bwd Packet Length Min",), 1.0),
     "Bwd Packet Length Mean": (("Bwd Packet Length Mean",), 1.0),
     "Bwd Packet Length Std": (("Bwd Packet Length Std",), 1.0),
-    "Fwd IAT Total": (("Fwd IAT Total",), US),
-    "Fwd IAT Mean": (("Fwd IAT Mean",), US),
-    "Fwd IAT Std": (("Fwd IAT Std",), US),
-    "Fwd IAT Max": (("Fwd IAT Max",), US),
-    "Bwd IAT Total": (("Bwd IAT Total",), US),
-    "Bwd IAT Mean": (("Bwd IAT Mean",), US),
-    "Bwd IAT Std": (("Bwd IAT Std",), US),
-    "Bwd IAT Max": (("Bwd IAT Max",), US),
+    "Fwd IAT Total": (("Fwd IAT Total",), 1.0),
+    "Fwd IAT Mean": (("Fwd IAT Mean",), 1.0),
+    "Fwd IAT Std": (("Fwd IAT Std",), 1.0),
+    "Fwd IAT Max": (("Fwd IAT Max",), 1.0),
+    "Bwd IAT Total": (("Bwd IAT Total",), 1.0),
+    "Bwd IAT Mean": (("Bwd IAT Mean",), 1.0),
+    "Bwd IAT Std": (("Bwd IAT Std",), 1.0),
+    "Bwd IAT Max": (("Bwd IAT Max",), 1.0),
     "Fwd Header Length": (("Fwd Header Length",), 1.0),
     "Bwd Header Length": (("Bwd Header Length",), 1.0),
 }
 MAPPED_CICIDS2017: tuple[str, ...] = tuple(_CIC)
 _UNSW_DIRECT: dict[str, tuple[str, float]] = {
-    "Flow Duration": ("dur", 1.0),
+    "Flow Duration": ("dur", US_PER_S),
     "Flow Packets/s": ("rate", 1.0),
     "Total Fwd Packets": ("spkts", 1.0),
     "Total Backward Packets": ("dpkts", 1.0),
@@ -84,8 +85,8 @@ _UNSW_DIRECT: dict[str, tuple[str, float]] = {
     "Total Length of Bwd Packets": ("dbytes", 1.0),
     "Fwd Packet Length Mean": ("smean", 1.0),
     "Bwd Packet Length Mean": ("dmean", 1.0),
-    "Fwd IAT Mean": ("sinpkt", 1e-3),
-    "Bwd IAT Mean": ("dinpkt", 1e-3),
+    "Fwd IAT Mean": ("sinpkt", 1e3),
+    "Bwd IAT Mean": ("dinpkt", 1e3),
 }
 MAPPED_UNSW_NB15: tuple[str, ...] = tuple(_UNSW_DIRECT) + ("Flow Bytes/s", "Down/Up Ratio", "Average Packet Size")
 
@@ -157,7 +158,7 @@ def load_unsw_nb15(path: str | Path) -> pd.DataFrame:
     dur, sp, dp = cols["Flow Duration"], cols["Total Fwd Packets"], cols["Total Backward Packets"]
     total_bytes = cols["Total Length of Fwd Packets"] + cols["Total Length of Bwd Packets"]
     with np.errstate(divide="ignore", invalid="ignore"):
-        cols["Flow Bytes/s"] = np.where(dur > 0, total_bytes / np.where(dur > 0, dur, 1), 0.0)
+        cols["Flow Bytes/s"] = np.where(dur > 0, total_bytes / np.where(dur > 0, dur / US_PER_S, 1), 0.0)
         cols["Down/Up Ratio"] = np.where(sp > 0, dp / np.where(sp > 0, sp, 1), 0.0)
         cols["Average Packet Size"] = np.where(sp + dp > 0, total_bytes / np.maximum(sp + dp, 1), 0.0)
     out = pd.DataFrame(cols)

@@ -1,12 +1,17 @@
 """Arrow schema of `flows.parquet` (column names from `schema.py`, dtypes fixed here) and I/O.
 
 Dtypes: identity strings are `string`; ports int32, protocol int16, seed/flow_id/packets/bytes
-int64; times float64 (Unix seconds for first_ts/last_ts); axis columns as Scenario.axes() gives
-them (n_uav, n_bs, tx_dbm int64; noise_dbm float64; others string); sequences are list columns:
-seq_time_s list<float64>, seq_size list<int32>, seq_flags list<int16>, seq_dir list<int8>
-(+1 forward, -1 backward), seq_effect list<string> (one of vocabulary.EFFECTS per packet); the 47
-features float64; attack_packets and attack_packets_<family> int64, attack_fraction float64;
-label_<family> bool; label, label_source string.
+int64; first_ts/last_ts float64 Unix seconds, first_ts_ns int64 Unix nanoseconds (exact);
+duration_s float64; axis columns as Scenario.axes() gives them (n_uav, n_bs, tx_dbm int64;
+noise_dbm float64; attacks, payload, pathloss, modulation, mission string); sequences are list
+columns: seq_time_s list<float64>, seq_size list<int32>, seq_flags list<int16>, seq_dir list<int8>
+(+1 forward, -1 backward), seq_effect list<string> (one of vocabulary.EFFECTS per packet); the
+47 features of the dataset's standard float64 (`schema.feature_columns`); attack_packets and
+attack_packets_<family> int64, attack_fraction float64; label_<family> bool; label, label_source string. Any column may hold nulls
+where the source did not carry the value (an imported CSV has no ports, for instance).
+
+Files are written from Arrow arrays without pandas metadata, so plain `pandas.read_parquet` reads
+every file (list columns come back as object columns of arrays).
 """
 
 from __future__ import annotations
@@ -14,6 +19,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 import pyarrow as pa
 import pyarrow.parquet as pq
@@ -23,11 +29,12 @@ from uavcas.atomic import atomic_path
 from uavcas.schema import (
     AXIS_COLUMNS,
     COUNT_COLUMNS,
-    FEATURES,
+    DEFAULT_STANDARD,
     ID_COLUMNS,
     LABEL_COLUMNS,
     SEQUENCE_COLUMNS,
     TRUTH_COLUMNS,
+    feature_columns,
 )
 
 _ID_TYPES = {
@@ -43,6 +50,7 @@ _ID_TYPES = {
     "protocol": pa.int16(),
     "first_ts": pa.float64(),
     "last_ts": pa.float64(),
+    "first_ts_ns": pa.int64(),
     "capture_point": pa.string(),
 }
 _AXIS_TYPES = {
@@ -67,12 +75,12 @@ _SEQ_TYPES = {
 META_KEY = b"uavcas"
 
 
-def arrow_schema() -> pa.Schema:
+def arrow_schema(standard: str = DEFAULT_STANDARD) -> pa.Schema:
     fields = [pa.field(c, _ID_TYPES[c]) for c in ID_COLUMNS]
     fields += [pa.field(c, _AXIS_TYPES[c]) for c in AXIS_COLUMNS]
     fields += [pa.field(c, _COUNT_TYPES[c]) for c in COUNT_COLUMNS]
     fields += [pa.field(c, _SEQ_TYPES[c]) for c in SEQUENCE_COLUMNS]
-    fields += [pa.field(c, pa.float64()) for c in FEATURES]
+    fields += [pa.field(c, pa.float64()) for c in feature_columns(standard)]
     fields += [pa.field(c, pa.float64() if c == "attack_fraction" else pa.int64()) for c in TRUTH_COLUMNS]
     fields += [pa.field(c, pa.bool_()) for c in LABEL_COLUMNS]
     fields += [pa.field("label", pa.string()), pa.field("label_source", pa.string())]
@@ -82,23 +90,49 @@ def arrow_schema() -> pa.Schema:
 COLUMNS: tuple[str, ...] = tuple(arrow_schema().names)
 
 
-def to_table(df: pd.DataFrame, meta: dict | None = None) -> pa.Table:
-    """DataFrame with every schema column -> Arrow table in schema order and dtypes."""
-    missing = [c for c in COLUMNS if c not in df.columns]
+def to_table(df: pd.DataFrame, meta: dict | None = None, standard: str | None = None) -> pa.Table:
+    """DataFrame with every schema column -> Arrow table in schema order and dtypes.
+
+    `standard` (default: `df.attrs["feature_standard"]`, else 'cic') picks the feature columns.
+    """
+    standard = standard or df.attrs.get("feature_standard", DEFAULT_STANDARD)
+    schema = arrow_schema(standard)
+    missing = [c for c in schema.names if c not in df.columns]
     if missing:
-        raise ValueError(f"flow frame lacks schema columns: {missing}")
-    schema = arrow_schema()
+        raise ValueError(f"flow frame lacks schema columns ({standard} features): {missing}")
     arrays = []
     for f in schema:
         col = df[f.name]
-        arr = pa.array(col.array) if isinstance(col.dtype, pd.ArrowDtype) else pa.array(col.to_numpy(), from_pandas=True)
+        if isinstance(col.dtype, pd.ArrowDtype):
+            arr = pa.array(col.array)
+        elif f.name in _SEQ_TYPES and col.dtype == object:
+            arr = pa.array([None if v is None or (isinstance(v, float) and np.isnan(v)) else list(v) for v in col], type=f.type)
+        else:
+            arr = pa.array(col.to_numpy(), from_pandas=True)
         if isinstance(arr, pa.ChunkedArray):
             arr = arr.combine_chunks()
         arrays.append(arr.cast(f.type))
     table = pa.Table.from_arrays(arrays, schema=schema)
-    if meta is not None:
-        table = table.replace_schema_metadata({META_KEY: json.dumps(meta, sort_keys=True).encode()})
-    return table
+    meta = dict(meta or {}, feature_standard=standard)
+    return table.replace_schema_metadata({META_KEY: json.dumps(meta, sort_keys=True).encode()})
+
+
+def table_standard(table_or_schema) -> str:
+    """The feature standard a table / file schema was written with ('cic' for files before v2)."""
+    schema = getattr(table_or_schema, "schema", table_or_schema)
+    md = schema.metadata or {}
+    return json.loads(md[META_KEY]).get("feature_standard", DEFAULT_STANDARD) if META_KEY in md else DEFAULT_STANDARD
+
+
+def frame_to_arrow(df: pd.DataFrame) -> pa.Table:
+    """Any flow frame (e.g. `uavcas flows` output) -> Arrow table without pandas metadata."""
+    arrays, names = [], []
+    for c in df.columns:
+        col = df[c]
+        arr = pa.array(col.array) if isinstance(col.dtype, pd.ArrowDtype) else pa.array(col.to_numpy(), from_pandas=True)
+        arrays.append(arr.combine_chunks() if isinstance(arr, pa.ChunkedArray) else arr)
+        names.append(str(c))
+    return pa.Table.from_arrays(arrays, names=names)
 
 
 def write_table(table: pa.Table, path: Path) -> None:
@@ -112,6 +146,11 @@ def table_meta(path: Path) -> dict:
 
 
 def read_flows(path: str | Path, columns: list[str] | None = None) -> pd.DataFrame:
-    """Read flows.parquet (or a shard); list columns stay Arrow-backed (no per-row Python lists)."""
+    """Read flows.parquet (or a shard); list columns stay Arrow-backed (no per-row Python lists).
+
+    `df.attrs["feature_standard"]` names the standard of its feature columns.
+    """
     table = pq.read_table(path, columns=columns)
-    return table.to_pandas(types_mapper=lambda t: pd.ArrowDtype(t) if pa.types.is_list(t) else None)
+    df = table.to_pandas(types_mapper=lambda t: pd.ArrowDtype(t) if pa.types.is_list(t) else None)
+    df.attrs["feature_standard"] = table_standard(table)
+    return df

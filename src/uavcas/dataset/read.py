@@ -2,8 +2,9 @@
 
 Formats (`FORMATS`), each parsed by its own module of this package:
 - 'uavcas': our dataset directory (flows.parquet) or a .parquet file (`parquet.read_flows`);
-- 'uavcas-csv': the authors' layout, a `<run>_ts.csv` (with its `_stat.csv` beside it) or a
-  directory of them (`uavcas_csv.read_uavcas_csv`); each file pair is one run;
+- 'uavcas-csv': the authors' released layout, `UAV-CAS_stat.csv` + `UAV-CAS_ts.csv` (or the `_cfg`
+  variants) in a directory, or one of the files (`uavcas_csv.read_layout`); its features are the
+  `paper` standard (`df.attrs["feature_standard"]`);
 - 'cicids2017', 'unsw-nb15': external CSV samples (`external.LOADERS`).
 
 Every frame comes back with our feature names and `label`, benign rows named 'Benign'. External
@@ -18,15 +19,15 @@ from pathlib import Path
 
 import pandas as pd
 
-from uavcas.schema import BENIGN, FEATURES
+from uavcas.schema import BENIGN, DEFAULT_STANDARD, feature_columns
 
 from .external import LOADERS
 from .parquet import read_flows
-from .uavcas_csv import TS_ALIASES, CsvFormatError, read_uavcas_csv
+from .uavcas_csv import STAT_CFG_FILE, STAT_FILE, TS_CFG_FILE, TS_FILE, read_layout
 
 FORMATS = ("uavcas", "uavcas-csv", "cicids2017", "unsw-nb15")
 _BENIGN_NAMES = {"BENIGN": BENIGN, "Benign": BENIGN, "benign": BENIGN, "Normal": BENIGN}
-_TS_SUFFIX = "_ts.csv"
+_LAYOUT_FILES = (STAT_FILE, TS_FILE, STAT_CFG_FILE, TS_CFG_FILE)
 
 
 def flows_path(path: str | Path) -> Path:
@@ -39,10 +40,6 @@ def flows_path(path: str | Path) -> Path:
     return p
 
 
-def _ts_files(p: Path) -> list[Path]:
-    return sorted(p.glob(f"*{_TS_SUFFIX}")) if p.is_dir() else ([p] if p.name.endswith(_TS_SUFFIX) else [])
-
-
 def detect_format(path: str | Path) -> str:
     """One of `FORMATS`, from the file name or the CSV header; ValueError if none fits."""
     p = Path(path)
@@ -50,21 +47,21 @@ def detect_format(path: str | Path) -> str:
         raise FileNotFoundError(f"{p} does not exist")
     if p.suffix == ".parquet" or (p / "flows.parquet").is_file():
         return "uavcas"
-    if _ts_files(p):
+    if (p.is_dir() and any((p / f).is_file() for f in _LAYOUT_FILES)) or p.name in _LAYOUT_FILES:
         return "uavcas-csv"
     csvs = sorted(p.glob("*.csv")) if p.is_dir() else ([p] if p.suffix == ".csv" else [])
     for f in csvs:
         with open(f, encoding="utf-8-sig", errors="replace") as fh:
             header = fh.readline()
+        names = {c.strip() for c in header.split(",")}
+        if {"packet_time", "packet_size"} <= names or {"config_idx", "Total Packets"} <= names:
+            return "uavcas-csv"
         if "attack_cat" in header:
             return "unsw-nb15"
         if "Label" in header and "Flow" in header:
             return "cicids2017"
-        names = {c.strip() for c in header.split(",")}
-        if names & set(TS_ALIASES["timestamps"]) and names & set(TS_ALIASES["sizes"]):
-            return "uavcas-csv"
     raise ValueError(
-        f"{p}: neither a uavcas dataset (flows.parquet), the authors' CSV (*_ts.csv) "
+        f"{p}: neither a uavcas dataset (flows.parquet), the authors' CSV ({STAT_FILE}/{TS_FILE}) "
         "nor a CICIDS2017/UNSW-NB15 CSV sample"
     )
 
@@ -89,19 +86,6 @@ def select_view(df: pd.DataFrame, view: str | None = None) -> pd.DataFrame:
     return df[df["view"].astype(str) == view].reset_index(drop=True)
 
 
-def _read_uavcas_csv(path: Path) -> pd.DataFrame:
-    files = _ts_files(path) or [path]
-    frames = []
-    for f in files:
-        df = read_uavcas_csv(f)
-        if "label" not in df.columns:
-            raise CsvFormatError(f"{f}: no 'label' column")
-        # one file pair per run (as `uavcas export` writes them): its name is the run id
-        df.insert(0, "run_id", f.name[: -len(_TS_SUFFIX)] if f.name.endswith(_TS_SUFFIX) else f.stem)
-        frames.append(df)
-    return pd.concat(frames, ignore_index=True)
-
-
 def _read_external(path: Path, fmt: str) -> pd.DataFrame:
     df = LOADERS[fmt](path)
     df["run_id"] = [f"{fmt}-{i}" for i in range(len(df))]
@@ -118,12 +102,17 @@ def load_any(path: str | Path, fmt: str | None = None, view: str | None = None) 
     if fmt == "uavcas":
         df = read_flows(flows_path(p))
     elif fmt == "uavcas-csv":
-        df = _read_uavcas_csv(p)
+        imp = read_layout(p)
+        df = imp.frame
+        df.attrs["lacks"] = imp.lacks
     else:
         df = _read_external(p, fmt)
+    attrs = dict(df.attrs)
     df = select_view(df, view)
+    df.attrs.update(attrs)
+    standard = df.attrs.setdefault("feature_standard", DEFAULT_STANDARD)
     if fmt != "uavcas":
         df["label"] = df["label"].astype(str).str.strip().replace(_BENIGN_NAMES)
-        df.attrs["absent_features"] = [f for f in FEATURES if f not in df.columns or df[f].isna().all()]
+        df.attrs["absent_features"] = [f for f in feature_columns(standard) if f not in df.columns or df[f].isna().all()]
     df.attrs["source"] = fmt
     return df

@@ -2,9 +2,10 @@
 
     DATASET_DIR/shards/<run_id>.parquet   one run (re-extracting the run replaces it)
     DATASET_DIR/flows.parquet             union of all shards, rewritten after every extract
-    DATASET_DIR/dataset.json              schema version, views, label modes and rules, class
-                                          counts, packet effect counts, seeds, twin profiles
-                                          (name + SHA-256), runs, library versions
+    DATASET_DIR/dataset.json              schema version, feature standard and the unit of
+                                          every feature column, views, flow rules, label modes
+                                          and rules, class counts, packet effect counts, seeds,
+                                          twin profiles (name + SHA-256), runs, library versions
 
 Extraction itself is `uavcas.extract`. A run is identified by run.json's `run_id` when present,
 else by the run directory's name; one shard per run id, so a run appears once whatever view or labels it was last extracted with.
@@ -24,14 +25,14 @@ import pyarrow as pa
 import pyarrow.compute as pc
 import pyarrow.parquet as pq
 
-from uavcas.atomic import atomic_write_text
+from uavcas.atomic import atomic_write_text, ensure_out_dir
 from uavcas.extract import ShardInfo, extract
-from uavcas.schema import CLASSES, EFFECTS, SCHEMA_VERSION
+from uavcas.schema import CLASSES, DEFAULT_STANDARD, EFFECTS, SCHEMA_VERSION
 from uavcas.versions import package_versions
 
-from .parquet import to_table, table_meta, write_table
+from .parquet import META_KEY, table_meta, table_standard, to_table, write_table
 
-__all__ = ["DatasetError", "ShardInfo", "extract_run", "read_card", "rebuild"]
+__all__ = ["DatasetError", "ShardInfo", "extract_run", "import_layout", "read_card", "rebuild"]
 
 
 class DatasetError(ValueError):
@@ -47,17 +48,18 @@ def extract_run(
     allow_truncated: bool = False,
     run_id: str | None = None,
     min_attack_fraction: float = 0.0,
+    features: str = DEFAULT_STANDARD,
 ) -> ShardInfo:
     """`uavcas.extract.extract` one run into its shard; then flows.parquet and dataset.json are rebuilt.
 
     `run_id` overrides the run's own id (a campaign names runs by manifest index).
     """
+    out_dir = ensure_out_dir(out_dir)
     shard = extract(run_dir, view=view, labels=labels, min_packets=min_packets,
-                    allow_truncated=allow_truncated, run_id=run_id, min_attack_fraction=min_attack_fraction)
-    out_dir = Path(out_dir)
-    out_dir.mkdir(parents=True, exist_ok=True)
+                    allow_truncated=allow_truncated, run_id=run_id, min_attack_fraction=min_attack_fraction,
+                    features=features)
     with _locked(out_dir):
-        write_table(to_table(shard.frame, meta=asdict(shard.info)), out_dir / "shards" / f"{shard.info.run_id}.parquet")
+        write_table(to_table(shard.frame, meta=asdict(shard.info), standard=shard.info.features), out_dir / "shards" / f"{shard.info.run_id}.parquet")
         rebuild(out_dir)
     return shard.info
 
@@ -78,8 +80,13 @@ def rebuild(out_dir: Path) -> dict:
     if not shards:
         raise DatasetError(f"{out_dir}: no shards")
     tables = [pq.read_table(s) for s in shards]
+    standards = sorted({table_standard(t) for t in tables})
+    if len(standards) > 1:
+        raise DatasetError(f"{out_dir}: shards of different feature standards {standards}; extract every run with one --features")
+    standard = standards[0]
     union = pa.concat_tables([t.replace_schema_metadata(None) for t in tables])
-    write_table(union, out_dir / "flows.parquet")
+    write_table(union.replace_schema_metadata({META_KEY: json.dumps({"feature_standard": standard}).encode()}),
+                out_dir / "flows.parquet")
     runs = [table_meta(s) for s in shards]
     counts: dict[str, int] = {c: 0 for c in CLASSES}
     vc = pc.value_counts(union.column("label")).to_pylist() if union.num_rows else []
@@ -87,6 +94,7 @@ def rebuild(out_dir: Path) -> dict:
         counts[item["values"]] = counts.get(item["values"], 0) + int(item["counts"])
     card = {
         "schema_version": SCHEMA_VERSION,
+        "features": feature_card(standard),
         "n_flows": union.num_rows,
         "n_runs": len(shards),
         "views": sorted({r.get("view") for r in runs if r.get("view")}),
@@ -118,6 +126,16 @@ def _effect_counts(runs: list[dict]) -> dict[str, int]:
     return out
 
 
+def feature_card(standard: str) -> dict:
+    """The card's record of a feature standard: its name, source and the unit of every column."""
+    from uavcas.flows import cic, paper
+
+    mod = cic if standard == "cic" else paper
+    source = ("CICFlowMeter-4.0 BasicFlow/FlowGenerator (uavcas.flows.cic)" if standard == "cic"
+              else "Sripathm2/Collaborative-UAV-Dataset Scripts/6-build_stat_csv.py (uavcas.flows.paper)")
+    return {"standard": standard, "source": source, "units": dict(mod.UNITS)}
+
+
 def read_card(dataset_dir: Path) -> dict:
     path = Path(dataset_dir) / "dataset.json"
     if not path.exists():
@@ -126,3 +144,23 @@ def read_card(dataset_dir: Path) -> dict:
         return json.loads(path.read_text())
     except json.JSONDecodeError as exc:
         raise DatasetError(f"{path}: not JSON ({exc.msg})") from None
+
+
+def import_layout(src: Path, out_dir: Path) -> tuple[dict, "Imported"]:
+    """Read the authors' CSV layout at `src` into a new dataset directory `out_dir`.
+
+    `out_dir` must not hold a dataset already (nothing the tool did not create is replaced). The
+    flows become one shard, `shards/import.parquet`, whose metadata (and so the card's `runs`)
+    records the files read and what the layout lacks.
+    """
+    from .uavcas_csv import Imported, read_layout  # noqa: F401
+
+    out_dir = ensure_out_dir(out_dir)
+    if any(out_dir.iterdir()):
+        raise DatasetError(f"{out_dir}: not empty; import into a new directory")
+    imp = read_layout(Path(src))
+    meta = {"run_id": "import", "source": "uavcas-csv", "files": imp.files, "lacks": imp.lacks, "notes": imp.notes}
+    with _locked(out_dir):
+        write_table(to_table(imp.frame, meta=meta, standard="paper"), out_dir / "shards" / "import.parquet")
+        card = rebuild(out_dir)
+    return card, imp

@@ -115,7 +115,7 @@ def _packet_table(seqs, src_ips: list[int], src_ports: list[int], dst_ip: int, d
     size = np.concatenate([s[1] for s in seqs]).astype(np.uint32)
     total = int(n.sum())
     cols = {
-        "ts_s": np.concatenate([s[0] for s in seqs]).astype(np.float64),
+        "ts_ns": np.round(np.concatenate([s[0] for s in seqs]).astype(np.float64) * 1e9).astype(np.int64),
         "frame_len": size,
         "cap_len": size,
         "ip_version": np.full(total, 4, np.uint8),
@@ -130,6 +130,7 @@ def _packet_table(seqs, src_ips: list[int], src_ports: list[int], dst_ip: int, d
         "ttl": np.full(total, 64, np.uint8),
         "ip_id": np.zeros(total, np.uint32),
         "tcp_seq": np.zeros(total, np.uint32),
+        "ip_len": np.maximum(size.astype(np.int64) - 14, 40).astype(np.uint32),  # Ethernet frames
         "ip_hdr_len": np.full(total, 20, np.uint16),
         "l4_hdr_len": np.full(total, 20, np.uint16),
         "frame_index": np.arange(total, dtype=np.int64),
@@ -146,7 +147,9 @@ def _flow_table(seqs, src_ips: list[int], src_ports: list[int], sequences: bool)
 
     dst_ip = int(ipaddress.IPv4Address(_SERVER_IP))
     table = _packet_table(seqs, src_ips, src_ports, dst_ip, _SERVER_PORT)
-    flows = assemble(table, FlowConfig(view="5tuple", dedup=False))
+    # one flow per generated sequence: no termination rule may split one
+    whole = FlowConfig(view="5tuple", dedup=False, idle_timeout_s=0, active_timeout_s=0, fin_rst=False, syn_restart=False)
+    flows = assemble(table, whole)
     if flows.n_flows != len(seqs):  # every flow has its own key by construction
         raise AssertionError(f"{len(seqs)} synthetic flows assembled into {flows.n_flows}")
     df = flow_frame(table, flows, sequences=sequences)
@@ -194,6 +197,7 @@ def make_flows(runs: int = 48, flows_per_run: int = 60, seed: int = 0, sequences
     shift = 1.7e9 + rng.uniform(0, 60, len(df))
     df["first_ts"] = df["first_ts"] + shift
     df["last_ts"] = df["last_ts"] + shift
+    df["first_ts_ns"] = df["first_ts_ns"] + np.round(shift * 1e9).astype(np.int64)
     return df
 
 

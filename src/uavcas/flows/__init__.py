@@ -1,8 +1,11 @@
 """flows: capture files -> packet table -> bidirectional flows -> per-flow sequences and 47 features.
 
-`read_packets` (packets.py) decodes pcap/pcapng captures into numpy columns, `assemble`
-(assemble.py) groups packets into flows, `flow_frame` (features.py) computes one row per flow.
-`extract_flows` chains the three for the common case.
+`read_packets` (packets.py) decodes pcap/pcapng captures block by block into numpy columns
+(pcapio.py framing, decode.py protocols, fragments.py IP fragments), `assemble` (assemble.py)
+groups packets into flows, `flow_frame` (features.py) computes one row per flow with the features
+of a standard (cic.py: CICFlowMeter's; paper.py: the authors'). `extract_flows` chains the three
+in memory (the extraction stage needs the packets for its labels); `iter_flow_frames`
+(stream.py) streams one capture with bounded memory.
 """
 
 from __future__ import annotations
@@ -13,15 +16,18 @@ from pathlib import Path
 
 import pandas as pd
 
+from uavcas.schema import DEFAULT_STANDARD
+
 from .assemble import DEFAULT_MIN_PACKETS, MAX_PACKETS_PER_FLOW, VIEWS, FlowConfig, Flows, assemble
-from .features import CSV_LEAD_COLUMNS, flow_frame
-from .packets import PacketTable, read_packets
+from .features import CSV_LEAD_COLUMNS, STANDARDS, flow_frame
+from .packets import CaptureStats, PacketTable, read_packets
 from .pcapio import CaptureError
+from .stream import StreamReport, iter_flow_frames
 
 __all__ = [
-    "CSV_LEAD_COLUMNS", "DEFAULT_MIN_PACKETS", "MAX_PACKETS_PER_FLOW", "VIEWS", "CaptureError",
-    "Extraction", "FlowConfig", "Flows", "PacketTable", "assemble", "extract_flows", "flow_frame",
-    "read_packets",
+    "CSV_LEAD_COLUMNS", "DEFAULT_MIN_PACKETS", "MAX_PACKETS_PER_FLOW", "STANDARDS", "VIEWS", "CaptureError",
+    "CaptureStats", "Extraction", "FlowConfig", "Flows", "PacketTable", "StreamReport", "assemble",
+    "extract_flows", "flow_frame", "iter_flow_frames", "read_packets",
 ]  # fmt: skip
 
 
@@ -38,7 +44,8 @@ def extract_flows(
     points: Sequence[str] | None = None,
     allow_truncated: bool = False,
     sequences: bool = True,
+    standard: str = DEFAULT_STANDARD,
 ) -> Extraction:
     packets = read_packets(paths, points=points, allow_truncated=allow_truncated)
     flows = assemble(packets, config)
-    return Extraction(packets, flows, flow_frame(packets, flows, sequences=sequences))
+    return Extraction(packets, flows, flow_frame(packets, flows, sequences=sequences, standard=standard))

@@ -1,11 +1,20 @@
 """Vectorised protocol decoding: link layer -> IPv4/IPv6 -> TCP/UDP/ICMP, all records at once.
 
-Every header field is gathered with numpy fancy indexing over the capture buffer (no per-packet
+Every header field is gathered with numpy fancy indexing over a block's buffer (no per-packet
 Python). Reads are guarded by the captured length, so a snap-length-truncated packet never
-borrows bytes from the next record: a packet whose IP header is not fully captured is dropped
-(counted in `DecodeStats.dropped_short`), one whose L4 header is not captured keeps ports 0.
-Non-IP frames (ARP, LLDP, ...) are dropped and counted, as nfstream and the paper's tshark
-filter do.
+borrows bytes from the next record. What cannot be decoded is dropped AND counted in
+`DecodeStats`, which the command line reports on stderr:
+- `dropped_short`: the IP header itself was not captured (snap length below link + IP header);
+- `l4_cut`: the transport header was cut by the snap length (TCP needs its first 14 bytes, up to
+  the flags; UDP its 4 bytes of ports), so ports or flags are unknown and the packet cannot be
+  put in its flow (ports 0 would merge unrelated conversations);
+- `null_unknown`: a DLT_NULL/LOOP packet whose 4-byte family field matches no address family
+  or Ethernet type in either byte order;
+- `dropped_non_ip`: other non-IP frames (ARP, LLDP, ...), as nfstream and tshark's `ip` filter.
+IPv6 TCP at snap length 68 (Ethernet 14 + IPv6 40 + 14 bytes of TCP) keeps ports and flags.
+
+IP fragments: the first fragment carries the transport header; later fragments are marked
+(`frag` 2) and get their datagram's ports in `uavcas.flows.fragments`.
 """
 
 from __future__ import annotations
@@ -21,9 +30,14 @@ LT_NULL, LT_ETHERNET, LT_RAW_A, LT_RAW_B, LT_RAW, LT_LOOP = 0, 1, 12, 14, 101, 1
 LT_SLL, LT_IPV4, LT_IPV6, LT_SLL2 = 113, 228, 229, 276
 SUPPORTED_LINKTYPES = (LT_NULL, LT_ETHERNET, LT_RAW_A, LT_RAW_B, LT_RAW, LT_LOOP, LT_SLL, LT_IPV4, LT_IPV6, LT_SLL2)
 ETH_IPV4, ETH_IPV6 = 0x0800, 0x86DD
+# BSD address-family values of IPv6 in a DLT_NULL header: Linux 10, NetBSD/OpenBSD 24,
+# FreeBSD 28, Darwin 30 (tcpdump's BSD_AFNUM_INET6_*); IPv4 is 2 everywhere.
+AF_INET, AF_INET6 = (2,), (10, 24, 28, 30)
 IPV4_MAPPED = np.uint64(0x0000FFFF00000000)  # IPv4 a.b.c.d is stored as ::ffff:a.b.c.d
 IPV6_EXT_HEADERS = (0, 43, 60)  # hop-by-hop, routing, destination options (length in 8-octet units)
 IPV6_FRAGMENT = 44
+TCP_MIN_CAPTURED, UDP_MIN_CAPTURED = 14, 4  # bytes of L4 header needed: TCP through its flags, UDP ports
+FRAG_NONE, FRAG_FIRST, FRAG_LATER = 0, 1, 2
 
 
 @dataclass(frozen=True)
@@ -33,24 +47,44 @@ class DecodeStats:
     dropped_non_ip: int
     dropped_short: int
     unsupported_linktypes: tuple[int, ...]
+    l4_cut: int = 0
+    null_unknown: int = 0
+    snaplen: int = 0
 
 
 class _Gather:
-    """Big-endian field reads at per-packet byte offsets, clipped to the padded buffer."""
+    """Big-endian field reads at per-packet byte offsets.
+
+    A read that would run past the buffer is moved back inside it; its value is garbage, but every
+    caller discards fields beyond a record's captured length, so a valid field is never moved.
+    """
 
     def __init__(self, buf: np.ndarray):
         self.buf = buf
-        self.limit = buf.shape[0] - 16
-
-    def _idx(self, pos: np.ndarray) -> np.ndarray:
-        return np.minimum(pos, self.limit)
+        self.size = buf.shape[0]
 
     def u8(self, pos: np.ndarray) -> np.ndarray:
-        return self.buf[self._idx(pos)]
+        return self.buf[np.minimum(pos, self.size - 1)]
 
     def be(self, pos: np.ndarray, width: int) -> np.ndarray:
-        b = self.buf[self._idx(pos)[:, None] + np.arange(width)]
+        b = self.buf[np.minimum(pos, self.size - width)[:, None] + np.arange(width)]
         return np.ascontiguousarray(b).view(f">u{width}").ravel()
+
+
+def _null_ethertype(g: _Gather, off: np.ndarray) -> np.ndarray:
+    """Ethernet type of DLT_NULL / LOOP records, whatever byte order wrote the family field.
+
+    The field is an address family in the capturing host's byte order (tcpdump: if the upper 16
+    bits are set, swap). Some systems put an Ethernet type there instead, either as the value or
+    in its last two bytes (Cisco-HDLC-like `0f 00 08 00`); all of these are accepted.
+    """
+    be = g.be(off, 4).astype(np.int64)
+    le = g.be(off, 4).byteswap().astype(np.int64)
+    fam = np.where((le & 0xFFFF0000) == 0, le, be)
+    low = be & 0xFFFF
+    v4 = np.isin(fam, AF_INET) | (fam == ETH_IPV4) | (low == ETH_IPV4)
+    v6 = np.isin(fam, AF_INET6) | (fam == ETH_IPV6) | (low == ETH_IPV6)
+    return np.where(v4, ETH_IPV4, np.where(v6, ETH_IPV6, 0))
 
 
 def decode(raw: RawCapture) -> tuple[dict[str, np.ndarray], DecodeStats]:
@@ -81,11 +115,11 @@ def decode(raw: RawCapture) -> tuple[dict[str, np.ndarray], DecodeStats]:
     if sll2.any():
         ethertype[sll2], l3[sll2] = g.be(off[sll2], 2), off[sll2] + 20
     bsd = (lt == LT_NULL) | (lt == LT_LOOP)
+    null_unknown = 0
     if bsd.any():
-        fam_le = g.be(off[bsd], 4).byteswap()  # DLT_NULL: host byte order (little endian here)
-        fam = np.where(lt[bsd] == LT_LOOP, g.be(off[bsd], 4), fam_le).astype(np.int64)
-        ethertype[bsd] = np.where(fam == 2, ETH_IPV4, np.where(np.isin(fam, (24, 28, 30)), ETH_IPV6, 0))
+        ethertype[bsd] = _null_ethertype(g, off[bsd])
         l3[bsd] = off[bsd] + 4
+        null_unknown = int((ethertype[bsd] == 0).sum())
     raw_ip = np.isin(lt, (LT_RAW_A, LT_RAW_B, LT_RAW, LT_IPV4, LT_IPV6))
     if raw_ip.any():
         ver = g.u8(off[raw_ip]) >> 4
@@ -103,6 +137,7 @@ def decode(raw: RawCapture) -> tuple[dict[str, np.ndarray], DecodeStats]:
     short = int(((is4 | is6) & ~keep).sum())
     idx = np.flatnonzero(keep)
     l3, end, ihl = l3[idx], end[idx], ihl[idx]
+    wire_l3 = raw.wire_len[idx].astype(np.int64) - (l3 - off[idx])  # IP bytes on the wire
     v4 = full4[idx]
     v6 = ~v4
     m = idx.shape[0]
@@ -110,7 +145,9 @@ def decode(raw: RawCapture) -> tuple[dict[str, np.ndarray], DecodeStats]:
     proto = np.zeros(m, dtype=np.int64)
     ttl = np.zeros(m, dtype=np.uint8)
     ip_id = np.zeros(m, dtype=np.uint32)
+    ip_len = np.zeros(m, dtype=np.int64)
     frag_off = np.zeros(m, dtype=np.int64)
+    more = np.zeros(m, dtype=bool)
     src_hi = np.zeros(m, dtype=np.uint64)
     src_lo = np.zeros(m, dtype=np.uint64)
     dst_hi = np.zeros(m, dtype=np.uint64)
@@ -122,18 +159,22 @@ def decode(raw: RawCapture) -> tuple[dict[str, np.ndarray], DecodeStats]:
         proto[v4] = g.u8(p + 9)
         ttl[v4] = g.u8(p + 8)
         ip_id[v4] = g.be(p + 4, 2)
-        frag_off[v4] = g.be(p + 6, 2) & 0x1FFF
+        ip_len[v4] = g.be(p + 2, 2)
+        fw = g.be(p + 6, 2).astype(np.int64)
+        frag_off[v4], more[v4] = fw & 0x1FFF, (fw & 0x2000) != 0
         src_lo[v4] = g.be(p + 12, 4).astype(np.uint64) | IPV4_MAPPED
         dst_lo[v4] = g.be(p + 16, 4).astype(np.uint64) | IPV4_MAPPED
         l4[v4] = p + ihl[v4]
     if v6.any():
         p = l3[v6]
         ttl[v6] = g.u8(p + 7)  # hop limit
+        ip_len[v6] = 40 + g.be(p + 4, 2).astype(np.int64)
         src_hi[v6], src_lo[v6] = g.be(p + 8, 8), g.be(p + 16, 8)
         dst_hi[v6], dst_lo[v6] = g.be(p + 24, 8), g.be(p + 32, 8)
         nh = g.u8(p + 6).astype(np.int64)
         pos = p + 40
         f_off = np.zeros(p.shape[0], dtype=np.int64)
+        f_more = np.zeros(p.shape[0], dtype=bool)
         f_id = np.zeros(p.shape[0], dtype=np.uint32)
         e = end[v6]
         for _ in range(4):  # a few extension headers; real traffic rarely chains more
@@ -142,16 +183,24 @@ def decode(raw: RawCapture) -> tuple[dict[str, np.ndarray], DecodeStats]:
             if not (ext.any() or frag.any()):
                 break
             step = np.where(ext, (g.u8(pos + 1).astype(np.int64) + 1) * 8, np.where(frag, 8, 0))
-            f_off = np.where(frag, g.be(pos + 2, 2).astype(np.int64) >> 3, f_off)
+            fw = g.be(pos + 2, 2).astype(np.int64)
+            f_off = np.where(frag, fw >> 3, f_off)
+            f_more = np.where(frag, (fw & 1) != 0, f_more)
             f_id = np.where(frag, g.be(pos + 4, 4), f_id)
             nh = np.where(ext | frag, g.u8(pos).astype(np.int64), nh)
             pos = pos + step
-        proto[v6], l4[v6], frag_off[v6], ip_id[v6] = nh, pos, f_off, f_id
+        proto[v6], l4[v6], frag_off[v6], more[v6], ip_id[v6] = nh, pos, f_off, f_more, f_id
+    # IPv4 total length 0 (TSO) or shorter than the header: fall back to the wire length
+    ip_len = np.where(ip_len >= (l4 - l3), ip_len, wire_l3)
 
     first_frag = frag_off == 0  # later fragments carry no L4 header
-    tcp = (proto == 6) & first_frag & (l4 + 20 <= end)
-    udp = (proto == 17) & first_frag & (l4 + 8 <= end)
-    icmp = ((proto == 1) | (proto == 58)) & first_frag & (l4 + 8 <= end)
+    captured_l4 = end - l4
+    tcp = (proto == 6) & first_frag
+    udp = (proto == 17) & first_frag
+    cut = (tcp & (captured_l4 < TCP_MIN_CAPTURED)) | (udp & (captured_l4 < UDP_MIN_CAPTURED))
+    tcp &= ~cut
+    udp &= ~cut
+    icmp = ((proto == 1) | (proto == 58)) & first_frag
     sport = np.zeros(m, dtype=np.uint16)
     dport = np.zeros(m, dtype=np.uint16)
     flags = np.zeros(m, dtype=np.uint16)
@@ -168,9 +217,11 @@ def decode(raw: RawCapture) -> tuple[dict[str, np.ndarray], DecodeStats]:
         flags[tcp] = g.u8(q + 13).astype(np.uint16) | ((b12 & 1) << 8)  # NS bit as 0x100
         l4_hdr[tcp] = (b12 >> 4) * 4
     l4_hdr[udp | icmp] = 8
+    frag = np.where(frag_off > 0, FRAG_LATER, np.where(more, FRAG_FIRST, FRAG_NONE)).astype(np.uint8)
 
+    ok = ~cut
     cols = {
-        "ts_s": raw.ts_s[idx],
+        "ts_ns": raw.ts_ns[idx],
         "frame_len": raw.wire_len[idx],
         "cap_len": raw.cap_len[idx],
         "ip_version": np.where(v4, 4, 6).astype(np.uint8),
@@ -185,15 +236,23 @@ def decode(raw: RawCapture) -> tuple[dict[str, np.ndarray], DecodeStats]:
         "ttl": ttl,
         "ip_id": ip_id,
         "tcp_seq": seq,
+        "ip_len": ip_len.astype(np.uint32),
         "ip_hdr_len": (l4 - l3).astype(np.uint16),
         "l4_hdr_len": l4_hdr,
-        "frame_index": idx.astype(np.int64),
+        "frame_index": idx.astype(np.int64) + raw.first_record,
+        "frag": frag,
     }
+    if cut.any():
+        cols = {k: v[ok] for k, v in cols.items()}
+    n_cut = int(cut.sum())
     stats = DecodeStats(
         records=n,
-        ip_packets=m,
+        ip_packets=m - n_cut,
         dropped_non_ip=int(n - m - short),
         dropped_short=short,
         unsupported_linktypes=unsupported,
+        l4_cut=n_cut,
+        null_unknown=null_unknown,
+        snaplen=raw.snaplen,
     )
     return cols, stats

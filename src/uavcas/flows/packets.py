@@ -1,19 +1,27 @@
 """The packet table: one row per IP packet of one or more captures, as numpy columns.
 
 Columns (all numpy arrays of equal length):
-  ts_s float64 (Unix seconds), frame_len uint32 (wire length, tshark frame.len), cap_len uint32,
-  ip_version uint8 (4/6), src_hi/src_lo/dst_hi/dst_lo uint64 (the 128-bit address; IPv4 is stored
-  IPv4-mapped ::ffff:a.b.c.d so both families share one key), sport/dport uint16, proto uint8,
-  tcp_flags uint16 (FIN 0x01 SYN 0x02 RST 0x04 PSH 0x08 ACK 0x10 URG 0x20 ECE 0x40 CWR 0x80
-  NS 0x100), ttl uint8 (hop limit for IPv6), ip_id uint32 (IPv6: fragment id or 0), tcp_seq uint32,
-  ip_hdr_len/l4_hdr_len uint16 (parsed header bytes, incl. options / extension headers),
-  frame_index int64 (record number in its file), point int16 (index into `points`).
+  ts_ns int64 (Unix nanoseconds, exact), frame_len uint32 (wire length, tshark frame.len), cap_len
+  uint32, ip_version uint8 (4/6), src_hi/src_lo/dst_hi/dst_lo uint64 (the 128-bit address; IPv4
+  is stored IPv4-mapped ::ffff:a.b.c.d so both families share one key), sport/dport uint16 (a later
+  IP fragment carries its datagram's ports, `uavcas.flows.fragments`), proto uint8, tcp_flags
+  uint16 (FIN 0x01 SYN 0x02 RST 0x04 PSH 0x08 ACK 0x10 URG 0x20 ECE 0x40 CWR 0x80 NS 0x100), ttl
+  uint8 (hop limit for IPv6), ip_id uint32 (IPv6: fragment id or 0), tcp_seq uint32, ip_len uint32
+  (IP total length from the header: bytes on the wire above the link layer, whatever the snap
+  length), ip_hdr_len/l4_hdr_len uint16 (parsed header bytes, incl. options / extension headers;
+  l4 0 for later fragments), frame_index int64 (record number in its file), point int16 (index
+  into `points`).
+`table["ts_s"]` gives float64 seconds for convenience (derived, rounded to ~0.2 us at today's
+epoch); computations that need exact time use `ts_ns`.
+
+Captures are read a block at a time (`iter_packet_blocks`), so a file is never held whole in
+memory; `read_packets` concatenates the decoded blocks of all files.
 """
 
 from __future__ import annotations
 
 import ipaddress
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -21,13 +29,15 @@ import numpy as np
 import pandas as pd
 
 from .decode import DecodeStats, decode
-from .pcapio import CaptureError, read_capture
+from .fragments import FragmentResolver
+from .pcapio import CHUNK_BYTES, CaptureError, iter_capture
 
 COLUMNS: tuple[str, ...] = (
-    "ts_s", "frame_len", "cap_len", "ip_version", "src_hi", "src_lo", "dst_hi", "dst_lo",
-    "sport", "dport", "proto", "tcp_flags", "ttl", "ip_id", "tcp_seq", "ip_hdr_len",
+    "ts_ns", "frame_len", "cap_len", "ip_version", "src_hi", "src_lo", "dst_hi", "dst_lo",
+    "sport", "dport", "proto", "tcp_flags", "ttl", "ip_id", "tcp_seq", "ip_len", "ip_hdr_len",
     "l4_hdr_len", "frame_index", "point",
 )  # fmt: skip
+ETHERNET_HEADER = 14
 
 
 @dataclass(frozen=True)
@@ -37,16 +47,72 @@ class Truncation:
 
 
 @dataclass
+class CaptureStats:
+    """What one capture file held and what could not be used (summed over its blocks)."""
+
+    path: str
+    records: int = 0
+    ip_packets: int = 0
+    dropped_non_ip: int = 0
+    dropped_short: int = 0
+    l4_cut: int = 0
+    null_unknown: int = 0
+    orphan_fragments: int = 0
+    snaplen: int = 0
+    unsupported_linktypes: tuple[int, ...] = ()
+
+    def add(self, st: DecodeStats) -> None:
+        self.records += st.records
+        self.ip_packets += st.ip_packets
+        self.dropped_non_ip += st.dropped_non_ip
+        self.dropped_short += st.dropped_short
+        self.l4_cut += st.l4_cut
+        self.null_unknown += st.null_unknown
+        self.snaplen = st.snaplen
+        self.unsupported_linktypes = tuple(sorted(set(self.unsupported_linktypes) | set(st.unsupported_linktypes)))
+
+    def warnings(self) -> list[str]:
+        """One line per kind of packet that was left out (for stderr)."""
+        snap = f" (snap length {self.snaplen} bytes)" if self.snaplen else ""
+        out = []
+        if self.l4_cut:
+            out.append(f"{self.path}: {self.l4_cut} of {self.records} packets had their transport header cut by the "
+                       f"snap length{snap}; ports/flags unknown, left out of the flows")  # fmt: skip
+        if self.dropped_short:
+            out.append(f"{self.path}: {self.dropped_short} of {self.records} packets had their IP header cut by the "
+                       f"snap length{snap}; left out")  # fmt: skip
+        if self.null_unknown:
+            out.append(f"{self.path}: {self.null_unknown} DLT_NULL/LOOP packets with an unknown family field; left out")
+        if self.orphan_fragments:
+            out.append(f"{self.path}: {self.orphan_fragments} IP fragments whose first fragment is not in the capture; "
+                       "left out of the flows")  # fmt: skip
+        return out
+
+
+@dataclass
 class PacketTable:
     cols: dict[str, np.ndarray]
     points: tuple[str, ...]  # capture point names, indexed by cols["point"]
-    stats: list[DecodeStats] = field(default_factory=list)
+    stats: list[CaptureStats] = field(default_factory=list)
     truncations: list[Truncation] = field(default_factory=list)
 
+    def __post_init__(self) -> None:
+        c = self.cols
+        # Tables built by hand (synthetic flows, tests) may give float seconds and no IP length.
+        if "ts_ns" not in c and "ts_s" in c:
+            c["ts_ns"] = np.round(np.asarray(c.pop("ts_s"), dtype=np.float64) * 1e9).astype(np.int64)
+        if "ip_len" not in c and "frame_len" in c:
+            c["ip_len"] = np.maximum(np.asarray(c["frame_len"]).astype(np.int64) - ETHERNET_HEADER, 0).astype(np.uint32)
+        self._ts_s: np.ndarray | None = None
+
     def __len__(self) -> int:
-        return int(self.cols["ts_s"].shape[0])
+        return int(self.cols["ts_ns"].shape[0])
 
     def __getitem__(self, name: str) -> np.ndarray:
+        if name == "ts_s":
+            if self._ts_s is None:
+                self._ts_s = ns_to_s(self.cols["ts_ns"])
+            return self._ts_s
         return self.cols[name]
 
     def take(self, idx: np.ndarray) -> "PacketTable":
@@ -55,16 +121,61 @@ class PacketTable:
     def to_pandas(self) -> pd.DataFrame:
         """Readable frame: addresses as strings, capture point names (for inspection and tests)."""
         df = pd.DataFrame({k: v for k, v in self.cols.items() if k not in ("src_hi", "src_lo", "dst_hi", "dst_lo")})
-        df.insert(4, "src_ip", addresses_to_str(self.cols["src_hi"], self.cols["src_lo"]))
-        df.insert(5, "dst_ip", addresses_to_str(self.cols["dst_hi"], self.cols["dst_lo"]))
+        df.insert(1, "ts_s", self["ts_s"])
+        df.insert(5, "src_ip", addresses_to_str(self.cols["src_hi"], self.cols["src_lo"]))
+        df.insert(6, "dst_ip", addresses_to_str(self.cols["dst_hi"], self.cols["dst_lo"]))
         df["point"] = np.asarray(self.points, dtype=object)[self.cols["point"]] if len(df) else []
         return df
+
+
+def ns_to_s(ns: np.ndarray) -> np.ndarray:
+    """int64 ns -> float64 s, correctly rounded for epoch times (whole seconds are exact)."""
+    ns = np.asarray(ns, dtype=np.int64)
+    sec = ns // 1_000_000_000
+    return sec.astype(np.float64) + (ns - sec * 1_000_000_000).astype(np.float64) / 1e9
+
+
+def empty_columns() -> dict[str, np.ndarray]:
+    dtypes = {"ts_ns": np.int64, "frame_len": np.uint32, "cap_len": np.uint32, "ip_version": np.uint8,
+              "src_hi": np.uint64, "src_lo": np.uint64, "dst_hi": np.uint64, "dst_lo": np.uint64,
+              "sport": np.uint16, "dport": np.uint16, "proto": np.uint8, "tcp_flags": np.uint16, "ttl": np.uint8,
+              "ip_id": np.uint32, "tcp_seq": np.uint32, "ip_len": np.uint32, "ip_hdr_len": np.uint16,
+              "l4_hdr_len": np.uint16, "frame_index": np.int64, "point": np.int16}  # fmt: skip
+    return {c: np.zeros(0, dtype=dtypes[c]) for c in COLUMNS}
+
+
+def iter_packet_blocks(
+    path: str | Path, point: int, stats: CaptureStats, truncations: list[Truncation],
+    allow_truncated: bool = False, chunk_bytes: int = CHUNK_BYTES,
+) -> Iterator[dict[str, np.ndarray]]:  # fmt: skip
+    """Decoded packet columns of one capture file, a block at a time (fragments resolved).
+
+    `stats` and `truncations` are filled as the blocks go by.
+    """
+    frags = FragmentResolver()
+    blocks = iter_capture(path, allow_truncated=allow_truncated, chunk_bytes=chunk_bytes)
+    raw = next(blocks, None)
+    while raw is not None:
+        nxt = next(blocks, None)
+        cols, st = decode(raw)
+        stats.add(st)
+        if st.unsupported_linktypes and stats.ip_packets == 0 and stats.records and nxt is None:
+            raise CaptureError(f"{path}: unsupported link type(s) {list(st.unsupported_linktypes)} at byte offset 20")
+        if raw.truncated_at is not None:
+            truncations.append(Truncation(str(path), raw.truncated_at))
+        cols = frags.resolve(cols, final=nxt is None)
+        del cols["frag"]
+        cols["point"] = np.full(cols["ts_ns"].shape[0], point, dtype=np.int16)
+        yield cols
+        raw = nxt
+    stats.orphan_fragments = frags.orphans
 
 
 def read_packets(
     paths: Sequence[str | Path],
     points: Sequence[str] | None = None,
     allow_truncated: bool = False,
+    chunk_bytes: int = CHUNK_BYTES,
 ) -> PacketTable:
     """Read captures into one table; `points` names each file's capture point (default: file stem)."""
     paths = [Path(p) for p in paths]
@@ -72,22 +183,13 @@ def read_packets(
     if len(names) != len(paths):
         raise ValueError("one capture point name per capture file is needed")
     parts: list[dict[str, np.ndarray]] = []
-    stats: list[DecodeStats] = []
+    stats: list[CaptureStats] = []
     truncs: list[Truncation] = []
     for k, path in enumerate(paths):
-        raw = read_capture(path, allow_truncated=allow_truncated)
-        cols, st = decode(raw)
-        if st.unsupported_linktypes and st.ip_packets == 0 and st.records:
-            raise CaptureError(f"{path}: unsupported link type(s) {list(st.unsupported_linktypes)} at byte offset 20")
-        cols["point"] = np.full(cols["ts_s"].shape[0], k, dtype=np.int16)
-        parts.append(cols)
+        st = CaptureStats(str(path))
         stats.append(st)
-        if raw.truncated_at is not None:
-            truncs.append(Truncation(str(path), raw.truncated_at))
-    if parts:
-        merged = {c: np.concatenate([p[c] for p in parts]) for c in COLUMNS}
-    else:
-        merged = {c: np.zeros(0) for c in COLUMNS}
+        parts.extend(iter_packet_blocks(path, k, st, truncs, allow_truncated, chunk_bytes))
+    merged = {c: np.concatenate([p[c] for p in parts]) for c in COLUMNS} if parts else empty_columns()
     return PacketTable(merged, names, stats, truncs)
 
 

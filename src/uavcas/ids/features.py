@@ -47,13 +47,13 @@ def check_feature_columns(columns: Iterable[str]) -> list[str]:
 def resolve_features(df: pd.DataFrame, spec: str | Iterable[str] | None = None) -> list[str]:
     """The feature columns to use on `df`.
 
-    None: the dataset's feature set (`df.attrs['features']` when it names one, else the first set
+    None: the dataset's feature set (`df.attrs['feature_standard']` when it names one, else the first set
     whose columns `df` all has, else the schema features `df` has); a name: that set, every
     column of which `df` must have; a list: those columns (checked to be features).
     """
     sets = feature_sets()
     if spec is None:
-        named = df.attrs.get("features")
+        named = df.attrs.get("feature_standard", df.attrs.get("features"))
         if isinstance(named, str) and named in sets:
             spec = named
         else:
