@@ -7,6 +7,7 @@ import os
 from pathlib import Path
 
 import typer
+from rich.markup import escape
 from rich.table import Table
 
 from .common import atomic_write_text, console, fail
@@ -47,8 +48,26 @@ def doctor(
     tools.add_row("python scapy", _yes(f.python_scapy))
     console.print(feats)
     console.print(tools)
+    _print_measurement(res)
+    if json_out is not None:
+        atomic_write_text(json_out, json.dumps(res.to_dict(measured=not no_measure), indent=1) + "\n")
+    if f.shaper == "none":
+        raise fail("no usable shaper on this kernel (need netem, or htb + nft numgen + NFQUEUE + br_netfilter)")
+    if res.error:
+        raise fail(f"self-measurement failed: {res.error}", code=1)
+    if res.saturated:
+        raise fail(f"the CPUs are saturated ({'; '.join(res.contention.reasons)}): emulated timing cannot be "
+                   "trusted on this machine now", code=1)
+    if not no_measure and not res.ok:
+        bad = ", ".join(c.name for c in res.checks if not c.ok)
+        raise fail(f"outside tolerance: {bad} (see the table){'; ' + res.warnings[0] if res.warnings else ''}",
+                   code=1)
+    console.print("[bold green]doctor: ok[/]")
+
+
+def _print_measurement(res) -> None:
     if res.checks:
-        meas = Table(title="two-hop self-measurement (uav0 -> uav1 -> uav2)", show_header=True)
+        meas = Table(title=f"two-hop self-measurement (uav0 -> uav1 -> uav2), {res.backend}", show_header=True)
         for col in ("figure", "configured", "expected", "measured", "tolerance", "ok"):
             meas.add_column(col)
         for c in res.checks:
@@ -56,18 +75,15 @@ def doctor(
                          f"[{c.low:.3f}, {c.high:.3f}]", _yes(c.ok))
         console.print(meas)
         if res.retried:
-            console.print(f"re-measured once: {', '.join(res.retried)}")
-    if json_out is not None:
-        atomic_write_text(json_out, json.dumps({
-            "features": f.to_dict(), "ok": res.ok if not no_measure else None, "error": res.error,
-            "checks": [{**c.__dict__, "ok": c.ok} for c in res.checks]}, indent=1, default=float) + "\n")
-    if f.shaper == "none":
-        raise fail("no usable shaper on this kernel (need netem, or htb + nft numgen + NFQUEUE + br_netfilter)")
-    if res.error:
-        raise fail(f"self-measurement failed: {res.error}", code=1)
-    if not no_measure and not res.ok:
-        raise fail("a measured figure is outside its tolerance (see the table)", code=1)
-    console.print("[bold green]doctor: ok[/]")
+            console.print(f"re-measured once: {', '.join(res.retried)}", highlight=False)
+    c = res.contention
+    if c is not None:
+        psi = "n/a" if c.psi_some_pct is None else f"{c.psi_some_pct:.0f} %"
+        console.print(f"CPU contention during the measurement: {c.level} (pressure {psi}, {c.runq_per_cpu:.2f} "
+                      f"runnable per CPU, steal {c.steal_pct:.0f} %, timer wake-ups late p50 "
+                      f"{c.timer_late_p50_us:.0f} us / p99 {c.timer_late_p99_us:.0f} us)", highlight=False)
+    for w in res.warnings:
+        console.print(f"[yellow]warning:[/] {escape(w)}", highlight=False)
 
 
 def clean(

@@ -202,6 +202,7 @@ def _play(st: _State, opt: RunOptions, notify: Callable[[Progress], None]) -> No
         st.events.append({"t_s": ev.t_s, "kind": ev.kind, "what": getattr(ev.obj, "attack_id", ev.obj),
                           "late_ms": round(late_ms, 3), "took_ms": round((time.time() - t_ev) * 1000, 3)})
     st.timings["schedule_s"] = time.time() - st.t0
+    emu.shaper.check()  # a delay stage lost in the last window fails the run too
 
 
 def _wind_down(st: _State, opt: RunOptions) -> None:

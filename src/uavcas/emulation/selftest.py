@@ -4,8 +4,8 @@ Topology: uav0 - uav1 - uav2 (line), so traffic uav0 -> uav2 crosses two shaped 
 Measured end to end with small Python endpoints started inside the namespaces:
 * TCP goodput (bulk transfer, slow start discarded) vs the configured rate x 1448/1514
   (HTB counts Ethernet frames of 1514 B carrying 1448 B of TCP payload with timestamps);
-* one-way delay of UDP probes (all namespaces share CLOCK_MONOTONIC, so send and receive
-  timestamps are directly comparable) vs the sum of the hops' delays;
+* one-way delay of UDP probes (all namespaces share one clock: the send time against the
+  kernel's receive timestamp) vs the sum of the hops' delays: median, p90 and p99;
 * UDP loss vs 1 - prod(1 - loss_hop), judged against the binomial 99 % interval.
 
 Endpoints: python -m uavcas.emulation.selftest {tcp-sink,tcp-source,udp-sink,udp-source} ...
@@ -16,15 +16,17 @@ from __future__ import annotations
 import argparse
 import json
 import socket
-import statistics
 import struct
 import subprocess
 import sys
 import time
 from dataclasses import dataclass
 
+import numpy as np
+
 TCP_PAYLOAD_FRACTION = 1448 / 1514
 PORT = 5999
+SO_TIMESTAMPNS = 35  # = SCM_TIMESTAMPNS (asm-generic/socket.h); not exported by Python's socket
 
 
 @dataclass(frozen=True)
@@ -37,9 +39,17 @@ class Check:
     low: float
     high: float
 
+    def __post_init__(self) -> None:  # plain floats: numpy scalars would leak into JSON as 1.0/0.0
+        for f in ("configured", "expected", "measured", "low", "high"):
+            object.__setattr__(self, f, float(getattr(self, f)))
+
     @property
     def ok(self) -> bool:
-        return self.low <= self.measured <= self.high
+        return bool(self.low <= self.measured <= self.high)
+
+    def to_dict(self) -> dict:
+        return {"name": self.name, "unit": self.unit, "configured": self.configured, "expected": self.expected,
+                "measured": self.measured, "low": self.low, "high": self.high, "ok": self.ok}
 
 
 @dataclass(frozen=True)
@@ -92,24 +102,29 @@ _END_MARKER = 2**64 - 1  # sequence number of the probe stream's last datagram
 
 
 def udp_sink(port: int, count: int, seconds: float) -> dict:
+    """Receives the probes; a probe's delay is the kernel's receive timestamp (SO_TIMESTAMPNS,
+    taken when the frame reaches this namespace's eth0) minus its send time, so this process's
+    own scheduling latency is not counted (it was 0.1-3 ms of every figure on a busy machine)."""
     s = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
     s.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4 << 20)
+    s.setsockopt(socket.SOL_SOCKET, SO_TIMESTAMPNS, 1)
     s.bind(("0.0.0.0", port))
     print("ready", flush=True)
     seen = set()
     delays = []
     deadline = time.monotonic() + seconds
     draining = False
+    anc_size = socket.CMSG_SPACE(16)
     while len(seen) < count:
         left = deadline - time.monotonic()
         if left <= 0:
             break
         s.settimeout(max(0.001, left))
         try:
-            data = s.recv(2048)
+            data, anc, _, _ = s.recvmsg(2048, anc_size)
         except socket.timeout:
             break
-        now = time.monotonic_ns()
+        now = kernel_rx_ns(anc)
         seq, sent_ns = struct.unpack_from("!QQ", data)
         if seq == _END_MARKER:
             if not draining:  # probes still held by the delay stage get 0.3 s more, then stop
@@ -118,15 +133,25 @@ def udp_sink(port: int, count: int, seconds: float) -> dict:
         if seq not in seen:
             seen.add(seq)
             delays.append((now - sent_ns) / 1e6)
-    delays.sort()
     return {"received": len(seen), "delays_ms": _summary(delays)}
+
+
+def kernel_rx_ns(ancillary: list[tuple[int, int, bytes]]) -> int:
+    """CLOCK_REALTIME ns of the SCM_TIMESTAMPNS message (now, if the kernel attached none)."""
+    for level, kind, data in ancillary:
+        if level == socket.SOL_SOCKET and kind == SO_TIMESTAMPNS and len(data) >= 16:
+            sec, nsec = struct.unpack_from("@qq", data)
+            return sec * 1_000_000_000 + nsec
+    return time.time_ns()
 
 
 def _summary(xs: list[float]) -> dict:
     if not xs:
         return {}
-    return {"median": statistics.median(xs), "p99": xs[min(len(xs) - 1, int(len(xs) * 0.99))],
-            "min": xs[0], "max": xs[-1], "mean": statistics.fmean(xs)}
+    a = np.asarray(xs)
+    p50, p90, p99 = np.percentile(a, [50, 90, 99])
+    return {"median": float(p50), "p90": float(p90), "p99": float(p99), "min": float(a.min()),
+            "max": float(a.max()), "mean": float(a.mean())}
 
 
 def udp_source(dst: str, port: int, count: int, pps: float, size: int) -> dict:
@@ -141,7 +166,7 @@ def udp_source(dst: str, port: int, count: int, pps: float, size: int) -> dict:
         due_now = min(count, int((time.monotonic() - start) * pps) + 1)
         while seq < due_now:
             try:
-                s.sendto(struct.pack("!QQ", seq, time.monotonic_ns()) + pad, (dst, port))
+                s.sendto(struct.pack("!QQ", seq, time.time_ns()) + pad, (dst, port))
             except BlockingIOError:
                 break
             seq += 1
@@ -207,10 +232,33 @@ def goodput_check(measured: float, rate_mbps: float, tol: float = 0.10) -> Check
     return Check("TCP goodput", "Mbit/s", rate_mbps, expected, measured, expected * (1 - tol), expected * (1 + tol))
 
 
-def delay_check(measured_ms: float, hops: list[HopConfig]) -> Check:
+@dataclass(frozen=True)
+class DelayTolerance:
+    """How far the one-way delay of light probe traffic may stray from the plan, per shaped hop.
+
+    Defaults: the median within 0.25 ms either side, p90 at most 0.5 ms and p99 at most 1 ms
+    above the planned delay. Probes are light (a few % of the rate), so queueing adds nothing
+    and every excess is the shaper's own error. These are twice the delay stage's per-hop
+    targets of issue #14 (p90 <= 0.2 ms, p99 <= 0.5 ms), so a stage meeting its targets passes
+    with margin, and one a busy machine pushes several times past them fails.
+    """
+
+    median_ms: float = 0.25
+    p90_ms: float = 0.5
+    p99_ms: float = 1.0
+
+
+def delay_checks(delays_ms: dict, hops: list[HopConfig], tol: DelayTolerance = DelayTolerance()) -> list[Check]:
+    """Median, p90 and p99 of the measured one-way delay against the sum of the hops' delays."""
     expected = sum(h.delay_ms for h in hops)
-    tol = max(1.0, 0.10 * expected)
-    return Check("one-way delay (median)", "ms", expected, expected, measured_ms, expected - tol, expected + tol)
+    n = len(hops)
+    nan, low = float("nan"), expected - n * tol.median_ms  # nothing may arrive early either
+    return [Check("one-way delay p50", "ms", expected, expected, delays_ms.get("median", nan), low,
+                  expected + n * tol.median_ms),
+            Check("one-way delay p90", "ms", expected, expected, delays_ms.get("p90", nan), low,
+                  expected + n * tol.p90_ms),
+            Check("one-way delay p99", "ms", expected, expected, delays_ms.get("p99", nan), low,
+                  expected + n * tol.p99_ms)]
 
 
 def loss_check(measured: float, n: int, hops: list[HopConfig], confidence: float = 0.99) -> Check:
