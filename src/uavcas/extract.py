@@ -3,6 +3,10 @@
 Captures -> flows (`uavcas.flows`) -> ground-truth labels (`uavcas.labels`) -> identity and axis
 columns from the plan's typed scenario (nothing here parses the config string). Writing the shard
 and the dataset card is `uavcas.dataset.store`'s job.
+
+Only complete runs are extracted: run.json present with exit status 0. A run that was killed
+(no run.json), interrupted (130, 143) or failed (1) is refused unless `allow_incomplete`, and
+its shard then says so (`complete: false`, `run_exit_status`), as does the dataset card.
 """
 
 from __future__ import annotations
@@ -15,7 +19,7 @@ import pandas as pd
 
 from uavcas.flows import FlowConfig, extract_flows
 from uavcas.labels import label_flows, read_attack_log
-from uavcas.rundir import RunDir, RunDirError
+from uavcas.rundir import RunDir, RunDirError, RunInfo
 
 
 @dataclass(frozen=True)
@@ -31,6 +35,8 @@ class ShardInfo:
     class_counts: dict[str, int]
     truncations: list[str]
     extracted_unix: float
+    complete: bool = True  # the run finished with exit status 0
+    run_exit_status: int | None = 0  # run.json's (None: the run never wrote one)
 
 
 @dataclass(frozen=True)
@@ -52,8 +58,11 @@ def extract(
     min_packets: int | None = None,
     allow_truncated: bool = False,
     run_id: str | None = None,
+    allow_incomplete: bool = False,
 ) -> Shard:
-    """Flows + labels of one run. The run id is `run_id`, else run.json's, else the dir's name."""
+    """Flows + labels of one run. The run id is `run_id`, else run.json's, else the dir's name.
+
+    Raises RunDirError for a run that did not finish cleanly, unless `allow_incomplete`."""
     rd = RunDir(Path(run_dir))
     if not rd.root.is_dir():
         raise RunDirError(f"{rd.root}: not a directory")
@@ -61,6 +70,9 @@ def extract(
     if plan.scenario is None:
         raise RunDirError(f"{rd.plan_json}: config {plan.config!r} is no scenario (no axes to record)")
     info = rd.read_info()
+    problem = incomplete_reason(info)
+    if problem and not allow_incomplete:
+        raise RunDirError(f"{rd.root}: {problem}; extract it anyway with --allow-incomplete (marked incomplete)")
     pcaps = rd.pcaps()
     if not pcaps:
         raise RunDirError(f"{rd.root}: no captures in {rd.pcap_dir}")
@@ -88,5 +100,16 @@ def extract(
             class_counts=counts,
             truncations=[f"{t.path}@{t.offset}" for t in ex.packets.truncations],
             extracted_unix=time.time(),
+            complete=problem is None,
+            run_exit_status=info.exit_status if info else None,
         ),
     )
+
+
+def incomplete_reason(info: RunInfo | None) -> str | None:
+    """Why a run's data is incomplete (None: it finished with exit status 0)."""
+    if info is None:
+        return "the run never finished (no run.json: killed, or still running)"
+    if info.exit_status != 0:
+        return f"the run did not finish cleanly (exit status {info.exit_status}: {info.exit_reason})"
+    return None

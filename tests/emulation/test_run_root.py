@@ -289,6 +289,11 @@ def test_kill_9_then_uavcas_clean_leaves_nothing(tmp_path):
     assert r.returncode == 0, r.stderr
     time.sleep(1.5)  # orphaned `timeout` wrappers exit once their tools are gone
     assert_nothing_left(prefix)
+    # the killed run's directory: known as a run (its marker), but never extracted as complete
+    assert json.loads((out / ".uavcas-run").read_text())["prefix"] == prefix and not (out / "run.json").exists()
+    r = subprocess.run([UAVCAS, "extract", str(out), "--out", str(tmp_path / "ds")], capture_output=True, text=True,
+                       timeout=120)
+    assert r.returncode == 2 and "never finished" in r.stderr and not (tmp_path / "ds").exists()
 
 
 def test_benign_run_http_and_optional_telemetry(tmp_path):

@@ -107,9 +107,12 @@ def clean(
     for r in reports:
         if r.skipped_live:
             console.print(f"{r.prefix}: live run, skipped (use --force)")
-        else:
+        elif r.error is None:
             console.print(f"{r.prefix}: removed {len(r.namespaces)} namespaces, killed {len(r.killed_pids)} "
                           f"processes, removed {len(r.cgroups)} cgroups")
+    failed = [r for r in reports if r.error is not None]
+    if failed:
+        raise fail("; ".join(f"{r.prefix}: {r.error}" for r in failed) + " (run `uavcas clean` again)", code=1)
 
 
 def _yes(v: bool) -> str:

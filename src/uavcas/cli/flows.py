@@ -103,16 +103,22 @@ def extract_cmd(
     labels: str = typer.Option("ours", "--labels", help="ours (packet-exact / attack window) or paper (IP membership)."),
     min_packets: int = typer.Option(None, "--min-packets", help="Drop smaller flows (default by view)."),
     allow_truncated: bool = typer.Option(False, "--allow-truncated", help="Keep the packets before a truncation."),
+    allow_incomplete: bool = typer.Option(False, "--allow-incomplete",
+                                          help="Also extract a run that was killed or failed (marked incomplete)."),
 ) -> None:
     """Extract one run into DATASET_DIR (its shard is replaced if it was extracted before)."""
     from uavcas.dataset.store import extract_run
 
     try:
-        info = extract_run(run_dir, out, view=view, labels=labels, min_packets=min_packets, allow_truncated=allow_truncated)
+        info = extract_run(run_dir, out, view=view, labels=labels, min_packets=min_packets,
+                           allow_truncated=allow_truncated, allow_incomplete=allow_incomplete)
     except _errors() as exc:
         raise fail(str(exc)) from None
     for t in info.truncations:
         err_console.print(f"[yellow]warning:[/] truncated capture {t}; kept the packets before it", highlight=False)
+    if not info.complete:
+        err_console.print(f"[yellow]warning:[/] run {info.run_id} is incomplete (exit status "
+                          f"{info.run_exit_status}); its shard is marked so", highlight=False)
     counts = ", ".join(f"{k} {v}" for k, v in sorted(info.class_counts.items()))
     console.print(f"run [bold]{info.run_id}[/]: {info.n_flows} flows from {info.n_packets} packets ({counts}) -> {out}", highlight=False)
 

@@ -45,13 +45,14 @@ def extract_run(
     min_packets: int | None = None,
     allow_truncated: bool = False,
     run_id: str | None = None,
+    allow_incomplete: bool = False,
 ) -> ShardInfo:
     """`uavcas.extract.extract` one run into its shard; then flows.parquet and dataset.json are rebuilt.
 
     `run_id` overrides the run's own id (a campaign names runs by manifest index).
     """
     shard = extract(run_dir, view=view, labels=labels, min_packets=min_packets,
-                    allow_truncated=allow_truncated, run_id=run_id)
+                    allow_truncated=allow_truncated, run_id=run_id, allow_incomplete=allow_incomplete)
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     with _locked(out_dir):
@@ -87,6 +88,7 @@ def rebuild(out_dir: Path) -> dict:
         "schema_version": SCHEMA_VERSION,
         "n_flows": union.num_rows,
         "n_runs": len(shards),
+        "n_incomplete_runs": sum(1 for r in runs if r.get("complete") is False),
         "views": sorted({r.get("view") for r in runs if r.get("view")}),
         "label_modes": sorted({r.get("labels") for r in runs if r.get("labels")}),
         "class_counts": counts,

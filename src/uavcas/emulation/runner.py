@@ -38,6 +38,8 @@ from .apps.traffic import BenignTraffic
 from .apps.versions import tool_versions
 from .attacks import AttackExecutor
 from .emulation import Emulation
+from .naming import new_prefix
+from .preflight import prepare_out_dir
 
 if TYPE_CHECKING:
     from uavcas.twin.model import Plan
@@ -86,27 +88,17 @@ def schedule(plan: "Plan") -> list[_Event]:
     return sorted(ev)
 
 
-def prepare_out_dir(out: Path) -> None:
-    """Create OUT, or reuse an empty one or a previous run's (its files are replaced)."""
-    rd = RunDir(out)
-    out.mkdir(parents=True, exist_ok=True)
-    shutil.rmtree(rd.pcap_dir, ignore_errors=True)
-    shutil.rmtree(rd.logs_dir, ignore_errors=True)
-    for f in rd.files():
-        f.unlink(missing_ok=True)
-    rd.pcap_dir.mkdir()
-
-
 def realize(plan: "Plan", out_dir: str | Path, options: RunOptions = RunOptions(),
             on_event: Callable[[Progress], None] | None = None, features=None) -> RunArtifacts:
     """Realise `plan` into `out_dir` in real time (needs root). See the module docstring."""
     out = Path(out_dir)
-    prepare_out_dir(out)
+    prefix = options.prefix or new_prefix()
+    prepare_out_dir(out, prefix)  # refuses a directory that is not an old run's (RunDirError)
     atomic_write_text(RunDir(out).plan_json, plan.to_json())
     notify = on_event or (lambda e: None)
     st = _State(plan, out, time.time())
     try:
-        with Emulation(plan, prefix=options.prefix, features=features) as emu:
+        with Emulation(plan, prefix=prefix, features=features) as emu:
             st.emu = emu
             st.timings["setup_s"] = time.time() - st.wall0
             notify(SetupDone(prefix=emu.prefix, seconds=st.timings["setup_s"]))
