@@ -315,3 +315,28 @@ def test_a_dead_link_drops_everything_and_reads_back_as_loss_one():
         assert applied[("uav0", "uav1")] == 1.0 and applied[("uav1", "uav0")] == 1.0
         assert applied[("uav1", "uav2")] == 0.0
         assert not reachable(emu, "uav0", "uav1") and reachable(emu, "uav1", "uav2")
+
+
+def test_flood_rate_holds_on_a_saturated_machine(tmp_path):
+    """Paced from outside, a flood keeps its nominal rate when every core is busy (the old
+    interval correction ran away to 2,500 pps when the schedule was late)."""
+    from uavcas.emulation.apps import flood
+
+    p = plan(nodes(3), [window(0, [link("uav0", "uav1"), link("uav1", "uav2")])])
+    hogs = [subprocess.Popen([sys.executable, "-c", "while True: pass"]) for _ in range(2 * os.cpu_count() + 1)]
+    try:
+        with Emulation(p, prefix=new_prefix()) as emu:
+            emu.apply_window(0)
+            f = flood.Flood(emu, "dos-0", "uav0", emu.ip("uav2"), 1000.0, tmp_path, 60)
+            for proc in f.prepare():
+                emu._procs.append(proc.popen)
+            assert f.counters() == {"syn": 0, "gated": 1}  # hping3's own first SYN never left
+            flood.start_all([f])
+            time.sleep(3.0)
+            (res,), _ = flood.stop_all([f])
+    finally:
+        for h in hogs:
+            h.kill()
+            h.wait()
+    assert res.syn_count == res.signals  # one SYN per signal, none merged
+    assert 900 <= res.measured_pps <= 1100, res

@@ -166,12 +166,21 @@ def test_ddos_from_two_attackers_at_the_nominal_rate(tmp_path):
     assert art.exit_status == 0, art.exit_reason
     start, stop, rec = rc.windows(art.out_dir)["ddos-0"]
     victim = rc.read_pcap(art.out_dir / "pcap" / "s-uav0.pcap")
-    rates = [r for r in rc.attack_log(art.out_dir) if r["event"] == "rate"]
-    assert sorted(r["attacker"] for r in rates) == ["uav1", "uav2"]
-    for ip in rec["attacker_ips"]:
-        fc = rc.flood_check(victim, ip, rec["victim_ips"][0], start, stop)
-        assert fc.outside == 0
-        assert 850 <= fc.pps <= 1150, (ip, fc.pps)
+    rates = {r["attacker"]: r for r in rc.attack_log(art.out_dir) if r["event"] == "rate"}
+    assert sorted(rates) == ["uav1", "uav2"] and all(r["restarts"] == 0 for r in rates.values())
+    # one hping3 per attacker for the whole attack: its source ports never repeat
+    assert len(list((art.out_dir / "logs").glob("hping3-*.err"))) == 2
+    pcaps = {pc.stem: rc.read_pcap(pc) for pc in (art.out_dir / "pcap").glob("s-*.pcap")}
+    v_ip = rec["victim_ips"][0]
+    for name, ip in zip(rec["attackers"], rec["attacker_ips"]):
+        own = [x for x in pcaps[f"s-{name}"] if rc.is_syn(x) and x.src == ip and x.dst == v_ip]
+        assert len({x.sport for x in own}) == len(own) == rates[name]["syn_count"]  # the nft count is exact
+        span = own[-1].t - own[0].t
+        assert 900 <= (len(own) - 1) / span <= 1100, (name, (len(own) - 1) / span)
+        for point, pk in pcaps.items():  # every SYN inside the logged window, at every switch
+            assert rc.flood_check(pk, ip, v_ip, start, stop).outside == 0, (name, point)
+        fc = rc.flood_check(victim, ip, v_ip, start, stop)
+        assert 900 <= fc.pps <= 1100, (ip, fc.pps)
     assert art.run_info.capture_drops == 0
     assert_nothing_left(art.run_info.prefix)
 

@@ -7,7 +7,9 @@ records of the attack log (`uavcas.events`), per-attack state, background proces
 current window (re-applied when a family changes forwarding mid-window).
 
 Times: a `start` record's t_unix is taken just *before* the action and a `stop` record's just
-*after* it is fully undone, so every attack packet and effect lies inside [start, stop).
+*after* it is fully undone, so every attack packet and effect lies inside [start, stop); a
+family may return a later start (when its first packet could go) or a later stop (when its
+last packet can have crossed the network) as `t_unix` in its extra fields.
 """
 
 from __future__ import annotations
@@ -109,6 +111,7 @@ class AttackExecutor:
         except Exception as e:
             raise AttackError(f"{a.attack_id}: start failed: {e}") from e
         self.active[a.attack_id] = a
+        t = extra.pop("t_unix", t)  # a family may know better when its first packet could go
         rec = AttackStart(attack_id=a.attack_id, family=a.family, attackers=list(a.attackers),
                           attacker_ips=[self.ip(x) for x in a.attackers], victims=list(a.victims),
                           victim_ips=[self.ip(v) for v in a.victims], t_unix=t, params=dict(a.params),
@@ -123,7 +126,8 @@ class AttackExecutor:
             extra = family(a.family).stop(self, a)
         finally:
             self.active.pop(a.attack_id, None)
-        rec = AttackStop(attack_id=a.attack_id, family=a.family, t_unix=time.time(), **extra)
+        # a family may know better when its last packet can have crossed the network
+        rec = AttackStop(attack_id=a.attack_id, family=a.family, t_unix=extra.pop("t_unix", time.time()), **extra)
         self.log(rec)
         return rec
 
