@@ -19,6 +19,9 @@ def doctor(
     no_measure: bool = typer.Option(False, "--no-measure", help="Only report features and tools."),
     json_out: Path = typer.Option(None, "--json", help="Also write the result as JSON here."),
     prefix: str = typer.Option(None, "--prefix", help="Prefix for the test emulation (default: random)."),
+    vm: bool = typer.Option(False, "--vm", help="Run the self-test with the netem backend in a stock Debian kernel "
+                                                "under QEMU (this checkout over 9p; ~0.5-3 min)."),
+    vm_accel: str = typer.Option("auto", "--vm-accel", help="auto (KVM if it boots, else TCG), kvm or tcg."),
 ) -> None:
     """Report kernel features, the chosen shaper and tools; measure a two-hop shaped path."""
     from uavcas.emulation.doctor import run_doctor
@@ -29,25 +32,13 @@ def doctor(
             check_prefix(prefix)
         except ValueError as e:
             raise fail(f"--prefix: {e}") from None
+    if vm:
+        return _doctor_vm(vm_accel, json_out)
     if os.geteuid() != 0 and not no_measure:
         raise fail("doctor's measurement needs root (network namespaces); use --no-measure to only report")
     res = run_doctor(prefix, measure=not no_measure)
     f = res.features
-    feats = Table(title="kernel features", show_header=True)
-    feats.add_column("feature")
-    feats.add_column("found")
-    for name in ("netns", "netem", "htb", "tbf", "nft", "nft_bridge_numgen", "nfqueue", "br_netfilter"):
-        feats.add_row(name, _yes(getattr(f, name)))
-    feats.add_row("cgroup cpu", f.cgroup or "[red]none[/]")
-    feats.add_row("shaper", f"[bold]{f.shaper}[/]")
-    tools = Table(title="tools", show_header=True)
-    tools.add_column("tool")
-    tools.add_column("path")
-    for t in TOOLS_SHOWN:
-        tools.add_row(t, f.tools.get(t) or "[red]missing[/]")
-    tools.add_row("python scapy", _yes(f.python_scapy))
-    console.print(feats)
-    console.print(tools)
+    _print_features(f)
     _print_measurement(res)
     if json_out is not None:
         atomic_write_text(json_out, json.dumps(res.to_dict(measured=not no_measure), indent=1) + "\n")
@@ -63,6 +54,55 @@ def doctor(
         raise fail(f"outside tolerance: {bad} (see the table){'; ' + res.warnings[0] if res.warnings else ''}",
                    code=1)
     console.print("[bold green]doctor: ok[/]")
+
+
+def _doctor_vm(accel: str, json_out: Path | None) -> None:
+    from uavcas.emulation import vm
+    from uavcas.emulation.doctor import DoctorResult
+
+    if accel not in ("auto", "kvm", "tcg"):
+        raise fail(f"--vm-accel: {accel!r} is not one of auto, kvm, tcg")
+    why = vm.unavailable()
+    if why:
+        raise fail(why)
+    k = vm.installed()
+    console.print(f"guest kernel {k.version} ({k.root}), host root over 9p read-only", highlight=False)
+    d, run, err = vm.doctor_in_vm(accel, log=lambda s: console.print(f"  {s}", highlight=False))
+    if err:
+        raise fail(f"VM self-test failed: {err}", code=1)
+    res = DoctorResult.from_dict(d)
+    _print_features(res.features)
+    _print_measurement(res)
+    console.print(f"guest run: {run.accel.upper()}, {run.wall_s:.0f} s from boot to power-off", highlight=False)
+    if json_out is not None:
+        atomic_write_text(json_out, json.dumps({**res.to_dict(), "vm": {"kernel": k.version, "accel": run.accel,
+                                                                        "wall_s": round(run.wall_s, 1)}},
+                                               indent=1) + "\n")
+    if res.error:
+        raise fail(f"self-measurement in the guest failed: {res.error}", code=1)
+    if res.backend != "netem":
+        raise fail(f"the guest kernel chose the {res.backend} backend, not netem", code=1)
+    if not res.ok:
+        raise fail(f"outside tolerance in the guest: {', '.join(c.name for c in res.checks if not c.ok)}", code=1)
+    console.print(f"[bold green]doctor --vm: ok[/] (netem backend, kernel {k.version}, {run.accel})", highlight=False)
+
+
+def _print_features(f) -> None:
+    feats = Table(title="kernel features", show_header=True)
+    feats.add_column("feature")
+    feats.add_column("found")
+    for name in ("netns", "netem", "htb", "tbf", "nft", "nft_bridge_numgen", "nfqueue", "br_netfilter"):
+        feats.add_row(name, _yes(getattr(f, name)))
+    feats.add_row("cgroup cpu", f.cgroup or "[red]none[/]")
+    feats.add_row("shaper", f"[bold]{f.shaper}[/]")
+    tools = Table(title="tools", show_header=True)
+    tools.add_column("tool")
+    tools.add_column("path")
+    for t in TOOLS_SHOWN:
+        tools.add_row(t, f.tools.get(t) or "[red]missing[/]")
+    tools.add_row("python scapy", _yes(f.python_scapy))
+    console.print(feats)
+    console.print(tools)
 
 
 def _print_measurement(res) -> None:

@@ -29,7 +29,7 @@ import time
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
-import numpy as np
+from .selftest import percentile
 
 PSI_CPU = Path("/proc/pressure/cpu")
 PROC_STAT = Path("/proc/stat")
@@ -124,9 +124,9 @@ def _sample_until_eof(stream) -> dict:
         if woke >= next_sample:
             runq.append(max(0, _procs_running() - 1))  # this process is running while it reads
             next_sample = woke + SAMPLE_EVERY_S
-    late = np.asarray(late_us or [0.0])
-    return {"late_p50_us": float(np.percentile(late, 50)), "late_p99_us": float(np.percentile(late, 99)),
-            "wakeups": len(late_us), "runq": float(np.mean(runq or [0]))}
+    late = sorted(late_us or [0.0])
+    return {"late_p50_us": percentile(late, 50), "late_p99_us": percentile(late, 99),
+            "wakeups": len(late_us), "runq": sum(runq) / len(runq) if runq else 0.0}
 
 
 class ContentionProbe:

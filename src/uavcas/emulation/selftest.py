@@ -22,8 +22,6 @@ import sys
 import time
 from dataclasses import dataclass
 
-import numpy as np
-
 TCP_PAYLOAD_FRACTION = 1448 / 1514
 PORT = 5999
 SO_TIMESTAMPNS = 35  # = SCM_TIMESTAMPNS (asm-generic/socket.h); not exported by Python's socket
@@ -145,13 +143,21 @@ def kernel_rx_ns(ancillary: list[tuple[int, int, bytes]]) -> int:
     return time.time_ns()
 
 
+def percentile(sorted_xs: list[float], q: float) -> float:
+    """Linear-interpolated percentile (numpy's default) of a sorted list: stdlib only, because
+    every endpoint imports this module and a slow guest pays each import dearly."""
+    pos = (len(sorted_xs) - 1) * q / 100
+    lo = int(pos)
+    hi = min(lo + 1, len(sorted_xs) - 1)
+    return sorted_xs[lo] + (sorted_xs[hi] - sorted_xs[lo]) * (pos - lo)
+
+
 def _summary(xs: list[float]) -> dict:
     if not xs:
         return {}
-    a = np.asarray(xs)
-    p50, p90, p99 = np.percentile(a, [50, 90, 99])
-    return {"median": float(p50), "p90": float(p90), "p99": float(p99), "min": float(a.min()),
-            "max": float(a.max()), "mean": float(a.mean())}
+    a = sorted(xs)
+    return {"median": percentile(a, 50), "p90": percentile(a, 90), "p99": percentile(a, 99), "min": a[0],
+            "max": a[-1], "mean": sum(a) / len(a)}
 
 
 def udp_source(dst: str, port: int, count: int, pps: float, size: int) -> dict:
@@ -198,24 +204,26 @@ def _result(p: subprocess.Popen, timeout_s: float) -> dict:
     return json.loads(lines[-1])
 
 
-def measure_goodput(emu, src: str, dst: str, seconds: float = 2.5) -> float:
-    sink = _endpoint(emu, dst, ["tcp-sink", "--port", str(PORT), "--seconds", str(seconds)], seconds + 15)
+def measure_goodput(emu, src: str, dst: str, seconds: float = 2.5, startup_s: float = 10.0) -> float:
+    """`startup_s`: how long an endpoint may take to start (an emulated CPU needs a minute)."""
+    wait = seconds + startup_s
+    sink = _endpoint(emu, dst, ["tcp-sink", "--port", str(PORT), "--seconds", str(wait)], 2 * wait)
     _wait_ready(sink)
     source = _endpoint(emu, src, ["tcp-source", "--dst", emu.ip(dst), "--port", str(PORT), "--seconds",
-                                  str(seconds)], seconds + 15)
-    _result(source, seconds + 15)
-    return _result(sink, seconds + 15)["goodput_mbps"]
+                                  str(seconds)], 2 * wait)
+    _result(source, 2 * wait)
+    return _result(sink, 2 * wait)["goodput_mbps"]
 
 
-def measure_udp(emu, src: str, dst: str, count: int, pps: float, size: int = 200) -> dict:
-    secs = count / pps + 5
+def measure_udp(emu, src: str, dst: str, count: int, pps: float, size: int = 200, startup_s: float = 5.0) -> dict:
+    secs = count / pps + startup_s
     sink = _endpoint(emu, dst, ["udp-sink", "--port", str(PORT + 1), "--count", str(count),
-                                "--seconds", str(secs)], secs + 10)
+                                "--seconds", str(secs)], secs + 10 + startup_s)
     _wait_ready(sink)
     source = _endpoint(emu, src, ["udp-source", "--dst", emu.ip(dst), "--port", str(PORT + 1), "--count",
-                                  str(count), "--pps", str(pps), "--size", str(size)], secs + 10)
-    sent = _result(source, secs + 10)
-    got = _result(sink, secs + 10)
+                                  str(count), "--pps", str(pps), "--size", str(size)], secs + 10 + startup_s)
+    sent = _result(source, secs + 10 + startup_s)
+    got = _result(sink, secs + 10 + startup_s)
     return {**got, **sent, "loss": 1 - got["received"] / count}
 
 
@@ -245,7 +253,7 @@ class DelayTolerance:
 
     median_ms: float = 0.25
     p90_ms: float = 0.5
-    p99_ms: float = 1.0
+    p99_ms: float | None = 1.0  # None: the tail is not judged (an emulated CPU's is its own)
 
 
 def delay_checks(delays_ms: dict, hops: list[HopConfig], tol: DelayTolerance = DelayTolerance()) -> list[Check]:
@@ -257,8 +265,8 @@ def delay_checks(delays_ms: dict, hops: list[HopConfig], tol: DelayTolerance = D
                   expected + n * tol.median_ms),
             Check("one-way delay p90", "ms", expected, expected, delays_ms.get("p90", nan), low,
                   expected + n * tol.p90_ms),
-            Check("one-way delay p99", "ms", expected, expected, delays_ms.get("p99", nan), low,
-                  expected + n * tol.p99_ms)]
+            *([Check("one-way delay p99", "ms", expected, expected, delays_ms.get("p99", nan), low,
+                     expected + n * tol.p99_ms)] if tol.p99_ms is not None else [])]
 
 
 def loss_check(measured: float, n: int, hops: list[HopConfig], confidence: float = 0.99) -> Check:
