@@ -176,8 +176,11 @@ class Flood:
         os.setpriority(os.PRIO_PROCESS, pid, PRIORITY_NICE)
         err_path = self.log_dir / f"pacer-{self.table}-{self.attacker}.err"
         with open(err_path, "wb") as err:
+            # --ns only names the run (`ps` shows whose pacer it is); it exits with its runner
+            # (stdin EOF) or its hping3 (pidfd)
             pacer = subprocess.Popen([sys.executable, "-m", "uavcas.emulation.apps.flood", "pace", "--pid", str(pid),
-                                      "--pps", str(1e6 / self.interval_us)], stdin=subprocess.PIPE,
+                                      "--pps", str(1e6 / self.interval_us), "--ns", self.emu.ns(self.attacker)],
+                                     stdin=subprocess.PIPE,
                                      stdout=subprocess.PIPE, stderr=err, start_new_session=True)
         self.pacer = Proc(f"pacer-{self.attacker}", pacer, Path(os.devnull), err_path)
         if pacer.stdout.readline().strip() != b"ready":
@@ -325,6 +328,7 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("mode", choices=["pace"])
     ap.add_argument("--pid", type=int, required=True)
     ap.add_argument("--pps", type=float, required=True)
+    ap.add_argument("--ns", help="the attacker's namespace (informational)")
     a = ap.parse_args(argv)
     ctypes.CDLL(None).prctl(_PR_SET_TIMERSLACK, 1, 0, 0, 0)  # deadlines to the microsecond, not 50 us
     try:
