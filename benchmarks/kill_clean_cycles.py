@@ -21,21 +21,10 @@ import tempfile
 import time
 from pathlib import Path
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "emulation" / "apps"))
+import runcheck as rc  # noqa: E402
+
 UAVCAS = str(Path(sys.executable).parent / "uavcas")
-
-
-def registered(pid: int, since: float, timeout_s: float = 60.0) -> str:
-    deadline = time.monotonic() + timeout_s
-    while time.monotonic() < deadline:
-        for p in Path("/run/uavcas").glob("uc*"):
-            try:
-                rec = json.loads((p / "run.json").read_text())
-            except (OSError, ValueError):
-                continue
-            if rec["pid"] == pid and rec["created_unix"] >= since:
-                return p.name
-        time.sleep(0.1)
-    raise RuntimeError("the run never registered")
 
 
 def leftovers(prefix: str) -> list[str]:
@@ -53,7 +42,7 @@ def cycle(config: str, kill_after_s: float, work: Path) -> dict:
     t = time.time()
     proc = subprocess.Popen([UAVCAS, "run", config, "--windows", "3", "--out", str(out)], stdout=subprocess.DEVNULL,
                             stderr=subprocess.DEVNULL, start_new_session=True)
-    prefix = registered(proc.pid, t)
+    prefix = rc.wait_registered(proc.pid, t)
     time.sleep(kill_after_s)
     os.kill(proc.pid, signal.SIGKILL)
     proc.wait(10)

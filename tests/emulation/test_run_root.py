@@ -237,24 +237,6 @@ def test_done_when_dos_run_via_cli(tmp_path):
     assert_nothing_left(info["prefix"])
 
 
-def wait_registered(pid: int, since_unix: float, timeout_s: float = 30.0) -> str:
-    """The prefix under which the run with this PID registered itself in /run/uavcas.
-
-    PIDs wrap (pid_max is 32768 here) and a crashed run's registry entry outlives its process,
-    so an entry only counts if it was written after our process started."""
-    deadline = time.monotonic() + timeout_s
-    while time.monotonic() < deadline:
-        for p in Path("/run/uavcas").glob("uc*"):
-            try:
-                rec = json.loads((p / "run.json").read_text())
-            except (FileNotFoundError, ValueError):
-                continue
-            if rec["pid"] == pid and rec["created_unix"] >= since_unix:
-                return p.name
-        time.sleep(0.2)
-    raise AssertionError("the run never registered")
-
-
 def _ignore_sigint() -> None:
     signal.signal(signal.SIGINT, signal.SIG_IGN)
 
@@ -271,7 +253,7 @@ def test_interrupted_run_leaves_nothing(tmp_path, sig, code, how):
     proc = subprocess.Popen([UAVCAS, "run", "replay=50,200,10,5,inc+dos=1000-4-1-image-logdist-adaptive-random-30-95",
                              "--windows", "3", "--out", str(out)], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                             text=True, start_new_session=True, preexec_fn=_ignore_sigint if how == "ignored" else None)
-    prefix = wait_registered(proc.pid, t)
+    prefix = rc.wait_registered(proc.pid, t)
     time.sleep(4)
     (os.killpg if how == "group" else os.kill)(proc.pid, sig)
     _, err = proc.communicate(timeout=60)
@@ -290,7 +272,7 @@ def test_kill_9_then_uavcas_clean_leaves_nothing(tmp_path):
     proc = subprocess.Popen([UAVCAS, "run", "ddos=1000-4-1-image-logdist-adaptive-random-30-95", "--windows", "3",
                              "--out", str(out)], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
                             start_new_session=True)
-    prefix = wait_registered(proc.pid, t)
+    prefix = rc.wait_registered(proc.pid, t)
     time.sleep(4)
     os.kill(proc.pid, signal.SIGKILL)
     proc.wait(10)

@@ -6,7 +6,8 @@
             emu.popen("uav0", ["nginx", ...])      # processes inside a node namespace
 
 Teardown runs on exit, on exceptions, on SIGTERM/SIGHUP (turned into SystemExit), on SIGINT
-(KeyboardInterrupt, even when the parent started us with SIGINT ignored) and at interpreter exit; after SIGKILL, `uavcas clean` uses the run's registry entry.
+(KeyboardInterrupt, even when the parent started us with SIGINT ignored) and at interpreter
+exit; after SIGKILL, `uavcas clean` uses the run's registry entry.
 """
 
 from __future__ import annotations

@@ -35,6 +35,8 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
+from . import kernel
+
 VM_DIR = Path(os.environ.get("UAVCAS_VM_DIR", "/var/cache/uavcas/vm"))
 META_PACKAGE = "linux-image-amd64"
 QEMU = "qemu-system-x86_64"
@@ -159,7 +161,7 @@ mount -t devtmpfs dev /dev
 echo "{INIT_MARKER}" > /dev/console
 {ins}
 mkdir -p /newroot
-mount -t 9p -o {opts},ro,cache=loose hostroot /newroot || {{ echo "uavcas-vm: no 9p root" > /dev/console; poweroff -f; }}
+mount -t 9p -o {opts},ro,cache=loose hostroot /newroot || {{ echo "uavcas-vm: no root" > /dev/console; poweroff -f; }}
 mount -t tmpfs -o mode=755 tmpfs /newroot/run
 mount -t tmpfs -o mode=1777 tmpfs /newroot/tmp
 mkdir -p {GUEST_OUT}
@@ -262,7 +264,8 @@ def boot(k: GuestKernel, out_dir: Path, script: str, accel: str, timeout_s: floa
     """Boot the guest once; None if `boot_deadline_s` passed without the init marker."""
     (out_dir / "guest.sh").write_text(script)
     console_path = out_dir / "console.log"
-    argv = qemu_argv(k, out_dir, accel, memory_mb, cpus)
+    # under `timeout` too: a guest outlives nothing, not even a SIGKILLed parent
+    argv = kernel.timed(qemu_argv(k, out_dir, accel, memory_mb, cpus), timeout_s + 30)
     t0 = time.monotonic()
     with open(console_path, "wb") as console:
         proc = subprocess.Popen(argv, stdin=subprocess.DEVNULL, stdout=console, stderr=subprocess.STDOUT,
@@ -278,8 +281,12 @@ def boot(k: GuestKernel, out_dir: Path, script: str, accel: str, timeout_s: floa
             pass
         finally:
             if proc.poll() is None:
-                proc.kill()
-                proc.wait()
+                proc.terminate()  # `timeout` passes it on to QEMU
+                try:
+                    proc.wait(10)
+                except subprocess.TimeoutExpired:
+                    proc.kill()
+                    proc.wait()
     rc_path = out_dir / "command.rc"
     rc = int(rc_path.read_text().strip()) if rc_path.exists() and rc_path.read_text().strip() else None
     return GuestRun(accel, time.monotonic() - t0, rc, out_dir, console_path.read_text(errors="replace"))
