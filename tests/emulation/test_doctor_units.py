@@ -10,7 +10,7 @@ import numpy as np
 
 from uavcas.emulation import contention
 from uavcas.emulation.contention import Contention
-from uavcas.emulation.doctor import DoctorResult
+from uavcas.emulation.doctor import EMULATED_CPU, DoctorResult
 from uavcas.emulation.probe import Features
 from uavcas.emulation.selftest import Check, DelayTolerance, HopConfig, delay_checks, kernel_rx_ns, loss_check
 
@@ -34,6 +34,8 @@ def test_delay_checks_scale_per_hop_and_bound_the_tail():
     assert (p90.high, p99.high) == (8.0, 9.0) and p50.low == 6.5
     assert not delay_checks({"median": 6.4, "p90": 7.0, "p99": 7.1}, HOPS, tol)[0].ok  # early is wrong too
     assert not any(c.ok for c in delay_checks({}, HOPS, tol))  # no probe arrived: nothing passes
+    only_median = delay_checks({"median": 8.9, "p90": 30.0, "p99": 60.0}, HOPS, EMULATED_CPU.tol)
+    assert [c.name for c in only_median] == ["one-way delay p50"] and only_median[0].ok  # TCG: tail not judged
 
 
 def test_check_is_plain_json_booleans_and_floats():

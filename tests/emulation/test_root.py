@@ -193,21 +193,24 @@ def test_sigkill_then_clean_removes_exactly_that_run():
         assert r.returncode == 0 and "removed 0 namespaces" in r.stdout
 
 
-def test_doctor_passes_unless_the_machine_is_saturated(tmp_path):
-    """On this shared 2-core machine other work can saturate the CPUs; the doctor must then
-    fail *and say so*. Otherwise every figure must be inside its tolerance."""
+def test_doctor_passes_on_a_quiet_machine_and_explains_any_failure(tmp_path):
+    """On this shared 2-core machine other work can contend for or saturate the CPUs. A quiet
+    machine must pass every check; otherwise a failure must name the measured contention (a
+    saturated machine always fails)."""
     r = subprocess.run([UAVCAS, "doctor", "--json", str(tmp_path / "d.json")], capture_output=True, text=True,
                        timeout=180)
     d = json.loads((tmp_path / "d.json").read_text())
     assert d["error"] is None and d["backend"] in ("htb-nft-nfqueue", "netem")
     assert [c["name"] for c in d["checks"]] == ["TCP goodput", "one-way delay p50", "one-way delay p90",
                                                 "one-way delay p99", "loss (3000 probes)"]
-    assert d["checks"][1]["ok"] is True, d["checks"][1]  # the median holds even on a saturated machine
-    if d["contention"]["level"] == "saturated":
-        assert r.returncode == 1 and d["ok"] is False and "saturated" in r.stderr, r.stderr
-    else:
+    level = d["contention"]["level"]
+    if level == "quiet":
         assert r.returncode == 0 and d["ok"] is True, r.stdout + r.stderr
         assert "doctor: ok" in r.stdout
+    elif level == "saturated":
+        assert r.returncode == 1 and d["ok"] is False and "saturated" in r.stderr, r.stderr
+    else:
+        assert r.returncode == 0 or (r.returncode == 1 and "machine contended" in r.stderr), r.stdout + r.stderr
 
 
 def test_doctor_fails_on_a_saturated_machine(tmp_path):

@@ -58,6 +58,7 @@ def doctor(
 
 def _doctor_vm(accel: str, json_out: Path | None) -> None:
     from uavcas.emulation import vm
+    from uavcas.emulation.contention import ContentionProbe
     from uavcas.emulation.doctor import DoctorResult
 
     if accel not in ("auto", "kvm", "tcg"):
@@ -67,23 +68,28 @@ def _doctor_vm(accel: str, json_out: Path | None) -> None:
         raise fail(why)
     k = vm.installed()
     console.print(f"guest kernel {k.version} ({k.root}), host root over 9p read-only", highlight=False)
-    d, run, err = vm.doctor_in_vm(accel, log=lambda s: console.print(f"  {s}", highlight=False))
+    with ContentionProbe() as host:  # an emulated CPU is only as fast as the host lets it be
+        d, run, err = vm.doctor_in_vm(accel, log=lambda s: console.print(f"  {s}", highlight=False))
+    hc = host.result
+    busy = f"; the host was {hc.level}: {'; '.join(hc.reasons)}" if hc and hc.level != "quiet" else ""
     if err:
-        raise fail(f"VM self-test failed: {err}", code=1)
+        raise fail(f"VM self-test failed: {err}{busy}", code=1)
     res = DoctorResult.from_dict(d)
     _print_features(res.features)
     _print_measurement(res)
-    console.print(f"guest run: {run.accel.upper()}, {run.wall_s:.0f} s from boot to power-off", highlight=False)
+    console.print(f"guest run: {run.accel.upper()}, {run.wall_s:.0f} s from boot to power-off; host CPUs "
+                  f"{hc.level if hc else 'unknown'}", highlight=False)
     if json_out is not None:
-        atomic_write_text(json_out, json.dumps({**res.to_dict(), "vm": {"kernel": k.version, "accel": run.accel,
-                                                                        "wall_s": round(run.wall_s, 1)}},
-                                               indent=1) + "\n")
+        atomic_write_text(json_out, json.dumps({**res.to_dict(), "vm": {
+            "kernel": k.version, "accel": run.accel, "wall_s": round(run.wall_s, 1),
+            "host_contention": hc.to_dict() if hc else None}}, indent=1) + "\n")
     if res.error:
-        raise fail(f"self-measurement in the guest failed: {res.error}", code=1)
+        raise fail(f"self-measurement in the guest failed: {res.error}{busy}", code=1)
     if res.backend != "netem":
         raise fail(f"the guest kernel chose the {res.backend} backend, not netem", code=1)
     if not res.ok:
-        raise fail(f"outside tolerance in the guest: {', '.join(c.name for c in res.checks if not c.ok)}", code=1)
+        raise fail(f"outside tolerance in the guest: {', '.join(c.name for c in res.checks if not c.ok)}{busy}",
+                   code=1)
     console.print(f"[bold green]doctor --vm: ok[/] (netem backend, kernel {k.version}, {run.accel})", highlight=False)
 
 

@@ -40,11 +40,12 @@ NATIVE = DoctorProfile("native", [HopConfig(20.0, 1.0, 0.0)] * 2,
                        [HopConfig(20.0, 3.0, 0.02), HopConfig(20.0, 4.0, 0.03)], 3000, 1500.0, DelayTolerance(), True)
 # A guest on an emulated CPU (QEMU TCG): every packet costs it tens of microseconds, so a tenth
 # of the traffic; its timers fire late whenever the host preempts a vCPU thread (measured in the
-# guest: wake-ups 0.4 ms late at p50, 13 ms at p99), so the median and p90 get wider tolerances,
-# the p99 is not judged, and neither is contention (an emulated CPU always looks contended).
+# guest: wake-ups 0.3-0.5 ms late at p50, 10-46 ms at p99; netem's median delay 0.3-0.8 ms high
+# per hop, its p90 up to 3 ms), so the median gets 1 ms per hop, the tail is only reported, and
+# contention in the guest is not judged (an emulated CPU always looks contended; the host's is).
 EMULATED_CPU = DoctorProfile("emulated-cpu", [HopConfig(2.0, 1.0, 0.0)] * 2,
                              [HopConfig(2.0, 3.0, 0.02), HopConfig(2.0, 4.0, 0.03)], 1500, 150.0,
-                             DelayTolerance(median_ms=1.0, p90_ms=2.5, p99_ms=None), False, startup_s=120.0)
+                             DelayTolerance(median_ms=1.0, p90_ms=None, p99_ms=None), False, startup_s=120.0)
 PROFILES = {p.name: p for p in (NATIVE, EMULATED_CPU)}
 
 
