@@ -2,10 +2,11 @@
 
 Order of a run (t0 = wall-clock time of plan t = 0, written to run.json):
   namespaces + fabric + shaper (Emulation) -> one tcpdump per switch -> nginx on every UAV ->
-  replay processes (idle) -> window 0 applied -> t0 -> BS clients -> the schedule: window k at
-  t0 + k * window_s, each attack's start/stop at t0 + start_s/stop_s, a flood's rate check one
-  second in -> end at t0 + duration -> attacks, clients and servers stopped -> captures stopped
-  (SIGINT: flushed, drop counters read) -> namespaces removed.
+  attack processes prepared (idle: replayers, floods behind their gates) -> window 0 applied ->
+  t0 -> BS clients -> the schedule: window k at t0 + k * window_s, each attack's start/stop at
+  t0 + start_s/stop_s (and a family's calibration times) -> end at t0 + duration -> attacks,
+  clients and servers stopped -> captures stopped (SIGINT: flushed, drop counters read) ->
+  namespaces removed.
 
 Cleanup always happens: the Emulation context manager tears down on exceptions, SIGTERM/SIGHUP
 (turned into SystemExit by the core) and Ctrl-C (KeyboardInterrupt); tools run in their own
