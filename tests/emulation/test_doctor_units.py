@@ -58,6 +58,7 @@ def test_contention_levels():
     assert quiet(steal_pct=contention.CONTENDED_STEAL_PCT + 1).level == "contended"
     assert quiet(timer_late_p99_us=contention.SATURATED_TIMER_P99_US + 1).level == "saturated"
     assert quiet(runq_per_cpu=contention.SATURATED_RUNQ_PER_CPU + 0.1).level == "saturated"
+    assert quiet(psi_some_pct=contention.SATURATED_PSI_SOME_PCT + 1).level == "saturated"
     assert quiet(psi_some_pct=None).level == "quiet"  # kernels without PSI
 
 

@@ -37,14 +37,18 @@ TIMER_PERIOD_S = 0.002
 SAMPLE_EVERY_S = 0.05
 
 # "contended" when any of these is exceeded, "saturated" when the timer probe's p99 lateness
-# exceeds SATURATED_TIMER_P99_US or the run queue holds more than SATURATED_RUNQ_PER_CPU
-# runnable tasks per CPU on average (each task then gets at most 1/that of a CPU).
+# exceeds SATURATED_TIMER_P99_US, the run queue holds more than SATURATED_RUNQ_PER_CPU runnable
+# tasks per CPU on average (each task then gets at most 1/that of a CPU), or some task waited
+# for a CPU more than SATURATED_PSI_SOME_PCT of the time. Measured here: one CPU hog gives
+# pressure 15-36 %, 1.2-1.5 runnable per CPU, p99 lateness 0.8-3.9 ms; two hogs 62-81 %, 1.9-2.6,
+# 1.8-6 ms; `stress-ng --cpu 4` 77-98 %, 2.5-11, 0.2-10 ms (every signal alone can miss it).
 CONTENDED_PSI_SOME_PCT = 40.0
 CONTENDED_TIMER_P99_US = 1000.0
 CONTENDED_RUNQ_PER_CPU = 1.0
 CONTENDED_STEAL_PCT = 10.0
 SATURATED_TIMER_P99_US = 4000.0
 SATURATED_RUNQ_PER_CPU = 2.0
+SATURATED_PSI_SOME_PCT = 75.0
 
 
 @dataclass(frozen=True)
@@ -75,7 +79,8 @@ class Contention:
 
     @property
     def level(self) -> str:
-        if self.timer_late_p99_us > SATURATED_TIMER_P99_US or self.runq_per_cpu > SATURATED_RUNQ_PER_CPU:
+        if (self.timer_late_p99_us > SATURATED_TIMER_P99_US or self.runq_per_cpu > SATURATED_RUNQ_PER_CPU
+                or (self.psi_some_pct or 0.0) > SATURATED_PSI_SOME_PCT):
             return "saturated"
         return "contended" if self.reasons else "quiet"
 
