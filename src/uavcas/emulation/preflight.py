@@ -32,6 +32,9 @@ def preflight(plan: "Plan", out: Path) -> str | None:
         return "uavcas run needs root (network namespaces, bridges, tc); run it as root"
     if not Path("/proc/self/ns/net").exists():
         return "this kernel has no network namespaces (/proc/self/ns/net is missing)"
+    problem = out_dir_problem(out)  # the user's own argument first
+    if problem:
+        return problem
     fams = [family(f) for f in dict.fromkeys(a.family for a in plan.attacks)]
     tools = list(dict.fromkeys([*BASE_TOOLS, *(t for f in fams for t in f.tools)]))
     missing = [t for t in tools if shutil.which(t) is None]
@@ -41,7 +44,7 @@ def preflight(plan: "Plan", out: Path) -> str | None:
         for mod in f.python_modules:
             if importlib.util.find_spec(mod) is None:
                 return f"{f.name} needs python {mod} in this environment (pip install {mod})"
-    return out_dir_problem(out)
+    return None
 
 
 def out_dir_problem(out: Path) -> str | None:
