@@ -4,6 +4,8 @@
 #   scripts/setup.sh            runtime + test extras
 #   UAVCAS_NO_APT=1 ...         skip apt (e.g. not root; emulation tests are then skipped)
 #   UAVCAS_EXTRAS=test,dl ...   choose the pip extras (dl pulls torch==2.13.0, CPU)
+#   UAVCAS_NO_VM=1 ...          skip the guest kernel of `uavcas doctor --vm` (a stock Debian
+#                               kernel fetched with apt into /var/cache/uavcas/vm, ~400 MB)
 set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$here"
@@ -11,6 +13,7 @@ cd "$here"
 APT_PACKAGES=(
   iproute2 nftables iptables ethtool iputils-ping procps psmisc
   tcpdump tshark hping3 nginx-light curl iperf3
+  qemu-system-x86 busybox-static cpio kmod util-linux
 )
 
 log() { printf '[setup] %s\n' "$*" >&2; }
@@ -53,5 +56,11 @@ if .venv/bin/python -m uavcas.emulation.nfqdelay --build >/dev/null 2>&1; then
   log "delay stage: compiled verdict loop built"
 else
   log "delay stage: no C compiler, the pure-Python verdict loop will be used"
+fi
+if [[ "${UAVCAS_NO_APT:-0}" != "1" && "${UAVCAS_NO_VM:-0}" != "1" && "$(id -u)" == "0" ]] \
+    && command -v apt-get >/dev/null; then
+  # the kernel `uavcas doctor --vm` boots: apt-get download + dpkg -x + depmod + initramfs;
+  # does nothing when the current one is already there
+  .venv/bin/python -m uavcas.emulation.vm prepare
 fi
 log "ready: $(.venv/bin/uavcas --version)"

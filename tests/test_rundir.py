@@ -28,9 +28,12 @@ def test_paths_and_the_one_list_of_run_files(tmp_path):
     assert [p.name for p in rd.files()] == ["plan.json", "run.json", "attacks.jsonl", "shaping.jsonl",
                                           "forwarding.jsonl", "fidelity.json"]
     assert (rd.pcap_dir, rd.logs_dir) == (tmp_path / "pcap", tmp_path / "logs")
-    assert not rd.holds_run() and rd.read_info() is None and rd.read_attacks() == []
-    rd.shaping_jsonl.write_text("")
-    assert rd.holds_run()
+    assert rd.read_owner() is None and rd.read_info() is None and rd.read_attacks() == []
+    rd.owner_path.write_text('{"prefix": "uc0001", "pid": 7, "started_unix": 1.5}')
+    assert rd.read_owner().prefix == "uc0001"
+    rd.owner_path.write_text('{"prefix": "uc0001"}')
+    with pytest.raises(RunDirError, match="not a uavcas run marker"):
+        rd.read_owner()
     with pytest.raises(RunDirError, match="no plan.json"):
         rd.read_plan()
 

@@ -4,6 +4,10 @@ Captures -> flows (`uavcas.flows`) -> every packet followed across the switches
 (`uavcas.flows.follow`) -> one effect per packet and labels from them (`uavcas.labels`) -> identity
 and axis columns from the plan's typed scenario (nothing here parses the config string). Writing
 the shard and the dataset card is `uavcas.dataset.store`'s job.
+
+Only complete runs are extracted: run.json present with exit status 0. A run that was killed
+(no run.json), interrupted (130, 143) or failed (1) is refused unless `allow_incomplete`, and
+its shard then says so (`complete: false`, `run_exit_status`), as does the dataset card.
 """
 
 from __future__ import annotations
@@ -19,7 +23,7 @@ import pandas as pd
 from uavcas.flows import FlowConfig, Flows, PacketTable, extract_flows
 from uavcas.flows.follow import Followed, follow_run
 from uavcas.labels import PacketTruth, TruthContext, label_flows, packet_truth, read_attack_log, rule_text
-from uavcas.rundir import RunDir, RunDirError
+from uavcas.rundir import RunDir, RunDirError, RunInfo
 from uavcas.schema import DEFAULT_STANDARD
 from uavcas.vocabulary import EFFECTS
 
@@ -46,6 +50,8 @@ class ShardInfo:
     profile: str | None = None  # twin profile the run's plan was made with, and its SHA-256
     profile_sha256: str | None = None
     fidelity: str | None = None  # the run's fidelity verdict (run.json), None: never audited
+    complete: bool = True  # the run finished with exit status 0
+    run_exit_status: int | None = 0  # run.json's (None: the run never wrote one)
 
 
 @dataclass(frozen=True)
@@ -86,9 +92,12 @@ def extract_detailed(
     run_id: str | None = None,
     min_attack_fraction: float = 0.0,
     features: str = DEFAULT_STANDARD,
+    allow_incomplete: bool = False,
 ) -> Extracted:
     """Flows + labels of one run, with the packet-level results (for audits and tests). The run id
-    is `run_id`, else run.json's, else the directory's name."""
+    is `run_id`, else run.json's, else the directory's name.
+
+    Raises RunDirError for a run that did not finish cleanly, unless `allow_incomplete`."""
     rd = RunDir(Path(run_dir))
     if not rd.root.is_dir():
         raise RunDirError(f"{rd.root}: not a directory")
@@ -96,6 +105,9 @@ def extract_detailed(
     if plan.scenario is None:
         raise RunDirError(f"{rd.plan_json}: config {plan.config!r} is no scenario (no axes to record)")
     info = rd.read_info()
+    problem = incomplete_reason(info)
+    if problem and not allow_incomplete:
+        raise RunDirError(f"{rd.root}: {problem}; extract it anyway with --allow-incomplete (marked incomplete)")
     pcaps = rd.pcaps()
     if not pcaps:
         raise RunDirError(f"{rd.root}: no captures in {rd.pcap_dir}")
@@ -139,6 +151,17 @@ def extract_detailed(
             profile=plan.profile,
             profile_sha256=plan.profile_sha256,
             fidelity=info.fidelity.verdict if info is not None and info.fidelity is not None else None,
+            complete=problem is None,
+            run_exit_status=info.exit_status if info else None,
         ),
     )
     return Extracted(shard, ex.packets, ex.flows, followed, truth)
+
+
+def incomplete_reason(info: RunInfo | None) -> str | None:
+    """Why a run's data is incomplete (None: it finished with exit status 0)."""
+    if info is None:
+        return "the run never finished (no run.json: killed, or still running)"
+    if info.exit_status != 0:
+        return f"the run did not finish cleanly (exit status {info.exit_status}: {info.exit_reason})"
+    return None

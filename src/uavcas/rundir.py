@@ -1,5 +1,6 @@
 """A run directory, typed: its paths (`RunDir`) and its run.json (`RunInfo`).
 
+    RUN_DIR/.uavcas-run     written first: which run owns the directory (RunOwner)
     RUN_DIR/plan.json       the Plan played (twin.model.Plan)
     RUN_DIR/run.json        what happened (RunInfo), written last
     RUN_DIR/attacks.jsonl   the attack log (uavcas.events records)
@@ -149,12 +150,22 @@ class RunInfo(_Strict):
         return self.model_dump_json(indent=1, exclude_none=False) + "\n"
 
 
+class RunOwner(_Strict):
+    """.uavcas-run: written before anything else of a run, so a directory a run was killed in
+    (no run.json yet) is still known for a uavcas run's, and whose (its namespace prefix)."""
+
+    prefix: str
+    pid: int
+    started_unix: float
+
+
 @dataclass(frozen=True)
 class RunDir:
     root: Path
 
     # the small files of a run
     FILES = ("plan.json", "run.json", "attacks.jsonl", "shaping.jsonl", "forwarding.jsonl", "fidelity.json")
+    OWNER = ".uavcas-run"
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "root", Path(self.root))
@@ -186,9 +197,18 @@ class RunDir:
     def files(self) -> list[Path]:
         return [self.root / f for f in self.FILES]
 
-    def holds_run(self) -> bool:
-        """Whether any file of a run is there (a directory uavcas may reuse for a run)."""
-        return any(p.exists() for p in self.files())
+    @property
+    def owner_path(self) -> Path:
+        return self.root / self.OWNER
+
+    def read_owner(self) -> RunOwner | None:
+        """The run that owns this directory (None: no marker, e.g. a run older than the marker)."""
+        if not self.owner_path.exists():
+            return None
+        try:
+            return RunOwner.model_validate_json(self.owner_path.read_text())
+        except ValidationError:
+            raise RunDirError(f"{self.owner_path}: not a uavcas run marker") from None
 
     @property
     def fidelity_json(self) -> Path:

@@ -44,14 +44,16 @@ def test_ddos_needs_three_uavs():
         parse("ddos=1000-2-1-image-logdist-adaptive-grid-30-95")
 
 
-def test_calibration_one_second_in_then_periodically():
-    a = parse("dos=1000-3-1-image-logdist-adaptive-grid-30-95")
+def test_pacing_follows_the_token_down_to_the_floor_and_needs_no_calibration():
+    from uavcas.emulation.apps.flood import PACE_FLOOR_US, pace_interval_us
     from uavcas.twin.model import Attack
 
-    att = Attack(attack_id="dos-0", family="dos", attackers=["uav1"], victims=["uav0"], start_s=2.0, stop_s=6.0,
-                 spec=a.attacks[0])
-    assert family("dos").calibration_times(att) == [3.0, 5.0]
-    assert family("blackhole").calibration_times(att) == []
+    for token, interval in (("dos=1000", 1000), ("ddos=250", 250), ("dos=10", PACE_FLOOR_US)):
+        spec = parse(f"{token}-3-1-image-logdist-adaptive-grid-30-95").attacks[0]
+        assert pace_interval_us(spec.nominal_pps) == interval
+        att = Attack(attack_id="dos-0", family=spec.family, attackers=["uav1"], victims=["uav0"], start_s=2.0,
+                     stop_s=6.0, spec=spec)
+        assert family(spec.family).calibration_times(att) == []  # one hping3, paced, never restarted
 
 
 def test_effect_is_packet_exact_inside_the_window(truth_ctx):

@@ -18,7 +18,8 @@ from uavcas.emulation import preflight as preflight_mod  # noqa: E402
 from uavcas.emulation.attacks import AttackExecutor  # noqa: E402
 from uavcas.emulation.controller import Detour  # noqa: E402
 from uavcas.emulation.naming import check_prefix  # noqa: E402
-from uavcas.emulation.runner import prepare_out_dir, schedule  # noqa: E402
+from uavcas.emulation.preflight import prepare_out_dir  # noqa: E402
+from uavcas.emulation.runner import schedule  # noqa: E402
 
 CONFIG = "dos=1000-5-2-image-logdist-adaptive-random-30-95"
 
@@ -32,10 +33,9 @@ def _plan():
                      wormholes=[("uav0", "uav1", "bs0")])
 
 
-def test_schedule_orders_stop_window_start_calibrate():
-    ev = [(e.t_s, e.kind) for e in schedule(_plan())]
-    assert ev == [(2.0, "start"), (3.0, "calibrate"), (4.0, "window"), (4.0, "start"), (5.0, "calibrate"), (6.0, "stop"),
-                  (8.0, "stop"), (8.0, "end")]
+def test_schedule_orders_stop_window_start():
+    ev = [(e.t_s, e.kind) for e in schedule(_plan())]  # floods are paced, never recalibrated
+    assert ev == [(2.0, "start"), (4.0, "window"), (4.0, "start"), (6.0, "stop"), (8.0, "stop"), (8.0, "end")]
 
 
 class _FakeEmu:
@@ -54,15 +54,71 @@ def test_wormhole_detour_only_while_active(tmp_path):
     assert switch_ports(p.node("uav1").index) == ["h1", "l1-*"]
 
 
-def test_prepare_out_dir_replaces_only_run_files(tmp_path):
+def _old_run(out: Path, prefix: str = "uc0001", finished: bool = True) -> None:
+    """A directory an earlier run wrote: the marker, its files, a capture and a tool log."""
+    (out / "pcap").mkdir(parents=True)
+    (out / "logs").mkdir()
+    (out / ".uavcas-run").write_text(f'{{"prefix": "{prefix}", "pid": 1, "started_unix": 1.0}}')
+    (out / "plan.json").write_text("{}")
+    (out / "pcap" / "s-uav0.pcap").write_bytes(b"old")
+    (out / "logs" / "curl-bs0.err").write_text("old")
+    if finished:
+        (out / "attacks.jsonl").write_text("")
+
+
+def test_out_dir_of_an_old_run_is_reused_removing_only_what_a_run_writes(tmp_path):
+    out = tmp_path / "r"
+    _old_run(out, finished=False)  # killed: no run.json, the marker says whose it was
+    (out / "notes.txt").write_text("mine")
+    (out / "pcap" / "README").write_text("mine too")
+    prepare_out_dir(out, "uc0002")
+    assert sorted(p.name for p in out.iterdir()) == [".uavcas-run", "notes.txt", "pcap"]
+    assert [p.name for p in (out / "pcap").iterdir()] == ["README"]
+    assert (out / "notes.txt").read_text() == "mine" and '"uc0002"' in (out / ".uavcas-run").read_text()
+
+
+@pytest.mark.parametrize("files", [{"plan.json": "{}"}, {"run.json": "{}"}, {"plan.json": "{}", "notes": "x"}])
+def test_out_dir_that_merely_holds_a_run_file_name_is_refused_and_untouched(tmp_path, files):
     out = tmp_path / "r"
     (out / "pcap").mkdir(parents=True)
-    (out / "pcap" / "s-uav0.pcap").write_bytes(b"old")
-    (out / "run.json").write_text("{}")
-    (out / "notes.txt").write_text("mine")
-    prepare_out_dir(out)
-    assert not (out / "run.json").exists() and list((out / "pcap").iterdir()) == []
-    assert (out / "notes.txt").read_text() == "mine"
+    (out / "pcap" / "mine.pcap").write_bytes(b"precious")
+    (out / "logs").mkdir()
+    (out / "logs" / "mine.log").write_text("precious")
+    for name, text in files.items():
+        (out / name).write_text(text)
+    before = sorted(str(p.relative_to(out)) for p in out.rglob("*"))
+    assert "holds no" in preflight_mod.out_dir_problem(out)
+    with pytest.raises(ValueError, match="holds no"):
+        prepare_out_dir(out, "uc0002")
+    assert sorted(str(p.relative_to(out)) for p in out.rglob("*")) == before
+    assert (out / "pcap" / "mine.pcap").read_bytes() == b"precious"
+
+
+def test_out_dir_of_a_live_run_or_of_two_runs_is_refused(tmp_path, monkeypatch):
+    from uavcas.emulation import cleanup, naming
+
+    monkeypatch.setattr(naming, "RUN_ROOT", tmp_path / "registry")
+    out = tmp_path / "r"
+    _old_run(out, "uc0003")
+    lock = cleanup.RunLock(cleanup.RunRecord("uc0003", os.getpid(), []))
+    try:
+        assert "live run (prefix uc0003)" in preflight_mod.out_dir_problem(out)
+    finally:
+        lock.release()
+    assert preflight_mod.out_dir_problem(out) is None
+    (out / ".uavcas-run").write_text('{"prefix": "uc0004", "pid": 1, "started_unix": 1.0}')
+    (out / "run.json").write_text((Path(__file__).parent / "apps").as_posix())  # not a run.json
+    assert "no readable uavcas run" in preflight_mod.out_dir_problem(out)
+
+
+def test_cli_run_into_a_foreign_dir_is_one_line_exit_2(tmp_path, monkeypatch):
+    monkeypatch.setattr(os, "geteuid", lambda: 0)
+    out = tmp_path / "r"
+    out.mkdir()
+    (out / "plan.json").write_text("my own plan")
+    r = CliRunner().invoke(app, ["run", CONFIG, "--windows", "1", "--out", str(out)])
+    assert r.exit_code == 2 and "holds no uavcas run" in r.output
+    assert (out / "plan.json").read_text() == "my own plan"
 
 
 def test_cli_bad_config_is_one_line_exit_2(tmp_path):

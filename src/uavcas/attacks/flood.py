@@ -3,9 +3,11 @@
 - token `dos=<interval_us>` / `ddos=<interval_us>`: hping3's inter-packet interval, 1000 us ~
   1,000 SYN/s nominal per attacker;
 - schedule: DoS takes one attacker; DDoS 2 up to a third of the swarm (at most 4);
-- executor: one `emulation.apps.flood.Flood` (hping3 -S to the victim's HTTP port) per
-  attacker, its rate calibrated one second in and then periodically; at stop one `rate` record
-  per attacker with the measured SYN rate;
+- executor: one `emulation.apps.flood.Flood` per attacker: one hping3 (-S to the victim's
+  HTTP port) for the whole attack, started before t0 behind a closed gate and paced from
+  outside at the nominal rate (see that module); the start is logged when the gates are open
+  and before the first SYN, the stop once hping3 is stopped and its last SYN can have crossed
+  the network; at stop one `rate` record per attacker with the SYNs that left it;
 - truth (effect `flood`, label source "flood-packets"): a TCP packet with SYN set and ACK clear
   from an attacker IP to a victim IP captured inside [start, stop) of the attack (packet-exact:
   the same host pair outside the window, or the victim's answering SYN-ACKs, are not flood).
@@ -43,6 +45,17 @@ class FloodSpec(SpecBase):
         return f"{self.family}={self.interval_us}"
 
 
+def _path_hops(ex: "AttackExecutor", src: str, dst: str) -> list[tuple[float, float]]:
+    """(delay_ms, rate_mbps) of each link a frame from src to dst crosses now ([] if dropped)."""
+    fwd, w = ex.emu.forwarding, ex.window
+    path = fwd.path(src, dst) if fwd is not None else None
+    if not path or w is None:
+        return []
+    links = {frozenset((lk.a, lk.b)): lk for lk in w.links}
+    return [(links[frozenset(h)].delay_ms, links[frozenset(h)].rate_mbps) for h in zip(path, path[1:])
+            if frozenset(h) in links]
+
+
 class _Flood(AttackFamily):
     spec = FloodSpec
     label_source = "flood-packets"
@@ -70,45 +83,40 @@ class _Flood(AttackFamily):
         return {**spec.model_dump(exclude={"family"}), "nominal_pps": spec.nominal_pps}
 
     # executor ----------------------------------------------------------------------------------
-    def calibration_times(self, attack: "Attack") -> list[float]:
-        from uavcas.emulation.apps.flood import CALIBRATE_AFTER_S, CALIBRATE_EVERY_S
-
-        out, t = [], attack.start_s + CALIBRATE_AFTER_S
-        while t < attack.stop_s - 0.5:
-            out.append(t)
-            t += CALIBRATE_EVERY_S
-        return out
-
-    def start(self, ex: "AttackExecutor", attack: "Attack") -> dict[str, Any]:
+    def prepare(self, ex: "AttackExecutor", attack: "Attack") -> None:
         from uavcas.emulation.apps.flood import Flood
 
         nominal = ex.spec(attack).nominal_pps
-        floods = [Flood(ex.emu, attack.attack_id, x, ex.ip(v), nominal, ex.log_dir, ex.duration_s + 10)
+        floods = [Flood(ex.emu, attack.attack_id, x, ex.ip(v), nominal, ex.log_dir, ex.duration_s + 30)
                   for x in attack.attackers for v in attack.victims]
         ex.state[attack.attack_id] = floods
         for f in floods:
-            f.start()
-        return {"hping_interval_us": [f.interval_us for f in floods]}
+            for proc in f.prepare():
+                ex.add_process(proc)
 
-    def calibrate(self, ex: "AttackExecutor", attack: "Attack") -> None:
-        for f in ex.state.get(attack.attack_id, []):
-            try:
-                f.calibrate()
-            except Exception as e:  # the flood keeps running at its first interval
-                ex.errors.append(f"{attack.attack_id}/{f.attacker}: calibration failed: {e}")
+    def start(self, ex: "AttackExecutor", attack: "Attack") -> dict[str, Any]:
+        from uavcas.emulation.apps.flood import start_all
+
+        floods = ex.state[attack.attack_id]
+        t = start_all(floods)  # every gate open, no SYN paced yet: the first one can go from t on
+        return {"t_unix": t, "hping_interval_us": [f.interval_us for f in floods]}
 
     def stop(self, ex: "AttackExecutor", attack: "Attack") -> dict[str, Any]:
+        from uavcas.emulation.apps.flood import quiet_after_s, stop_all
         from uavcas.events import AttackRate
 
-        results = [f.stop() for f in ex.state.pop(attack.attack_id, [])]
-        t = ex.now()
+        results, t_closed = stop_all(ex.state.pop(attack.attack_id, []))
+        # no SYN left an attacker after t_closed; the last ones may still be crossing the network
+        quiet = max((quiet_after_s(_path_hops(ex, x, v)) for x in attack.attackers for v in attack.victims),
+                    default=0.0)
+        t = max(ex.now(), t_closed + quiet)
         for r in results:
             ex.log(AttackRate(attack_id=attack.attack_id, family=attack.family, attacker=r.attacker,
                               measured_pps=round(r.measured_pps, 2), nominal_pps=r.nominal_pps,
-                              hping_interval_us=r.hping_interval_us, syn_count=r.syn_count,
-                              seconds=round(r.seconds, 4), restarts=r.restarts, intervals_us=r.intervals_us,
+                              hping_interval_us=r.interval_us, syn_count=r.syn_count,
+                              seconds=round(r.seconds, 4), restarts=0, intervals_us=[r.interval_us],
                               victim_ip=r.victim_ip, t_unix=t))
-        return {"syn_count": sum(r.syn_count for r in results)}
+        return {"t_unix": t, "syn_count": sum(r.syn_count for r in results)}
 
     # ground truth ------------------------------------------------------------------------------
     def effects(self, ctx: "TruthContext", windows: list["AttackWindow"]) -> np.ndarray:

@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import errno
+from pathlib import Path
+
 import typer
 
 from uavcas import __version__
@@ -18,6 +21,7 @@ from . import flows as _flows
 from . import plan as _plan
 from . import report as _report
 from . import run as _run
+from .common import fail
 
 app = typer.Typer(
     name="uavcas",
@@ -51,6 +55,19 @@ def main() -> None:
     try:
         app()
     except UnsafeOutput as exc:  # any command's --out onto a symlink, FIFO, device or directory
-        from .common import fail
-
         raise SystemExit(fail(str(exc)).exit_code) from None
+    except OSError as e:  # a file or folder named on the command line cannot be read or written
+        raise SystemExit(_os_error(e).exit_code) from None
+
+
+_BAD_INPUT_ERRNOS = (errno.EACCES, errno.EPERM, errno.ENOENT, errno.ENOTDIR, errno.EISDIR, errno.EROFS, errno.EEXIST)
+
+
+def _os_error(e: OSError) -> typer.Exit:
+    """One line naming the path (the target, not the temporary name an atomic write used)."""
+    path = Path(e.filename) if e.filename else None
+    if path is not None and path.name.startswith(".") and ".tmp" in path.name:
+        where = f"cannot write into {path.parent}"
+    else:
+        where = str(path) if path is not None else "file system"
+    return fail(f"{where}: {e.strerror or e}", code=2 if e.errno in _BAD_INPUT_ERRNOS else 1)

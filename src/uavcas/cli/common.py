@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import typer
 from rich.console import Console
+from rich.markup import escape
 
 from uavcas.atomic import atomic_path, atomic_write_bytes, atomic_write_text  # noqa: F401
 
@@ -12,8 +13,11 @@ err_console = Console(stderr=True)
 
 
 def fail(message: str, code: int = 2) -> "typer.Exit":
-    """Print a one-line error to stderr and return the Exit to raise."""
-    err_console.print(f"[bold red]error:[/] {message}", highlight=False, soft_wrap=True)
+    """Print a one-line error to stderr and return the Exit to raise.
+
+    The message is plain text: escaped, so brackets in it (a regex, a list) are printed as
+    they are instead of being taken for console markup."""
+    err_console.print(f"[bold red]error:[/] {escape(message)}", highlight=False, soft_wrap=True)
     return typer.Exit(code)
 
 

@@ -192,6 +192,8 @@ def extract_cmd(
     min_attack_fraction: float = typer.Option(
         0.0, "--min-attack-fraction", min=0.0, max=1.0,
         help="Leave out flows whose share of attack packets is above 0 but below this (default 0: keep all)."),
+    allow_incomplete: bool = typer.Option(False, "--allow-incomplete",
+                                          help="Also extract a run that was killed or failed (marked incomplete)."),
 ) -> None:
     """Extract one run into DATASET_DIR (its shard is replaced if it was extracted before)."""
     from uavcas.dataset.store import extract_run
@@ -199,11 +201,14 @@ def extract_cmd(
     try:
         info = extract_run(run_dir, out, view=view, labels=labels, min_packets=min_packets,
                            allow_truncated=allow_truncated, features=features,
-                           min_attack_fraction=min_attack_fraction)  # fmt: skip
+                           min_attack_fraction=min_attack_fraction, allow_incomplete=allow_incomplete)  # fmt: skip
     except _errors() as exc:
         raise fail(str(exc)) from None
     for t in info.truncations:
         err_console.print(f"[yellow]warning:[/] truncated capture {t}; kept the packets before it", highlight=False)
+    if not info.complete:
+        err_console.print(f"[yellow]warning:[/] run {info.run_id} is incomplete (exit status "
+                          f"{info.run_exit_status}); its shard is marked so", highlight=False)
     counts = ", ".join(f"{k} {v}" for k, v in sorted(info.class_counts.items()))
     console.print(f"run [bold]{info.run_id}[/]: {info.n_flows} flows from {info.n_packets} packets ({counts}) -> {out}", highlight=False)
     if info.impure_dropped:

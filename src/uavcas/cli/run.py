@@ -80,7 +80,7 @@ def run_cmd(
             elif isinstance(e, AttackLogged) and isinstance(e.record, AttackRate):
                 r = e.record
                 progress.console.print(f"           rate {r.attack_id} {r.attacker}: {r.measured_pps:.0f} pps "
-                                       f"(nominal {r.nominal_pps:.0f}, hping3 -i u{r.hping_interval_us})",
+                                       f"(nominal {r.nominal_pps:.0f}, one SYN every {r.hping_interval_us} us)",
                                        highlight=False)
             elif isinstance(e, RunDone):
                 progress.update(task, completed=len(p.windows) if e.exit_status == 0 else None,

@@ -49,6 +49,7 @@ def extract_run(
     run_id: str | None = None,
     min_attack_fraction: float = 0.0,
     features: str = DEFAULT_STANDARD,
+    allow_incomplete: bool = False,
 ) -> ShardInfo:
     """`uavcas.extract.extract` one run into its shard; then flows.parquet and dataset.json are rebuilt.
 
@@ -57,7 +58,7 @@ def extract_run(
     out_dir = ensure_out_dir(out_dir)
     shard = extract(run_dir, view=view, labels=labels, min_packets=min_packets,
                     allow_truncated=allow_truncated, run_id=run_id, min_attack_fraction=min_attack_fraction,
-                    features=features)
+                    features=features, allow_incomplete=allow_incomplete)
     with _locked(out_dir):
         write_table(to_table(shard.frame, meta=asdict(shard.info), standard=shard.info.features), out_dir / "shards" / f"{shard.info.run_id}.parquet")
         rebuild(out_dir)
@@ -97,6 +98,7 @@ def rebuild(out_dir: Path) -> dict:
         "features": feature_card(standard),
         "n_flows": union.num_rows,
         "n_runs": len(shards),
+        "n_incomplete_runs": sum(1 for r in runs if r.get("complete") is False),
         "views": sorted({r.get("view") for r in runs if r.get("view")}),
         "label_modes": sorted({r.get("labels") for r in runs if r.get("labels")}),
         "class_counts": counts,

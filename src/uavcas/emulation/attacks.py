@@ -8,9 +8,10 @@ current window (re-applied when a family changes forwarding mid-window).
 
 Times: a `start` record's t_unix is taken just *before* the action and a `stop` record's just
 *after* it is fully undone, so every attack packet and effect lies inside [start, stop). A family
-whose effect is a rule in force (the blackhole's drop table) returns its own `t_unix` instead: the
-moment the rule was installed, and the moment just before it was removed, so [start, stop) is
-exactly when the rule held.
+may return its own `t_unix` instead: a family whose effect is a rule in force (the blackhole's
+drop table) the moment the rule was installed and the moment just before it was removed, so
+[start, stop) is exactly when the rule held; a flood a later start (when its first packet could
+go) and a later stop (when its last packet can have crossed the network).
 """
 
 from __future__ import annotations
@@ -108,7 +109,7 @@ class AttackExecutor:
         except Exception as e:
             raise AttackError(f"{a.attack_id}: start failed: {e}") from e
         self.active[a.attack_id] = a
-        t = extra.pop("t_unix", t)
+        t = extra.pop("t_unix", t)  # a family may know better when its first packet could go
         rec = AttackStart(attack_id=a.attack_id, family=a.family, attackers=list(a.attackers),
                           attacker_ips=[self.ip(x) for x in a.attackers], victims=list(a.victims),
                           victim_ips=[self.ip(v) for v in a.victims], t_unix=t, params=dict(a.params),
@@ -123,8 +124,8 @@ class AttackExecutor:
             extra = family(a.family).stop(self, a)
         finally:
             self.active.pop(a.attack_id, None)
-        t = extra.pop("t_unix", None)
-        rec = AttackStop(attack_id=a.attack_id, family=a.family, t_unix=time.time() if t is None else t, **extra)
+        # a family may know better when its last packet can have crossed the network
+        rec = AttackStop(attack_id=a.attack_id, family=a.family, t_unix=extra.pop("t_unix", time.time()), **extra)
         self.log(rec)
         return rec
 

@@ -96,6 +96,7 @@ class CleanReport:
     killed_pids: list[int] = field(default_factory=list)
     namespaces: list[str] = field(default_factory=list)
     cgroups: list[str] = field(default_factory=list)
+    error: str | None = None  # one line: what could not be removed (the other prefixes still are)
 
 
 def kill_pids(pids: list[int], grace_s: float = 1.0) -> list[int]:
@@ -120,10 +121,13 @@ def kill_pids(pids: list[int], grace_s: float = 1.0) -> list[int]:
 
 
 def _exists(pid: int) -> bool:
+    """Alive and not a zombie. A process may exit at any point of this: /proc/PID vanishes
+    (FileNotFoundError), or the read after a successful open fails with ESRCH
+    (ProcessLookupError); both mean it is gone."""
     try:
         with open(f"/proc/{pid}/stat") as fh:
             return fh.read().rsplit(")", 1)[1].split()[0] != "Z"
-    except (FileNotFoundError, IndexError):
+    except (OSError, IndexError):
         return False
 
 
@@ -133,7 +137,13 @@ def remove_namespaces(namespaces: list[str]) -> list[str]:
     pids = sorted({pid for ns in mine for pid in kernel.netns_pids(ns) if pid != os.getpid()})
     kill_pids(pids)
     if mine:
-        kernel.run_batch("ip", None, [f"netns del {ns}" for ns in mine])
+        try:
+            kernel.run_batch("ip", None, [f"netns del {ns}" for ns in mine])
+        except kernel.KernelError:
+            # one batch stops at its first failure (e.g. a namespace someone else removed
+            # meanwhile): delete what is still there one by one, failing only on a real error
+            for ns in sorted(set(mine) & set(kernel.netns_list())):
+                kernel.run(["ip", "netns", "del", ns])
     return mine
 
 
@@ -143,9 +153,11 @@ def remove_cgroups(dirs: list[str]) -> list[str]:
         path = Path(d)
         if not path.is_dir():
             continue
-        procs = path / "cgroup.procs"
-        if procs.exists():
-            kill_pids([int(x) for x in procs.read_text().split()], grace_s=0.5)
+        try:
+            pids = [int(x) for x in (path / "cgroup.procs").read_text().split()]
+        except OSError:  # removed meanwhile, or no procs file
+            pids = []
+        kill_pids(pids, grace_s=0.5)
         for _ in range(50):
             try:
                 path.rmdir()
@@ -166,17 +178,25 @@ def clean(prefix: str | None = None, force: bool = False) -> list[CleanReport]:
         if is_live(p) and not force:
             rep.skipped_live = True
             continue
-        rec = _record(p)
-        naming = Naming(p)
-        if rec is not None:
-            namespaces, cgroups = rec.namespaces, rec.cgroups
-        else:
-            # No registry: only the shape a uavcas run has (a fabric namespace) identifies it.
-            all_ns = kernel.netns_list()
-            namespaces = [ns for ns in all_ns if naming.owns_ns(ns)] if naming.fabric_ns in all_ns else []
-            cgroups = []
-        rep.killed_pids = [pid for ns in namespaces if ns in kernel.netns_list() for pid in kernel.netns_pids(ns)]
-        rep.namespaces = remove_namespaces(namespaces)
-        rep.cgroups = remove_cgroups(cgroups)
-        shutil.rmtree(naming.run_dir, ignore_errors=True)
+        try:
+            _clean_one(rep)
+        except (OSError, kernel.KernelError) as e:
+            rep.error = f"{type(e).__name__}: {str(e).splitlines()[0] if str(e) else ''}"
     return reports
+
+
+def _clean_one(rep: CleanReport) -> None:
+    rec = _record(rep.prefix)
+    naming = Naming(rep.prefix)
+    if rec is not None:
+        namespaces, cgroups = rec.namespaces, rec.cgroups
+    else:
+        # No registry: only the shape a uavcas run has (a fabric namespace) identifies it.
+        all_ns = kernel.netns_list()
+        namespaces = [ns for ns in all_ns if naming.owns_ns(ns)] if naming.fabric_ns in all_ns else []
+        cgroups = []
+    present = set(kernel.netns_list())
+    rep.killed_pids = [pid for ns in namespaces if ns in present for pid in kernel.netns_pids(ns)]
+    rep.namespaces = remove_namespaces(namespaces)
+    rep.cgroups = remove_cgroups(cgroups)
+    shutil.rmtree(naming.run_dir, ignore_errors=True)

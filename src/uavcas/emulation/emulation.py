@@ -5,8 +5,9 @@
             report = emu.apply_window(i)           # links, shaping, forwarding; read back
             emu.popen("uav0", ["nginx", ...])      # processes inside a node namespace
 
-Teardown runs on exit, on exceptions, on SIGTERM/SIGHUP (turned into SystemExit) and at
-interpreter exit; after SIGKILL, `uavcas clean` uses the run's registry entry.
+Teardown runs on exit, on exceptions, on SIGTERM/SIGHUP (turned into SystemExit), on SIGINT
+(KeyboardInterrupt, even when the parent started us with SIGINT ignored) and at interpreter
+exit; after SIGKILL, `uavcas clean` uses the run's registry entry.
 """
 
 from __future__ import annotations
@@ -166,6 +167,11 @@ class Emulation:
         if threading.current_thread() is threading.main_thread():
             for sig in (signal.SIGTERM, signal.SIGHUP):
                 self._old_handlers[sig] = signal.signal(sig, _raise_exit)
+            # A shell without job control starts background jobs with SIGINT ignored, and Python
+            # then never raises KeyboardInterrupt: `kill -INT` would be lost and the run would
+            # end "ok". A run must stop on SIGINT (exit 130), so Ctrl-C is turned on here.
+            if signal.getsignal(signal.SIGINT) in (signal.SIG_IGN, signal.SIG_DFL, None):
+                self._old_handlers[signal.SIGINT] = signal.signal(signal.SIGINT, signal.default_int_handler)
         self.setup()
         return self
 
@@ -197,6 +203,7 @@ class Emulation:
         ahead by `prepare_links` for a later window stay up either way.
         """
         t0 = time.perf_counter()
+        self.shaper.check()
         self._links, self._routes = list(links), [list(r) for r in routes]
         self._wormholes = [Detour.of(w) for w in wormholes]
         active = {key(self.index[lk.a], self.index[lk.b]) for lk in links}

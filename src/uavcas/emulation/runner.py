@@ -2,10 +2,11 @@
 
 Order of a run (t0 = wall-clock time of plan t = 0, written to run.json):
   namespaces + fabric + shaper (Emulation) -> one tcpdump per switch -> nginx on every UAV ->
-  replay processes (idle) -> window 0 applied -> t0 -> BS clients -> the schedule: window k at
-  t0 + k * window_s, each attack's start/stop at t0 + start_s/stop_s, a flood's rate check one
-  second in -> end at t0 + duration -> attacks, clients and servers stopped -> captures stopped
-  (SIGINT: flushed, drop counters read) -> namespaces removed.
+  attack processes prepared (idle: replayers, floods behind their gates) -> window 0 applied ->
+  t0 -> BS clients -> the schedule: window k at t0 + k * window_s, each attack's start/stop at
+  t0 + start_s/stop_s (and a family's calibration times) -> end at t0 + duration -> attacks,
+  clients and servers stopped -> captures stopped (SIGINT: flushed, drop counters read) ->
+  namespaces removed.
 
 Cleanup always happens: the Emulation context manager tears down on exceptions, SIGTERM/SIGHUP
 (turned into SystemExit by the core) and Ctrl-C (KeyboardInterrupt); tools run in their own
@@ -39,6 +40,8 @@ from .apps.traffic import BenignTraffic
 from .apps.versions import tool_versions
 from .attacks import AttackExecutor
 from .emulation import Emulation
+from .naming import new_prefix
+from .preflight import prepare_out_dir
 from .priority import CONTROL_RT_PRIORITY, SOFTIRQ_RT_PRIORITY, softirq_boost, urgent
 from .sampling import WindowSampler
 
@@ -96,27 +99,17 @@ def schedule(plan: "Plan") -> list[_Event]:
     return sorted(ev)
 
 
-def prepare_out_dir(out: Path) -> None:
-    """Create OUT, or reuse an empty one or a previous run's (its files are replaced)."""
-    rd = RunDir(out)
-    out.mkdir(parents=True, exist_ok=True)
-    shutil.rmtree(rd.pcap_dir, ignore_errors=True)
-    shutil.rmtree(rd.logs_dir, ignore_errors=True)
-    for f in rd.files():
-        f.unlink(missing_ok=True)
-    rd.pcap_dir.mkdir()
-
-
 def realize(plan: "Plan", out_dir: str | Path, options: RunOptions = RunOptions(),
             on_event: Callable[[Progress], None] | None = None, features=None) -> RunArtifacts:
     """Realise `plan` into `out_dir` in real time (needs root). See the module docstring."""
     out = Path(out_dir)
-    prepare_out_dir(out)
+    prefix = options.prefix or new_prefix()
+    prepare_out_dir(out, prefix)  # refuses a directory that is not an old run's (RunDirError)
     atomic_write_text(RunDir(out).plan_json, plan.to_json())
     notify = on_event or (lambda e: None)
     st = _State(plan, out, time.time())
     try:
-        with Emulation(plan, prefix=options.prefix, features=features, readback=False) as emu:
+        with Emulation(plan, prefix=prefix, features=features, readback=False) as emu:
             st.emu = emu
             emu.keep_links_up = True  # see _prepare_next
             st.sampler = WindowSampler(emu.shaper)
@@ -249,6 +242,7 @@ def _play(st: _State, opt: RunOptions, notify: Callable[[Progress], None]) -> No
         _prepare_next(st, opt, events[k + 1:])
     st.timings["schedule_s"] = time.time() - st.t0
     starter.join()
+    st.emu.shaper.check()  # a delay stage lost in the last window fails the run too
 
 
 class _Background:

@@ -4,8 +4,8 @@ Topology: uav0 - uav1 - uav2 (line), so traffic uav0 -> uav2 crosses two shaped 
 Measured end to end with small Python endpoints started inside the namespaces:
 * TCP goodput (bulk transfer, slow start discarded) vs the configured rate x 1448/1514
   (HTB counts Ethernet frames of 1514 B carrying 1448 B of TCP payload with timestamps);
-* one-way delay of UDP probes (all namespaces share CLOCK_MONOTONIC, so send and receive
-  timestamps are directly comparable) vs the sum of the hops' delays;
+* one-way delay of UDP probes (all namespaces share one clock: the send time against the
+  kernel's receive timestamp) vs the sum of the hops' delays: median, p90 and p99;
 * UDP loss vs 1 - prod(1 - loss_hop), judged against the binomial 99 % interval.
 
 Endpoints: python -m uavcas.emulation.selftest {tcp-sink,tcp-source,udp-sink,udp-source} ...
@@ -16,7 +16,6 @@ from __future__ import annotations
 import argparse
 import json
 import socket
-import statistics
 import struct
 import subprocess
 import sys
@@ -25,6 +24,7 @@ from dataclasses import dataclass
 
 TCP_PAYLOAD_FRACTION = 1448 / 1514
 PORT = 5999
+SO_TIMESTAMPNS = 35  # = SCM_TIMESTAMPNS (asm-generic/socket.h); not exported by Python's socket
 
 
 @dataclass(frozen=True)
@@ -37,9 +37,17 @@ class Check:
     low: float
     high: float
 
+    def __post_init__(self) -> None:  # plain floats: numpy scalars would leak into JSON as 1.0/0.0
+        for f in ("configured", "expected", "measured", "low", "high"):
+            object.__setattr__(self, f, float(getattr(self, f)))
+
     @property
     def ok(self) -> bool:
-        return self.low <= self.measured <= self.high
+        return bool(self.low <= self.measured <= self.high)
+
+    def to_dict(self) -> dict:
+        return {"name": self.name, "unit": self.unit, "configured": self.configured, "expected": self.expected,
+                "measured": self.measured, "low": self.low, "high": self.high, "ok": self.ok}
 
 
 @dataclass(frozen=True)
@@ -92,24 +100,29 @@ _END_MARKER = 2**64 - 1  # sequence number of the probe stream's last datagram
 
 
 def udp_sink(port: int, count: int, seconds: float) -> dict:
+    """Receives the probes; a probe's delay is the kernel's receive timestamp (SO_TIMESTAMPNS,
+    taken when the frame reaches this namespace's eth0) minus its send time, so this process's
+    own scheduling latency is not counted (it was 0.1-3 ms of every figure on a busy machine)."""
     s = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
     s.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4 << 20)
+    s.setsockopt(socket.SOL_SOCKET, SO_TIMESTAMPNS, 1)
     s.bind(("0.0.0.0", port))
     print("ready", flush=True)
     seen = set()
     delays = []
     deadline = time.monotonic() + seconds
     draining = False
+    anc_size = socket.CMSG_SPACE(16)
     while len(seen) < count:
         left = deadline - time.monotonic()
         if left <= 0:
             break
         s.settimeout(max(0.001, left))
         try:
-            data = s.recv(2048)
+            data, anc, _, _ = s.recvmsg(2048, anc_size)
         except socket.timeout:
             break
-        now = time.monotonic_ns()
+        now = kernel_rx_ns(anc)
         seq, sent_ns = struct.unpack_from("!QQ", data)
         if seq == _END_MARKER:
             if not draining:  # probes still held by the delay stage get 0.3 s more, then stop
@@ -118,15 +131,33 @@ def udp_sink(port: int, count: int, seconds: float) -> dict:
         if seq not in seen:
             seen.add(seq)
             delays.append((now - sent_ns) / 1e6)
-    delays.sort()
     return {"received": len(seen), "delays_ms": _summary(delays)}
+
+
+def kernel_rx_ns(ancillary: list[tuple[int, int, bytes]]) -> int:
+    """CLOCK_REALTIME ns of the SCM_TIMESTAMPNS message (now, if the kernel attached none)."""
+    for level, kind, data in ancillary:
+        if level == socket.SOL_SOCKET and kind == SO_TIMESTAMPNS and len(data) >= 16:
+            sec, nsec = struct.unpack_from("@qq", data)
+            return sec * 1_000_000_000 + nsec
+    return time.time_ns()
+
+
+def percentile(sorted_xs: list[float], q: float) -> float:
+    """Linear-interpolated percentile (numpy's default) of a sorted list: stdlib only, because
+    every endpoint imports this module and a slow guest pays each import dearly."""
+    pos = (len(sorted_xs) - 1) * q / 100
+    lo = int(pos)
+    hi = min(lo + 1, len(sorted_xs) - 1)
+    return sorted_xs[lo] + (sorted_xs[hi] - sorted_xs[lo]) * (pos - lo)
 
 
 def _summary(xs: list[float]) -> dict:
     if not xs:
         return {}
-    return {"median": statistics.median(xs), "p99": xs[min(len(xs) - 1, int(len(xs) * 0.99))],
-            "min": xs[0], "max": xs[-1], "mean": statistics.fmean(xs)}
+    a = sorted(xs)
+    return {"median": percentile(a, 50), "p90": percentile(a, 90), "p99": percentile(a, 99), "min": a[0],
+            "max": a[-1], "mean": sum(a) / len(a)}
 
 
 def udp_source(dst: str, port: int, count: int, pps: float, size: int) -> dict:
@@ -141,7 +172,7 @@ def udp_source(dst: str, port: int, count: int, pps: float, size: int) -> dict:
         due_now = min(count, int((time.monotonic() - start) * pps) + 1)
         while seq < due_now:
             try:
-                s.sendto(struct.pack("!QQ", seq, time.monotonic_ns()) + pad, (dst, port))
+                s.sendto(struct.pack("!QQ", seq, time.time_ns()) + pad, (dst, port))
             except BlockingIOError:
                 break
             seq += 1
@@ -173,24 +204,26 @@ def _result(p: subprocess.Popen, timeout_s: float) -> dict:
     return json.loads(lines[-1])
 
 
-def measure_goodput(emu, src: str, dst: str, seconds: float = 2.5) -> float:
-    sink = _endpoint(emu, dst, ["tcp-sink", "--port", str(PORT), "--seconds", str(seconds)], seconds + 15)
+def measure_goodput(emu, src: str, dst: str, seconds: float = 2.5, startup_s: float = 10.0) -> float:
+    """`startup_s`: how long an endpoint may take to start (an emulated CPU needs a minute)."""
+    wait = seconds + startup_s
+    sink = _endpoint(emu, dst, ["tcp-sink", "--port", str(PORT), "--seconds", str(wait)], 2 * wait)
     _wait_ready(sink)
     source = _endpoint(emu, src, ["tcp-source", "--dst", emu.ip(dst), "--port", str(PORT), "--seconds",
-                                  str(seconds)], seconds + 15)
-    _result(source, seconds + 15)
-    return _result(sink, seconds + 15)["goodput_mbps"]
+                                  str(seconds)], 2 * wait)
+    _result(source, 2 * wait)
+    return _result(sink, 2 * wait)["goodput_mbps"]
 
 
-def measure_udp(emu, src: str, dst: str, count: int, pps: float, size: int = 200) -> dict:
-    secs = count / pps + 5
+def measure_udp(emu, src: str, dst: str, count: int, pps: float, size: int = 200, startup_s: float = 5.0) -> dict:
+    secs = count / pps + startup_s
     sink = _endpoint(emu, dst, ["udp-sink", "--port", str(PORT + 1), "--count", str(count),
-                                "--seconds", str(secs)], secs + 10)
+                                "--seconds", str(secs)], secs + 10 + startup_s)
     _wait_ready(sink)
     source = _endpoint(emu, src, ["udp-source", "--dst", emu.ip(dst), "--port", str(PORT + 1), "--count",
-                                  str(count), "--pps", str(pps), "--size", str(size)], secs + 10)
-    sent = _result(source, secs + 10)
-    got = _result(sink, secs + 10)
+                                  str(count), "--pps", str(pps), "--size", str(size)], secs + 10 + startup_s)
+    sent = _result(source, secs + 10 + startup_s)
+    got = _result(sink, secs + 10 + startup_s)
     return {**got, **sent, "loss": 1 - got["received"] / count}
 
 
@@ -207,10 +240,34 @@ def goodput_check(measured: float, rate_mbps: float, tol: float = 0.10) -> Check
     return Check("TCP goodput", "Mbit/s", rate_mbps, expected, measured, expected * (1 - tol), expected * (1 + tol))
 
 
-def delay_check(measured_ms: float, hops: list[HopConfig]) -> Check:
+@dataclass(frozen=True)
+class DelayTolerance:
+    """How far the one-way delay of light probe traffic may stray from the plan, per shaped hop.
+
+    Defaults: the median within 0.25 ms either side, p90 at most 0.5 ms and p99 at most 1 ms
+    above the planned delay. Probes are light (a few % of the rate), so queueing adds nothing
+    and every excess is the shaper's own error. These are twice the delay stage's per-hop
+    targets of issue #14 (p90 <= 0.2 ms, p99 <= 0.5 ms), so a stage meeting its targets passes
+    with margin, and one a busy machine pushes several times past them fails.
+    """
+
+    median_ms: float = 0.25
+    p90_ms: float | None = 0.5  # None: not judged (an emulated CPU's tail is its own)
+    p99_ms: float | None = 1.0
+
+
+def delay_checks(delays_ms: dict, hops: list[HopConfig], tol: DelayTolerance = DelayTolerance()) -> list[Check]:
+    """Median, p90 and p99 of the measured one-way delay against the sum of the hops' delays."""
     expected = sum(h.delay_ms for h in hops)
-    tol = max(1.0, 0.10 * expected)
-    return Check("one-way delay (median)", "ms", expected, expected, measured_ms, expected - tol, expected + tol)
+    n = len(hops)
+    nan, low = float("nan"), expected - n * tol.median_ms  # nothing may arrive early either
+    out = [Check("one-way delay p50", "ms", expected, expected, delays_ms.get("median", nan), low,
+                 expected + n * tol.median_ms)]
+    for q, key, per_hop in ((90, "p90", tol.p90_ms), (99, "p99", tol.p99_ms)):
+        if per_hop is not None:
+            out.append(Check(f"one-way delay p{q}", "ms", expected, expected, delays_ms.get(key, nan), low,
+                             expected + n * per_hop))
+    return out
 
 
 def loss_check(measured: float, n: int, hops: list[HopConfig], confidence: float = 0.99) -> Check:

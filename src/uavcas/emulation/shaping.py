@@ -204,6 +204,9 @@ class Shaper(ABC):
     def stop(self) -> None:
         """Stop helpers; the namespace's deletion removes qdiscs and rules."""
 
+    def check(self) -> None:
+        """Raise KernelError if a helper the shaping depends on is gone (called every window)."""
+
     @abstractmethod
     def init_lines(self, ports: Sequence[str]) -> list[str]:
         """tc batch lines preparing freshly created (still down) ports."""
@@ -303,12 +306,22 @@ class FallbackShaper(Shaper):
         kernel.run(["ip", "netns", "exec", self.fabric_ns, "nft", "-f", "-"], input_text=nft_table_ruleset())
         log = open(self.run_dir / "nfqdelay.log", "ab")
         # `ip netns exec` execs, so Popen.pid is the daemon itself (killable by PID, listed by
-        # `ip netns pids` for `uavcas clean`).
+        # `ip netns pids` for `uavcas clean`). Its own session: a Ctrl-C to the terminal's
+        # process group reaches only the runner, which stops the daemon last, after the tools.
         self.daemon = subprocess.Popen(
             ["ip", "netns", "exec", self.fabric_ns, sys.executable, "-m", "uavcas.emulation.nfqdelay",
              "--queue", str(self.queue_num), "--ctl", self.ctl_path],
-            stdout=subprocess.PIPE, stderr=log, stdin=subprocess.DEVNULL)
+            stdout=subprocess.PIPE, stderr=log, stdin=subprocess.DEVNULL, start_new_session=True)
         log.close()
+
+    def check(self) -> None:
+        """The daemon must live as long as the run: without it packets pass undelayed
+        (`--queue-bypass`), so a run that lost it fails here instead of recording wrong delays."""
+        if self.daemon is not None and self.daemon.poll() is not None:
+            rc = self.daemon.returncode
+            how = f"killed by signal {-rc}" if rc < 0 else f"exit status {rc}"
+            err = (self.run_dir / "nfqdelay.log").read_text(errors="replace").strip().splitlines()
+            raise kernel.KernelError(f"NFQUEUE delay daemon died ({how}){': ' + err[-1] if err else ''}")
 
     def wait_ready(self) -> None:
         ready, _, _ = select.select([self.daemon.stdout], [], [], 10.0)

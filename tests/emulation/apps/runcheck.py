@@ -1,13 +1,15 @@
-"""Reading a run directory back (dpkt): what the pcaps hold vs what attacks.jsonl says.
+"""Reading a run directory back (dpkt): what the pcaps hold vs what attacks.jsonl says; and
+finding a run in the registry.
 
-Used by the root tests and benchmarks/run_families.py; independent of uavcas.flows on purpose
-(a second opinion on the captures).
+Used by the root tests and the benchmarks; independent of uavcas.flows on purpose (a second
+opinion on the captures).
 """
 
 from __future__ import annotations
 
 import json
 import socket
+import time
 from collections import Counter
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -130,3 +132,21 @@ def hop_delays(run: Path, max_dt_s: float = 0.1, max_size: int = 100_000) -> dic
                 dts.append(tb - ta)
         out[(a, b)] = dts
     return out
+
+
+def wait_registered(pid: int, since_unix: float, timeout_s: float = 60.0) -> str:
+    """The prefix under which the run with this PID registered itself in /run/uavcas.
+
+    PIDs wrap (pid_max is 32768 here) and a crashed run's registry entry outlives its process,
+    so an entry only counts if it was written after our process started."""
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        for p in Path("/run/uavcas").glob("uc*"):
+            try:
+                rec = json.loads((p / "run.json").read_text())
+            except (FileNotFoundError, ValueError):
+                continue
+            if rec["pid"] == pid and rec["created_unix"] >= since_unix:
+                return p.name
+        time.sleep(0.1)
+    raise AssertionError("the run never registered")

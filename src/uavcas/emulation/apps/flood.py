@@ -1,66 +1,106 @@
-"""hping3 SYN flood with closed-loop rate calibration and an exact SYN counter.
+"""hping3 SYN flood paced from outside: one process per attacker, exact rate, exact window.
 
-`hping3 -i uN` sleeps N us *between* packets and then pays its own per-packet overhead, so the
-real rate is 1e6 / (N + overhead): on this kernel `-i u1000` gives ~900 pps and the overhead
-varies with load (EMULATION-NOTES section 5). We therefore
-1. start with N = 1e6 / nominal - overhead (the last overhead measured in this process, or a
-   prior), count the SYNs the attacker actually emits with an nft counter on its OUTPUT hook
-   (raw-socket packets traverse LOCAL_OUT, so the count is exact, and the benign server
-   traffic of the same UAV never matches: it does not send SYNs to the victim's port);
-2. after `CALIBRATE_AFTER_S`, then every `CALIBRATE_EVERY_S`, compare the rate since the last
-   check with the nominal one and, if it is off by more than `TOLERANCE`, restart hping3 with
-   the corrected interval (a gap of a few ms; the load on the cores changes during a run);
-3. at stop, log the measured rate over the whole attack (`rate` record of attacks.jsonl).
+`hping3 -i uN` re-arms its interval timer in its own SIGALRM handler, so its real period is N
+plus the handler's latency, which grows with the load on the cores: a closed loop restarting
+hping3 with corrected intervals ran away on a late schedule (1,000 -> 2,500 pps) and every
+restart reused source ports (one "flow" spanning separate bursts). Instead:
+
+* hping3 is started once per attacker *before* t0 (`prepare`), with `-i 3600`: it never sends
+  on its own. A pacer (`python -m uavcas.emulation.apps.flood pace`, one per hping3) sends it
+  SIGALRM at absolute deadlines t_go + k / pps: each signal is one SYN. A standard signal does
+  not queue, so the pacer signals only when the previous one was consumed (the pidfd's
+  process no longer has SIGALRM pending) and catches up after a late wake-up, never faster
+  than `PACE_FLOOR_US` apart: the rate is the nominal one whatever the lateness, and the
+  floor bounds it (a nominal interval below the floor is paced at the floor, and logged so).
+* hping3 sends one SYN as soon as it starts. Until the attack starts a gate in the attacker's
+  namespace steers its SYNs to the victim into a veth pair that leads nowhere (an nft `route`
+  chain marks them, an `ip rule` routes the mark to that veth): nothing reaches a switch, and
+  the first gated SYN tells us hping3 is ready. `start_all` opens the gates, notes the time,
+  then lets the pacers go: every SYN leaves after the logged start.
+* `stop_all` stops the pacers, closes the gates (a SYN still pending in hping3 is gated), stops
+  hping3 and reads the exact count of SYNs that left `eth0` (nft counter on postrouting). The
+  attack's stop time is when the last of them can have crossed the network: the gate's
+  closing plus, on the attacker -> victim path, each hop's planned delay and the sojourn of a
+  full queue (`quiet_after_s`).
 """
 
 from __future__ import annotations
 
+import argparse
+import ctypes
 import json
+import os
 import re
+import select
 import signal
+import subprocess
+import sys
 import time
-from dataclasses import dataclass, field
+from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
 
-from .procs import Proc, spawn
+from .procs import Proc, spawn, wait_for
 
-OVERHEAD_PRIOR_US = 170.0  # measured here: u900 -> ~910 pps, u833 -> ~1008 pps
-CALIBRATE_AFTER_S = 1.0  # first check; then every CALIBRATE_EVERY_S (the overhead drifts with load)
-CALIBRATE_EVERY_S = 2.0
-TOLERANCE = 0.03
-MIN_INTERVAL_US = 1
-_learned_overhead_us: list[float] = []  # per process: later floods start closer to the target
-
-
-def hping_interval_us(nominal_pps: float, overhead_us: float) -> int:
-    return max(MIN_INTERVAL_US, round(1e6 / nominal_pps - overhead_us))
+PACE_FLOOR_US = 100  # at most 10,000 SYN/s per attacker: each SYN costs hping3 + pacer a wake-up
+HPING_IDLE_S = 3600  # hping3's own interval: longer than any run, so only the pacer makes it send
+READY_TIMEOUT_S = 10.0
+PRIORITY_NICE = -10  # hping3 and its pacer (see Flood.prepare)
+QUIET_SLACK_S = 0.02  # on top of the path bound: the delay stage's wake-up lateness
+_SIGALRM_BIT = 1 << (signal.SIGALRM - 1)
+_PR_SET_TIMERSLACK = 29
+_gate_ids = iter(range(1, 10_000))  # per process: gate devices, marks and route tables are unique
 
 
-def overhead_from(interval_us: int, measured_pps: float) -> float:
-    return max(0.0, 1e6 / measured_pps - interval_us) if measured_pps > 0 else OVERHEAD_PRIOR_US
-
-
-def current_overhead_us() -> float:
-    return sorted(_learned_overhead_us)[len(_learned_overhead_us) // 2] if _learned_overhead_us else OVERHEAD_PRIOR_US
+def pace_interval_us(nominal_pps: float) -> int:
+    return max(PACE_FLOOR_US, round(1e6 / nominal_pps))
 
 
 def table_name(attack_id: str) -> str:
     return "uavcas_f_" + re.sub(r"[^A-Za-z0-9_]", "_", attack_id)
 
 
-def counter_ruleset(table: str, victim_ip: str, port: int) -> str:
+def _match(victim_ip: str, port: int) -> str:
+    return f"ip daddr {victim_ip} tcp dport {port} tcp flags & (syn | ack) == syn"
+
+
+def counter_ruleset(table: str, victim_ip: str, port: int, out_if: str = "eth0") -> str:
+    """Counters `syn` (SYNs that left `out_if`) and `gated`, and the empty `gate` route chain."""
     return (f"table ip {table} {{\n"
-            f"  counter syn {{ }}\n"
-            f"  chain out {{ type filter hook output priority 0; policy accept;\n"
-            f"    ip daddr {victim_ip} tcp dport {port} tcp flags & (syn | ack) == syn counter name syn\n"
+            f"  counter syn {{ }}\n  counter gated {{ }}\n"
+            f"  chain gate {{ type route hook output priority mangle; policy accept; }}\n"
+            f"  chain post {{ type filter hook postrouting priority 0; policy accept;\n"
+            f"    oifname \"{out_if}\" {_match(victim_ip, port)} counter name syn\n"
             f"  }}\n}}\n")
 
 
-def parse_counter(nft_json: str) -> int:
+def gate_rule(table: str, victim_ip: str, port: int, mark: int) -> str:
+    return f"add rule ip {table} gate {_match(victim_ip, port)} counter name gated meta mark set {mark:#x}\n"
+
+
+def gate_lines(gid: int, mark: int, route_table: int) -> list[str]:
+    """`ip -batch` lines (attacker's namespace): the veth pair a gated SYN is routed into. Its
+    peer has no address and the frame is not for its MAC (ARP off): dropped in silence, and
+    hping3's sendto succeeds (a blackhole route would fail it, and hping3 exits on that)."""
+    a, b = f"fg{gid}a", f"fg{gid}b"
+    return [f"link add {a} type veth peer name {b}", f"link set {a} arp off up", f"link set {b} up",
+            f"rule add fwmark {mark:#x} table {route_table}", f"route add default dev {a} table {route_table}"]
+
+
+def parse_counters(nft_json: str) -> dict[str, int]:
+    out = {}
     for item in json.loads(nft_json).get("nftables", []):
         if "counter" in item:
-            return int(item["counter"]["packets"])
-    raise ValueError("no counter in nft output")
+            out[item["counter"]["name"]] = int(item["counter"]["packets"])
+    return out
+
+
+def quiet_after_s(hops: Sequence[tuple[float, float]]) -> float:
+    """Longest time a packet can spend on a path of (delay_ms, rate_mbps) hops: each hop's delay
+    plus a full queue drained at its rate (the queues are sized by `shaping.queue_limit_pkts`)."""
+    from uavcas.emulation.shaping import queue_limit_pkts
+
+    return QUIET_SLACK_S + sum(d / 1000 + queue_limit_pkts(r) * 1514 * 8 / (r * 1e6) for d, r in hops)
 
 
 @dataclass
@@ -68,11 +108,11 @@ class FloodResult:
     attacker: str
     victim_ip: str
     nominal_pps: float
-    hping_interval_us: int
-    syn_count: int
-    seconds: float
-    restarts: int
-    intervals_us: list[int] = field(default_factory=list)
+    interval_us: int  # the pacing interval (nominal, or the floor)
+    syn_count: int  # SYNs that left the attacker (nft counter)
+    signals: int  # SIGALRMs the pacer delivered
+    seconds: float  # from the pacer's go to its stop
+    max_behind: int  # most SYNs the pacer was ever behind its deadlines
 
     @property
     def measured_pps(self) -> float:
@@ -80,77 +120,224 @@ class FloodResult:
 
 
 class Flood:
-    """One attacker's SYN flood. `emu` is the running Emulation (popen/run in a node)."""
+    """One attacker's SYN flood on a running Emulation (see the module docstring). `start_all`
+    and `stop_all` act on all of an attack's floods at once (their kernel calls concurrent)."""
 
     def __init__(self, emu, attack_id: str, attacker: str, victim_ip: str, nominal_pps: float,
                  log_dir: Path, max_s: float, port: int = 80) -> None:
         self.emu, self.attacker, self.victim_ip, self.port = emu, attacker, victim_ip, port
         self.nominal_pps = float(nominal_pps)
+        self.interval_us = pace_interval_us(self.nominal_pps)
         self.table = table_name(attack_id)
         self.log_dir, self.max_s = log_dir, max_s
-        self.proc: Proc | None = None
-        self.interval_us = hping_interval_us(self.nominal_pps, current_overhead_us())
-        self.intervals: list[int] = []
-        self.t_start = 0.0
-        self.restarts = 0
-        self.old: list[Proc] = []  # replaced hping3 processes, reaped at stop
-        self._last = (0.0, 0)
+        self.gid = next(_gate_ids)
+        self.mark, self.route_table = 0x5CA10000 + self.gid, 20000 + self.gid
+        self.hping: Proc | None = None
+        self.pacer: Proc | None = None
 
-    def _nft(self, *args: str, input_text: str | None = None) -> str:
-        r = self.emu.run(self.attacker, ["nft", *args], timeout_s=10, input=input_text)
-        if r.returncode != 0:
-            raise RuntimeError(f"nft {' '.join(args)} in {self.attacker}: {r.stderr.strip()}")
-        return r.stdout
+    # kernel calls, as (node, argv, stdin) jobs for `_run_all` --------------------------------------
+    def _nft_job(self, *args: str, text: str | None = None) -> tuple[str, list[str], str | None]:
+        return self.attacker, ["nft", *args], text
 
-    def count(self) -> int:
-        return parse_counter(self._nft("-j", "list", "counter", "ip", self.table, "syn"))
+    def open_gate_job(self):
+        return self._nft_job("flush", "chain", "ip", self.table, "gate")
 
-    def _spawn(self) -> None:
-        self.intervals.append(self.interval_us)
-        argv = ["hping3", "-S", "-p", str(self.port), "-i", f"u{self.interval_us}", "-q", self.victim_ip]
-        name = f"hping3-{self.table}-{self.attacker}-{len(self.intervals)}"
-        left = max(1.0, self.max_s - (time.time() - self.t_start if self.t_start else 0.0))
-        self.proc = spawn(lambda a, t, **kw: self.emu.popen(self.attacker, a, t, **kw), name, argv, self.log_dir, left)
+    def close_gate_job(self):
+        return self._nft_job("-f", "-", text=gate_rule(self.table, self.victim_ip, self.port, self.mark))
 
-    def start(self) -> None:
-        self._nft("-f", "-", input_text=counter_ruleset(self.table, self.victim_ip, self.port))
-        self.t_start = time.time()
-        self._last = (self.t_start, 0)
-        self._spawn()
+    def counters_job(self):
+        return self._nft_job("-j", "list", "counters", "table", "ip", self.table)
 
-    def calibrate(self) -> None:
-        """Called every CALIBRATE_EVERY_S: correct the interval from the rate since the last check.
+    def remove_job(self):
+        return self._nft_job("delete", "table", "ip", self.table)
 
-        The old hping3 gets SIGINT and is reaped at stop (no waiting here: the schedule must not
-        slip); the new one starts at once, so the gap is a few milliseconds.
-        """
-        now, n = time.time(), self.count()
-        t_prev, n_prev = self._last
-        self._last = (now, n)
-        if self.proc is None or now - t_prev <= 0.2:
-            return
-        pps = (n - n_prev) / (now - t_prev)
-        oh = overhead_from(self.interval_us, pps)
-        _learned_overhead_us.append(oh)
-        if abs(pps - self.nominal_pps) / self.nominal_pps > TOLERANCE:
-            new = hping_interval_us(self.nominal_pps, oh)
-            if new != self.interval_us:
-                self.proc.popen.send_signal(signal.SIGINT)
-                self.old.append(self.proc)
-                self.interval_us = new
-                self.restarts += 1
-                self._spawn()
+    def counters(self) -> dict[str, int]:
+        return parse_counters(_run_all(self.emu, [self.counters_job()])[0])
 
-    def stop(self) -> FloodResult:
-        for p in [*self.old, self.proc]:
-            if p is not None:
-                p.stop(signal.SIGINT, grace_s=2.0)
-        seconds = time.time() - self.t_start
+    # lifecycle -------------------------------------------------------------------------------
+    def prepare(self) -> list[Proc]:
+        """Before t0: gate closed, hping3 started and seen ready, pacer waiting. Returns both
+        processes (the executor stops them whatever happens)."""
+        _run_all(self.emu, [(self.attacker, ["ip", "-batch", "-"],
+                             "\n".join(gate_lines(self.gid, self.mark, self.route_table)) + "\n")])
+        _run_all(self.emu, [self._nft_job("-f", "-", text=counter_ruleset(self.table, self.victim_ip, self.port)
+                                          + gate_rule(self.table, self.victim_ip, self.port, self.mark))])
+        argv = ["hping3", "-S", "-p", str(self.port), "-i", str(HPING_IDLE_S), "-q", self.victim_ip]
+        name = f"hping3-{self.table}-{self.attacker}"
+        self.hping = spawn(lambda a, t, **kw: self.emu.popen(self.attacker, a, t, **kw), name, argv, self.log_dir,
+                           self.max_s)
+        if not wait_for(lambda: not self.hping.alive() or self.counters().get("gated", 0) >= 1, READY_TIMEOUT_S,
+                        0.02) or not self.hping.alive():
+            raise RuntimeError(f"hping3 in {self.attacker} did not start: {self.hping.stderr()[-300:].strip()}")
+        pid = _only_child(self.hping.pid)
+        # Each SYN is one wake-up of hping3, and the next signal waits for it: on busy cores a
+        # nice-0 hping3 woke too late to keep 1,000/s (865/s beside 5 CPU hogs). It needs
+        # little CPU, so a higher priority costs the other tools almost nothing.
+        os.setpriority(os.PRIO_PROCESS, pid, PRIORITY_NICE)
+        err_path = self.log_dir / f"pacer-{self.table}-{self.attacker}.err"
+        with open(err_path, "wb") as err:
+            # --ns only names the run (`ps` shows whose pacer it is); it exits with its runner
+            # (stdin EOF) or its hping3 (pidfd)
+            pacer = subprocess.Popen([sys.executable, "-m", "uavcas.emulation.apps.flood", "pace", "--pid", str(pid),
+                                      "--pps", str(1e6 / self.interval_us), "--ns", self.emu.ns(self.attacker)],
+                                     stdin=subprocess.PIPE,
+                                     stdout=subprocess.PIPE, stderr=err, start_new_session=True)
+        self.pacer = Proc(f"pacer-{self.attacker}", pacer, Path(os.devnull), err_path)
+        if pacer.stdout.readline().strip() != b"ready":
+            raise RuntimeError(f"flood pacer for {self.attacker} did not start: {self.pacer.stderr()[-300:]}")
+        return [self.hping, self.pacer]
+
+    def _tell(self, word: bytes) -> None:
         try:
-            n = self.count()
-        finally:
-            self._nft("delete", "table", "ip", self.table)
-        if seconds > 2 * CALIBRATE_AFTER_S and n:
-            _learned_overhead_us.append(overhead_from(self.interval_us, n / seconds))
-        return FloodResult(self.attacker, self.victim_ip, self.nominal_pps, self.interval_us, n, seconds,
-                           self.restarts, list(self.intervals))
+            self.pacer.popen.stdin.write(word + b"\n")
+            self.pacer.popen.stdin.flush()
+        except BrokenPipeError:  # it already stopped: hping3 exited (its report says so)
+            pass
+
+    def _report(self) -> dict:
+        try:
+            out, _ = self.pacer.popen.communicate(timeout=10)
+            return json.loads(out.decode().strip().splitlines()[-1])
+        except (ValueError, IndexError, subprocess.TimeoutExpired) as e:
+            raise RuntimeError(f"flood pacer for {self.attacker} gave no report: {e}; "
+                               f"{self.pacer.stderr()[-300:]}") from None
+
+
+def start_all(floods: Sequence[Flood]) -> float:
+    """Open every gate, then let every pacer go; returns the time from which SYNs can go."""
+    if floods:
+        _run_all(floods[0].emu, [f.open_gate_job() for f in floods])
+    t = time.time()
+    for f in floods:
+        f._tell(b"go")
+    return t
+
+
+def stop_all(floods: Sequence[Flood]) -> tuple[list[FloodResult], float]:
+    """Pacers stopped, gates closed, hping3 stopped, counts read, tables removed. Returns the
+    results and the time the gates were closed (no SYN leaves an attacker after it). Raises
+    only after every step ran for every flood."""
+    if not floods:
+        return [], time.time()
+    emu = floods[0].emu
+    for f in floods:
+        f._tell(b"stop")
+    try:
+        _run_all(emu, [f.close_gate_job() for f in floods])
+    finally:
+        t_closed = time.time()
+        for f in floods:  # all at once; waited for below
+            if f.hping.alive():
+                f.hping.popen.send_signal(signal.SIGINT)
+    reports, errors = [], []
+    for f in floods:
+        try:
+            reports.append(f._report())
+        except RuntimeError as e:
+            errors.append(str(e))
+    try:
+        counts = [parse_counters(out).get("syn", 0) for out in _run_all(emu, [f.counters_job() for f in floods])]
+    finally:
+        for f in floods:
+            f.hping.stop(signal.SIGINT, grace_s=2.0)
+        # the table (its closed gate would catch a later flood's SYNs); the gate's veth and
+        # rule match nothing without it and go with the namespace
+        _run_all(emu, [f.remove_job() for f in floods])
+    if errors:
+        raise RuntimeError("; ".join(errors))
+    return [FloodResult(f.attacker, f.victim_ip, f.nominal_pps, f.interval_us, n, r["signals"], r["seconds"],
+                        r["max_behind"]) for f, n, r in zip(floods, counts, reports)], t_closed
+
+
+def _run_all(emu, jobs: list[tuple[str, list[str], str | None]], timeout_s: float = 15.0) -> list[str]:
+    """Run (node, argv, stdin) jobs in their nodes' namespaces concurrently; their stdouts."""
+    procs = [subprocess.Popen(emu.hosts.argv(node, argv, timeout_s), stdin=subprocess.PIPE, stdout=subprocess.PIPE,
+                              stderr=subprocess.PIPE, text=True) for node, argv, _ in jobs]
+    outs, errors = [], []
+    for (node, argv, text), p in zip(jobs, procs):
+        out, err = p.communicate(text, timeout=timeout_s + 5)
+        if p.returncode != 0:
+            errors.append(f"{' '.join(argv[:4])} in {node}: {err.strip()[:300]}")
+        outs.append(out)
+    if errors:
+        raise RuntimeError("; ".join(errors))
+    return outs
+
+
+def _only_child(pid: int, timeout_s: float = 5.0) -> int:
+    """The tool under our `timeout` wrapper (`ip netns exec` execs it: one child)."""
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        try:
+            kids = Path(f"/proc/{pid}/task/{pid}/children").read_text().split()
+        except OSError:
+            kids = []
+        if kids:
+            return int(kids[0])
+        time.sleep(0.01)
+    raise RuntimeError(f"no child process under {pid}")
+
+
+# the pacer (own process) -----------------------------------------------------------------------
+def _alarm_pending(pid: int) -> bool:
+    try:
+        with open(f"/proc/{pid}/status") as fh:
+            for line in fh:
+                if line.startswith(("ShdPnd:", "SigPnd:")) and int(line.split()[1], 16) & _SIGALRM_BIT:
+                    return True
+    except OSError:
+        return False
+    return False
+
+
+def pace(pid: int, pps: float, commands: int = 0, out=None) -> dict:
+    """Wait for "go" on fd `commands`, then SIGALRM `pid` at t_go + k / pps until "stop", EOF
+    or the end of `pid`. Returns what it did (signals, seconds from go, most SYNs behind)."""
+    out = out or sys.stdout
+    fd = os.pidfd_open(pid)
+    floor_s = PACE_FLOOR_US / 1e6
+    print("ready", file=out, flush=True)
+    if os.read(commands, 64).strip() != b"go":
+        return {"signals": 0, "seconds": 0.0, "max_behind": 0}
+    t0 = time.monotonic()
+    sent, max_behind, last = 0, 0, float("-inf")
+    while True:
+        now = time.monotonic()
+        due = int((now - t0) * pps) + 1  # the first SYN at t0
+        max_behind = max(max_behind, due - sent - 1)
+        if sent < due and now - last >= floor_s and not _alarm_pending(pid):
+            try:
+                signal.pidfd_send_signal(fd, signal.SIGALRM)
+            except ProcessLookupError:
+                break
+            sent, last = sent + 1, now
+        # still behind (late wake-up, or hping3 had not taken the last signal): retry one floor
+        # interval on; else sleep to the next deadline
+        if sent < int((time.monotonic() - t0) * pps) + 1:
+            wait = floor_s
+        else:
+            wait = t0 + sent / pps - time.monotonic()
+        ready, _, _ = select.select([commands, fd], [], [], max(0.0, wait))
+        if ready:
+            break  # "stop", EOF, or hping3 exited (its pidfd is readable)
+    return {"signals": sent, "seconds": time.monotonic() - t0, "max_behind": max_behind}
+
+
+def main(argv: list[str] | None = None) -> None:
+    ap = argparse.ArgumentParser(description="SIGALRM pacer for one hping3 (see uavcas.emulation.apps.flood)")
+    ap.add_argument("mode", choices=["pace"])
+    ap.add_argument("--pid", type=int, required=True)
+    ap.add_argument("--pps", type=float, required=True)
+    ap.add_argument("--ns", help="the attacker's namespace (informational)")
+    a = ap.parse_args(argv)
+    ctypes.CDLL(None).prctl(_PR_SET_TIMERSLACK, 1, 0, 0, 0)  # deadlines to the microsecond, not 50 us
+    try:
+        os.setpriority(os.PRIO_PROCESS, 0, PRIORITY_NICE)  # a wake-up in time matters more than CPU share
+    except OSError:
+        pass
+    signal.signal(signal.SIGTERM, lambda *_: sys.exit(0))
+    print(json.dumps(pace(a.pid, a.pps)), flush=True)
+
+
+if __name__ == "__main__":
+    main()
