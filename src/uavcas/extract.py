@@ -111,9 +111,10 @@ def extract_detailed(
     pcaps = rd.pcaps()
     if not pcaps:
         raise RunDirError(f"{rd.root}: no captures in {rd.pcap_dir}")
-    t0 = info.t0_unix if info else None
+    t0 = rd.read_t0()
     if t0 is None:
-        raise RunDirError(f"{rd.run_json}: no t0_unix (an unfinished run?): packets cannot be placed in the plan")
+        raise RunDirError(f"{rd.root}: the run never reached its plan's t = 0 (no t0_unix in run.json or "
+                          f"{rd.owner_path.name}): its packets cannot be placed in the plan")
     cfg = FlowConfig(view=view, min_packets=min_packets, window_t0_unix=t0, window_s=plan.window_s)  # type: ignore[arg-type]
     ex = extract_flows(pcaps, cfg, points=[p.stem for p in pcaps], allow_truncated=allow_truncated, standard=features)
     log = read_attack_log(rd.attacks_jsonl, plan, t0)

@@ -157,6 +157,7 @@ class RunOwner(_Strict):
     prefix: str
     pid: int
     started_unix: float
+    t0_unix: float | None = None  # plan t = 0, written once the run gets there (a killed run keeps it)
 
 
 @dataclass(frozen=True)
@@ -200,6 +201,20 @@ class RunDir:
     @property
     def owner_path(self) -> Path:
         return self.root / self.OWNER
+
+    def read_t0(self) -> float | None:
+        """Wall-clock time of plan t = 0: run.json's, else (a killed run) the marker's; None when
+        the run never got there."""
+        info = self.read_info()
+        if info is not None:
+            return info.t0_unix
+        owner = self.read_owner()
+        return owner.t0_unix if owner is not None else None
+
+    def write_owner(self, owner: RunOwner) -> None:
+        from uavcas.atomic import atomic_write_text
+
+        atomic_write_text(self.owner_path, owner.model_dump_json() + "\n")
 
     def read_owner(self) -> RunOwner | None:
         """The run that owns this directory (None: no marker, e.g. a run older than the marker)."""

@@ -25,7 +25,7 @@ from pathlib import Path
 from scapy.layers.inet import IP, TCP
 
 from uavcas.events import AttackRate, AttackStart, AttackStop, Inject, attack_log_text
-from uavcas.rundir import RunInfo
+from uavcas.rundir import RunDir, RunInfo, RunOwner
 
 
 def run_info(**fields) -> RunInfo:
@@ -192,6 +192,8 @@ def build_run(run_dir: Path, run_id: str = "run-synth") -> Path:
         AttackStop(attack_id="blackhole-0", family="blackhole", t_unix=T0 + BLACKHOLE_WINDOW[1]),
     ]
     (run_dir / "attacks.jsonl").write_text(attack_log_text(log))
+    # as a real run: the marker first (with t0 once the run reached it), run.json last
+    RunDir(run_dir).write_owner(RunOwner(prefix="synth", pid=1, started_unix=T0 - 5.0, t0_unix=T0))
     (run_dir / "run.json").write_text(run_info(run_id=run_id, t0_unix=T0, config=CONFIG, seed=7).to_json())
     return run_dir
 

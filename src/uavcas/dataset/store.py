@@ -55,10 +55,10 @@ def extract_run(
 
     `run_id` overrides the run's own id (a campaign names runs by manifest index).
     """
-    out_dir = ensure_out_dir(out_dir)
     shard = extract(run_dir, view=view, labels=labels, min_packets=min_packets,
                     allow_truncated=allow_truncated, run_id=run_id, min_attack_fraction=min_attack_fraction,
                     features=features, allow_incomplete=allow_incomplete)
+    out_dir = ensure_out_dir(out_dir)  # only once there is a shard to write: bad input leaves nothing
     with _locked(out_dir):
         write_table(to_table(shard.frame, meta=asdict(shard.info), standard=shard.info.features), out_dir / "shards" / f"{shard.info.run_id}.parquet")
         rebuild(out_dir)

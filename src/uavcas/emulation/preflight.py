@@ -9,16 +9,14 @@ only what a run writes there (`prepare_out_dir`); any other file stays.
 from __future__ import annotations
 
 import importlib.util
-import json
 import os
 import shutil
 import time
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from uavcas.atomic import atomic_write_text
 from uavcas.attacks import family
-from uavcas.rundir import CAPTURE_SUFFIXES, RunDir, RunDirError
+from uavcas.rundir import CAPTURE_SUFFIXES, RunDir, RunDirError, RunOwner
 
 if TYPE_CHECKING:
     from uavcas.twin.model import Plan
@@ -78,8 +76,7 @@ def prepare_out_dir(out: Path, prefix: str) -> None:
         raise RunDirError(problem)
     rd = RunDir(out)
     out.mkdir(parents=True, exist_ok=True)
-    atomic_write_text(rd.owner_path, json.dumps({"prefix": prefix, "pid": os.getpid(),
-                                                  "started_unix": time.time()}) + "\n")
+    rd.write_owner(RunOwner(prefix=prefix, pid=os.getpid(), started_unix=time.time()))
     for f in rd.files():
         f.unlink(missing_ok=True)
     if rd.pcap_dir.is_dir():

@@ -209,6 +209,11 @@ def _play(st: _State, opt: RunOptions, notify: Callable[[Progress], None]) -> No
             st.wind_down_errors.append(f"window 0: links not operational after {LINKS_READY_S:g} s")
         _apply_window(st, 0)
     st.t0 = time.time()
+    # Recorded at once: a run killed before it writes run.json can still be placed in its plan.
+    rd = RunDir(st.out)
+    owner = rd.read_owner()
+    if owner is not None:
+        rd.write_owner(owner.model_copy(update={"t0_unix": st.t0}))
     notify(WindowApplied(window=0, t0_unix=st.t0, n_windows=len(plan.windows)))
     # Starting a hundred client loops took 6 s on a loaded machine: in the background, so that the
     # schedule (window 1 at t0 + 5 s) never waits for it.

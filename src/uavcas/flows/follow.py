@@ -355,9 +355,10 @@ def follow_run(run_dir: str | Path, max_hop_s: float = MAX_HOP_S, table: PacketT
     if epochs:
         timeline = Timeline.from_epochs(plan, epochs)
     else:
-        info = rd.read_info()
-        if info is None or info.t0_unix is None:
-            raise RunDirError(f"{rd.root}: no forwarding.jsonl and no t0 in run.json: cannot place windows in time")
-        applied = [(a.t_unix - a.timings_s.get("total_s", 0.0), a.t_unix) for a in info.window_applies]
-        timeline = Timeline.from_plan(plan, info.t0_unix, applied or None)
+        info, t0 = rd.read_info(), rd.read_t0()
+        if t0 is None:
+            raise RunDirError(f"{rd.root}: no forwarding.jsonl and no t0 (run.json or {rd.owner_path.name}): "
+                              "cannot place windows in time")
+        applied = [(a.t_unix - a.timings_s.get("total_s", 0.0), a.t_unix) for a in info.window_applies] if info else []
+        timeline = Timeline.from_plan(plan, t0, applied or None)
     return table, follow(table, timeline, max_hop_s)
