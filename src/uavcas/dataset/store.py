@@ -20,6 +20,7 @@ import fcntl
 import json
 from dataclasses import asdict
 from pathlib import Path
+from typing import Any
 
 import pyarrow as pa
 import pyarrow.compute as pc
@@ -27,7 +28,7 @@ import pyarrow.parquet as pq
 
 from uavcas.atomic import atomic_write_text, ensure_out_dir
 from uavcas.extract import ShardInfo, extract
-from uavcas.schema import CLASSES, DEFAULT_STANDARD, EFFECTS, SCHEMA_VERSION
+from uavcas.schema import CLASSES, EFFECTS, SCHEMA_VERSION
 from uavcas.versions import package_versions
 
 from .parquet import META_KEY, table_meta, table_standard, to_table, write_table
@@ -39,25 +40,13 @@ class DatasetError(ValueError):
     """A run or dataset directory that cannot be used; one-line message."""
 
 
-def extract_run(
-    run_dir: Path,
-    out_dir: Path,
-    view: str = "5tuple",
-    labels: str = "ours",
-    min_packets: int | None = None,
-    allow_truncated: bool = False,
-    run_id: str | None = None,
-    min_attack_fraction: float = 0.0,
-    features: str = DEFAULT_STANDARD,
-    allow_incomplete: bool = False,
-) -> ShardInfo:
-    """`uavcas.extract.extract` one run into its shard; then flows.parquet and dataset.json are rebuilt.
+def extract_run(run_dir: Path, out_dir: Path, **options: Any) -> ShardInfo:
+    """`uavcas.extract.extract` one run (options: those of `uavcas.extract.extract_detailed`) into
+    its shard; then flows.parquet and dataset.json are rebuilt.
 
     `run_id` overrides the run's own id (a campaign names runs by manifest index).
     """
-    shard = extract(run_dir, view=view, labels=labels, min_packets=min_packets,
-                    allow_truncated=allow_truncated, run_id=run_id, min_attack_fraction=min_attack_fraction,
-                    features=features, allow_incomplete=allow_incomplete)
+    shard = extract(run_dir, **options)
     out_dir = ensure_out_dir(out_dir)  # only once there is a shard to write: bad input leaves nothing
     with _locked(out_dir):
         write_table(to_table(shard.frame, meta=asdict(shard.info), standard=shard.info.features), out_dir / "shards" / f"{shard.info.run_id}.parquet")
