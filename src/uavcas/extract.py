@@ -2,8 +2,10 @@
 
 Captures -> flows (`uavcas.flows`) -> every packet followed across the switches
 (`uavcas.flows.follow`) -> one effect per packet and labels from them (`uavcas.labels`) -> identity
-and axis columns from the plan's typed scenario (nothing here parses the config string). Writing
-the shard and the dataset card is `uavcas.dataset.store`'s job.
+and axis columns from the plan's typed scenario (nothing here parses the config string). The
+context columns (`ctx_*`, `uavcas.flows.context`) are computed from the captures and flows alone,
+before anything reads the plan's attacks or the attack log. Writing the shard and the dataset card
+is `uavcas.dataset.store`'s job.
 """
 
 from __future__ import annotations
@@ -17,10 +19,11 @@ import numpy as np
 import pandas as pd
 
 from uavcas.flows import FlowConfig, Flows, PacketTable, extract_flows
+from uavcas.flows.context import CONTEXT_WINDOW_S, context_frame
 from uavcas.flows.follow import Followed, follow_run
 from uavcas.labels import PacketTruth, TruthContext, label_flows, packet_truth, read_attack_log, rule_text
 from uavcas.rundir import RunDir, RunDirError
-from uavcas.schema import DEFAULT_STANDARD
+from uavcas.schema import CONTEXT_FEATURES, DEFAULT_STANDARD
 from uavcas.vocabulary import EFFECTS
 
 
@@ -46,11 +49,12 @@ class ShardInfo:
     profile: str | None = None  # twin profile the run's plan was made with, and its SHA-256
     profile_sha256: str | None = None
     fidelity: str | None = None  # the run's fidelity verdict (run.json), None: never audited
+    context_window_s: float | None = None  # window of the ctx_* columns, None: not computed
 
 
 @dataclass(frozen=True)
 class Shard:
-    frame: pd.DataFrame  # schema.METADATA_COLUMNS + features, one row per flow
+    frame: pd.DataFrame  # schema.METADATA_COLUMNS + features (+ schema.CONTEXT_FEATURES), one row per flow
     info: ShardInfo
 
 
@@ -86,9 +90,10 @@ def extract_detailed(
     run_id: str | None = None,
     min_attack_fraction: float = 0.0,
     features: str = DEFAULT_STANDARD,
+    context: bool = True,
 ) -> Extracted:
     """Flows + labels of one run, with the packet-level results (for audits and tests). The run id
-    is `run_id`, else run.json's, else the directory's name."""
+    is `run_id`, else run.json's, else the directory's name. `context`: add the `ctx_*` columns."""
     rd = RunDir(Path(run_dir))
     if not rd.root.is_dir():
         raise RunDirError(f"{rd.root}: not a directory")
@@ -104,12 +109,16 @@ def extract_detailed(
         raise RunDirError(f"{rd.run_json}: no t0_unix (an unfinished run?): packets cannot be placed in the plan")
     cfg = FlowConfig(view=view, min_packets=min_packets, window_t0_unix=t0, window_s=plan.window_s)  # type: ignore[arg-type]
     ex = extract_flows(pcaps, cfg, points=[p.stem for p in pcaps], allow_truncated=allow_truncated, standard=features)
+    # from the captures and flows only: computed before the attack log is even read
+    ctx = context_frame(ex.packets, ex.flows) if context else None
     log = read_attack_log(rd.attacks_jsonl, plan, t0)
     _, followed = follow_run(rd.root, table=ex.packets)
     truth = packet_truth(TruthContext(ex.packets, log, followed, plan, t0))
     lab = label_flows(ex.flows, ex.frame, log, truth, mode=labels,  # type: ignore[arg-type]
                       min_attack_fraction=min_attack_fraction)
     df = lab.frame
+    if ctx is not None:  # label_flows keeps flow_id: rows may have been left out, never reordered
+        df[list(CONTEXT_FEATURES)] = ctx.to_numpy()[df["flow_id"].to_numpy()]
     rid = _check_run_id(rd.root, str(run_id or (info.run_id if info else None) or rd.root.resolve().name))
     df["run_id"], df["config"], df["seed"], df["view"] = rid, plan.config, plan.seed, view
     for k, v in plan.scenario.axes().items():
@@ -139,6 +148,7 @@ def extract_detailed(
             profile=plan.profile,
             profile_sha256=plan.profile_sha256,
             fidelity=info.fidelity.verdict if info is not None and info.fidelity is not None else None,
+            context_window_s=CONTEXT_WINDOW_S if context else None,
         ),
     )
     return Extracted(shard, ex.packets, ex.flows, followed, truth)
