@@ -117,10 +117,23 @@ CONTEXT_HOST_SHIFTS: dict[str, str] = {
 CONTEXT_HOST_FEATURES: tuple[str, ...] = tuple(
     f"ctx_{role}_{m}" for role in ("src", "dst") for m in CONTEXT_HOST_METRICS + tuple(CONTEXT_HOST_SHIFTS.values())
 )
+# per window for the flow's host pair, and against the pair's earlier windows
+CONTEXT_PAIR_METRICS: tuple[str, ...] = ("flows", "unanswered_frac", "rtt_ms", "delay_ms", "lost_frac", "path_len_mean")
+CONTEXT_PAIR_SHIFTS: dict[str, str] = {
+    "unanswered_frac": "unanswered_shift", "rtt_ms": "rtt_shift_ms", "delay_ms": "delay_shift_ms",
+    "path_len_mean": "path_len_shift",
+}  # fmt: skip
+CONTEXT_PAIR_FEATURES: tuple[str, ...] = tuple(
+    f"ctx_pair_{m}" for m in CONTEXT_PAIR_METRICS + tuple(CONTEXT_PAIR_SHIFTS.values())
+)
+# the flow's own round trip, delay and path length less the median of its pair's earlier windows
+CONTEXT_FLOW_SHIFTS: tuple[str, ...] = ("ctx_rtt_shift_ms", "ctx_delay_shift_ms", "ctx_path_len_shift")
 CONTEXT_NET_FEATURES: tuple[str, ...] = ("ctx_net_lost_frac", "ctx_net_path_len_mean", "ctx_net_unanswered_frac")
-CONTEXT_FEATURES: tuple[str, ...] = CONTEXT_FLOW_FEATURES + CONTEXT_HOST_FEATURES + CONTEXT_NET_FEATURES
+CONTEXT_FEATURES: tuple[str, ...] = (
+    CONTEXT_FLOW_FEATURES + CONTEXT_HOST_FEATURES + CONTEXT_PAIR_FEATURES + CONTEXT_FLOW_SHIFTS + CONTEXT_NET_FEATURES
+)
 CONTEXT_PREFIX = "ctx_"
-assert len(set(CONTEXT_FEATURES)) == len(CONTEXT_FEATURES) == 47
+assert len(set(CONTEXT_FEATURES)) == len(CONTEXT_FEATURES) == 60
 assert all(c.startswith(CONTEXT_PREFIX) for c in CONTEXT_FEATURES)
 
 FEATURE_STANDARDS: dict[str, tuple[str, ...]] = {"cic": FEATURES, "paper": PAPER_FEATURES}

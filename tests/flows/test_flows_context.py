@@ -173,6 +173,12 @@ def test_detour_adds_a_switch_against_earlier_windows():
     assert f["ctx_rtt_ms"] == pytest.approx(7.0) and f["ctx_dst_rtt_shift_ms"] == pytest.approx(2.0)
     assert flow(c, 40001)["ctx_dst_path_len_shift"] == 0
     assert f["ctx_net_path_len_mean"] == 4
+    # the host pair's windows, and the flow itself against the pair's earlier windows
+    assert f["ctx_pair_path_len_mean"] == 4 and f["ctx_pair_path_len_shift"] == 1 and f["ctx_pair_flows"] == 2
+    assert f["ctx_path_len_shift"] == 1 and f["ctx_delay_shift_ms"] == pytest.approx(1.0)
+    assert f["ctx_rtt_shift_ms"] == pytest.approx(2.0) and f["ctx_pair_rtt_shift_ms"] == pytest.approx(2.0)
+    first = flow(c, 40000)
+    assert first["ctx_path_len_shift"] == 0 and first["ctx_rtt_shift_ms"] == 0  # no earlier window to compare
 
 
 def test_shift_uses_the_median_of_earlier_windows_only():

@@ -39,7 +39,14 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from uavcas.schema import CONTEXT_FEATURES, CONTEXT_HOST_METRICS, CONTEXT_HOST_SHIFTS
+from uavcas.schema import (
+    CONTEXT_FEATURES,
+    CONTEXT_FLOW_SHIFTS,
+    CONTEXT_HOST_METRICS,
+    CONTEXT_HOST_SHIFTS,
+    CONTEXT_PAIR_METRICS,
+    CONTEXT_PAIR_SHIFTS,
+)
 
 from .assemble import Flows
 from .follow import KEY_COLUMNS, MAX_HOP_S
@@ -249,67 +256,108 @@ def unanswered_requests(p: PacketTable, fl: Flows) -> np.ndarray:
     return request & (np.bincount(fl.flow, weights=~fl.fwd, minlength=fl.n_flows) == 0)
 
 
-def _earlier_median_shift(hw: pd.DataFrame, metric: str) -> pd.Series:
-    """Value in this window less the median of the host's earlier windows that had one; 0 in a
-    host's first window or without a value. `hw` is sorted by (host, window)."""
-    v = hw[metric]
-    base = v.groupby(hw["host"]).transform(lambda s: s.expanding().median().shift(1).ffill())
-    return (v - base).fillna(0.0)
+def _earlier_median(tab: pd.DataFrame, metric: str) -> pd.Series:
+    """Median of the key's earlier windows that had a value (NaN in its first one). `tab` is
+    sorted by (key, window)."""
+    return tab[metric].groupby(tab["key"]).transform(lambda s: s.expanding().median().shift(1).ffill())
 
 
-def host_windows(p: PacketTable, fl: Flows, t: Transmissions, rtt_ms: np.ndarray, window_s: float) -> pd.DataFrame:
-    """Per (host, window): `schema.CONTEXT_HOST_METRICS` and their shifts (`CONTEXT_HOST_SHIFTS`)."""
-    w_ns = int(round(window_s * _NS))
-    ini, res = endpoints(fl, t)
-    unanswered = unanswered_requests(p, fl).astype(np.float64)
-    win = np.asarray(p["ts_ns"], dtype=np.int64)[fl.first] // w_ns
-    rtt = np.where(rtt_ms >= 0, rtt_ms, np.nan)
-    twice = lambda a: np.r_[a, a]  # noqa: E731 - a flow counts for both its hosts, a transmission for its source and destination
-    flows = pd.DataFrame({"host": np.r_[ini, res], "win": twice(win), "u": twice(unanswered), "rtt": twice(rtt)})
-    fa = flows.groupby(["host", "win"]).agg(flows=("u", "size"), unanswered_frac=("u", "mean"), rtt_ms=("rtt", "median"))
+@dataclass(frozen=True)
+class Observed:
+    """What the windows aggregate. Per flow: `ini`, `res` (address codes of its initiator and
+    responder), `win`, `unanswered`, `rtt` (ms, NaN without a handshake). Per transmission:
+    `win` and, over the ones that crossed a link, `path` and `delay` (NaN otherwise)."""
+
+    ini: np.ndarray
+    res: np.ndarray
+    f_win: np.ndarray
+    unanswered: np.ndarray
+    rtt: np.ndarray
+    t_win: np.ndarray
+    path: np.ndarray
+    delay: np.ndarray
+
+    @staticmethod
+    def of(p: PacketTable, fl: Flows, t: Transmissions, rtt_ms: np.ndarray, window_s: float) -> "Observed":
+        w_ns = int(round(window_s * _NS))
+        first = fl.first
+        fwd_first = fl.fwd[fl.starts[:-1]]  # the initiator sent the first packet unless it went backward
+        return Observed(
+            ini=np.where(fwd_first, t.addr_src[first], t.addr_dst[first]),
+            res=np.where(fwd_first, t.addr_dst[first], t.addr_src[first]),
+            f_win=np.asarray(p["ts_ns"], dtype=np.int64)[first] // w_ns,
+            unanswered=unanswered_requests(p, fl).astype(np.float64), rtt=np.where(rtt_ms >= 0, rtt_ms, np.nan),
+            t_win=t.t_ns // w_ns, path=np.where(t.crossed, t.n_points, np.nan),
+            delay=np.where(t.crossed, t.delay_ms, np.nan),
+        )
+
+
+def _finish(tab: pd.DataFrame, shifts: dict[str, str]) -> pd.DataFrame:
+    """Sort by (key, window), add the shifts against the key's earlier windows and the earlier
+    medians (`base_<metric>`); times without a measurement are -1, everything else missing 0."""
+    tab = tab.reset_index().sort_values(["key", "win"], kind="stable").reset_index(drop=True)
+    tab["flows"] = tab["flows"].fillna(0.0)
+    for metric, shift in shifts.items():
+        tab["base_" + metric] = _earlier_median(tab, metric)
+        tab[shift] = (tab[metric] - tab["base_" + metric]).fillna(0.0)
+    for m in ("rtt_ms", "delay_ms"):
+        tab[m] = tab[m].fillna(-1.0)
+    # the earlier medians stay missing: a flow without history gets no shift
+    rest = [c for c in tab.columns if not c.startswith("base_")]
+    tab[rest] = tab[rest].fillna(0.0)
+    return tab.set_index(["key", "win"])
+
+
+def host_windows(o: Observed, t: Transmissions) -> pd.DataFrame:
+    """Per (host, window): `schema.CONTEXT_HOST_METRICS` and their shifts (`CONTEXT_HOST_SHIFTS`).
+    A flow counts for both its hosts, a transmission for its source and its destination."""
+    twice = lambda a: np.r_[a, a]  # noqa: E731
+    flows = pd.DataFrame({"key": np.r_[o.ini, o.res], "win": twice(o.f_win), "u": twice(o.unanswered), "rtt": twice(o.rtt)})
+    fa = flows.groupby(["key", "win"]).agg(flows=("u", "size"), unanswered_frac=("u", "mean"), rtt_ms=("rtt", "median"))
     ntx = t.src.shape[0]
-    crossed = t.crossed
     txs = pd.DataFrame({
-        "host": np.r_[t.src, t.dst], "win": twice(t.t_ns // w_ns), "out": np.r_[np.ones(ntx), np.zeros(ntx)],
+        "key": np.r_[t.src, t.dst], "win": twice(o.t_win), "out": np.r_[np.ones(ntx), np.zeros(ntx)],
         "lost": twice(~t.reached).astype(np.float64), "offhome": twice(t.offhome).astype(np.float64),
-        "ttl_off": twice(t.ttl_off).astype(np.float64),
-        "path": twice(np.where(crossed, t.n_points, np.nan)), "delay": twice(np.where(crossed, t.delay_ms, np.nan)),
+        "ttl_off": twice(t.ttl_off).astype(np.float64), "path": twice(o.path), "delay": twice(o.delay),
     })
     txs["lost_out"] = txs["lost"].where(txs["out"] == 1)
     txs["lost_in"] = txs["lost"].where(txs["out"] == 0)
-    ta = txs.groupby(["host", "win"]).agg(
+    ta = txs.groupby(["key", "win"]).agg(
         out_share=("out", "mean"), lost_out_frac=("lost_out", "mean"), lost_in_frac=("lost_in", "mean"),
         offhome_frac=("offhome", "mean"), ttl_off_frac=("ttl_off", "mean"), path_len_mean=("path", "mean"),
         delay_ms=("delay", "median"))
-    hw = fa.join(ta, how="outer").reset_index().sort_values(["host", "win"], kind="stable").reset_index(drop=True)
-    hw["flows"] = hw["flows"].fillna(0.0)
-    for metric, shift in CONTEXT_HOST_SHIFTS.items():
-        hw[shift] = _earlier_median_shift(hw, metric)
-    for m in ("rtt_ms", "delay_ms"):
-        hw[m] = hw[m].fillna(-1.0)
-    return hw.fillna(0.0)
+    return _finish(fa.join(ta, how="outer"), CONTEXT_HOST_SHIFTS)
 
 
-def network_windows(p: PacketTable, fl: Flows, t: Transmissions, window_s: float) -> pd.DataFrame:
+def pair_windows(o: Observed, t: Transmissions) -> tuple[pd.DataFrame, np.ndarray]:
+    """Per (unordered host pair, window): `schema.CONTEXT_PAIR_METRICS` and their shifts
+    (`CONTEXT_PAIR_SHIFTS`); and each flow's pair code."""
+    n = int(max(o.ini.max(initial=0), o.res.max(initial=0), t.src.max(initial=0), t.dst.max(initial=0))) + 1
+    code = lambda a, b: np.minimum(a, b) * n + np.maximum(a, b)  # noqa: E731
+    flows = pd.DataFrame({"key": code(o.ini, o.res), "win": o.f_win, "u": o.unanswered, "rtt": o.rtt})
+    fa = flows.groupby(["key", "win"]).agg(flows=("u", "size"), unanswered_frac=("u", "mean"), rtt_ms=("rtt", "median"))
+    txs = pd.DataFrame({"key": code(t.src, t.dst), "win": o.t_win, "lost": (~t.reached).astype(np.float64),
+                        "path": o.path, "delay": o.delay})
+    ta = txs.groupby(["key", "win"]).agg(lost_frac=("lost", "mean"), path_len_mean=("path", "mean"),
+                                         delay_ms=("delay", "median"))
+    tab = _finish(fa.join(ta, how="outer"), CONTEXT_PAIR_SHIFTS)
+    return tab, code(o.ini, o.res)
+
+
+def network_windows(o: Observed, t: Transmissions) -> pd.DataFrame:
     """Per window, over every host: share of transmissions lost, mean path length, share of
     requests unanswered."""
-    w_ns = int(round(window_s * _NS))
-    fw = pd.DataFrame({"win": np.asarray(p["ts_ns"], dtype=np.int64)[fl.first] // w_ns, "u": unanswered_requests(p, fl)})
-    tw = pd.DataFrame({"win": t.t_ns // w_ns, "lost": ~t.reached, "path": np.where(t.crossed, t.n_points, np.nan)})
+    tw = pd.DataFrame({"win": o.t_win, "lost": ~t.reached, "path": o.path})
     return pd.DataFrame({
         "ctx_net_lost_frac": tw.groupby("win")["lost"].mean(),
         "ctx_net_path_len_mean": tw.groupby("win")["path"].mean(),
-        "ctx_net_unanswered_frac": fw.groupby("win")["u"].mean(),
+        "ctx_net_unanswered_frac": pd.Series(o.unanswered).groupby(o.f_win).mean(),
     }).fillna(0.0)
 
 
-def endpoints(fl: Flows, t: Transmissions) -> tuple[np.ndarray, np.ndarray]:
-    """Address codes of each flow's initiator and responder (the source of its first packet,
-    unless that packet travelled backward)."""
-    first = fl.first
-    fwd_first = fl.fwd[fl.starts[:-1]]
-    return (np.where(fwd_first, t.addr_src[first], t.addr_dst[first]),
-            np.where(fwd_first, t.addr_dst[first], t.addr_src[first]))
+def _take(tab: pd.DataFrame, key: np.ndarray, win: np.ndarray, cols: list[str]) -> np.ndarray:
+    # every flow's (key, window) exists: the flow itself put it there
+    return tab.reindex(pd.MultiIndex.from_arrays([key, win]))[cols].to_numpy()
 
 
 def context_frame(p: PacketTable, fl: Flows, window_s: float = CONTEXT_WINDOW_S) -> pd.DataFrame:
@@ -321,15 +369,21 @@ def context_frame(p: PacketTable, fl: Flows, window_s: float = CONTEXT_WINDOW_S)
         return pd.DataFrame({c: np.zeros(0) for c in CONTEXT_FEATURES})
     t = transmissions(p)
     per_flow = flow_context(p, fl, t)
-    hw = host_windows(p, fl, t, per_flow["ctx_rtt_ms"].to_numpy(), window_s).set_index(["host", "win"])
-    win = np.asarray(p["ts_ns"], dtype=np.int64)[fl.first] // int(round(window_s * _NS))
-    cols = list(CONTEXT_HOST_METRICS) + list(CONTEXT_HOST_SHIFTS.values())
+    o = Observed.of(p, fl, t, per_flow["ctx_rtt_ms"].to_numpy(), window_s)
     out = [per_flow]
-    for role, host in zip(("src", "dst"), endpoints(fl, t)):
-        # every flow's (host, window) exists: the flow itself put it there
-        vals = hw.reindex(pd.MultiIndex.from_arrays([host, win]))[cols].to_numpy()
-        out.append(pd.DataFrame(vals, columns=[f"ctx_{role}_{c}" for c in cols]))
-    out.append(network_windows(p, fl, t, window_s).reindex(win).fillna(0.0).reset_index(drop=True))
+    hw = host_windows(o, t)
+    cols = list(CONTEXT_HOST_METRICS) + list(CONTEXT_HOST_SHIFTS.values())
+    for role, host in (("src", o.ini), ("dst", o.res)):
+        out.append(pd.DataFrame(_take(hw, host, o.f_win, cols), columns=[f"ctx_{role}_{c}" for c in cols]))
+    pw, pair = pair_windows(o, t)
+    cols = list(CONTEXT_PAIR_METRICS) + list(CONTEXT_PAIR_SHIFTS.values())
+    out.append(pd.DataFrame(_take(pw, pair, o.f_win, cols), columns=[f"ctx_pair_{c}" for c in cols]))
+    # the flow's own round trip, delay and path against its host pair's earlier windows
+    base = _take(pw, pair, o.f_win, ["base_rtt_ms", "base_delay_ms", "base_path_len_mean"])
+    own = np.stack([o.rtt, np.where(per_flow["ctx_delay_ms"] > 0, per_flow["ctx_delay_ms"], np.nan),
+                    np.where(per_flow["ctx_path_len_mean"] > 0, per_flow["ctx_path_len_mean"], np.nan)], 1)
+    out.append(pd.DataFrame(np.nan_to_num(own - base, nan=0.0), columns=list(CONTEXT_FLOW_SHIFTS)))
+    out.append(network_windows(o, t).reindex(o.f_win).fillna(0.0).reset_index(drop=True))
     frame = pd.concat(out, axis=1)
     if tuple(frame.columns) != CONTEXT_FEATURES:
         raise AssertionError(f"context columns {list(frame.columns)} differ from schema.CONTEXT_FEATURES")
