@@ -8,6 +8,9 @@ the shard and the dataset card is `uavcas.dataset.store`'s job.
 Only complete runs are extracted: run.json present with exit status 0. A run that was killed
 (no run.json), interrupted (130, 143) or failed (1) is refused unless `allow_incomplete`, and
 its shard then says so (`complete: false`, `run_exit_status`), as does the dataset card.
+
+The context columns (`ctx_*`, `uavcas.flows.context`) are computed from the captures and flows
+alone, before anything reads the plan's attacks or the attack log.
 """
 
 from __future__ import annotations
@@ -21,10 +24,11 @@ import numpy as np
 import pandas as pd
 
 from uavcas.flows import FlowConfig, Flows, PacketTable, extract_flows
+from uavcas.flows.context import CONTEXT_WINDOW_S, context_frame
 from uavcas.flows.follow import Followed, follow_run
 from uavcas.labels import PacketTruth, TruthContext, label_flows, packet_truth, read_attack_log, rule_text
 from uavcas.rundir import RunDir, RunDirError, RunInfo
-from uavcas.schema import DEFAULT_STANDARD
+from uavcas.schema import CONTEXT_FEATURES, DEFAULT_STANDARD
 from uavcas.vocabulary import EFFECTS
 
 
@@ -52,11 +56,12 @@ class ShardInfo:
     fidelity: str | None = None  # the run's fidelity verdict (run.json), None: never audited
     complete: bool = True  # the run finished with exit status 0
     run_exit_status: int | None = 0  # run.json's (None: the run never wrote one)
+    context_window_s: float | None = None  # window of the ctx_* columns, None: not computed
 
 
 @dataclass(frozen=True)
 class Shard:
-    frame: pd.DataFrame  # schema.METADATA_COLUMNS + features, one row per flow
+    frame: pd.DataFrame  # schema.METADATA_COLUMNS + features (+ schema.CONTEXT_FEATURES), one row per flow
     info: ShardInfo
 
 
@@ -93,9 +98,10 @@ def extract_detailed(
     min_attack_fraction: float = 0.0,
     features: str = DEFAULT_STANDARD,
     allow_incomplete: bool = False,
+    context: bool = True,
 ) -> Extracted:
     """Flows + labels of one run, with the packet-level results (for audits and tests). The run id
-    is `run_id`, else run.json's, else the directory's name.
+    is `run_id`, else run.json's, else the directory's name. `context`: add the `ctx_*` columns.
 
     Raises RunDirError for a run that did not finish cleanly, unless `allow_incomplete`."""
     rd = RunDir(Path(run_dir))
@@ -117,12 +123,16 @@ def extract_detailed(
                           f"{rd.owner_path.name}): its packets cannot be placed in the plan")
     cfg = FlowConfig(view=view, min_packets=min_packets, window_t0_unix=t0, window_s=plan.window_s)  # type: ignore[arg-type]
     ex = extract_flows(pcaps, cfg, points=[p.stem for p in pcaps], allow_truncated=allow_truncated, standard=features)
+    # from the captures and flows only: computed before the attack log is even read
+    ctx = context_frame(ex.packets, ex.flows) if context else None
     log = read_attack_log(rd.attacks_jsonl, plan, t0)
     _, followed = follow_run(rd.root, table=ex.packets)
     truth = packet_truth(TruthContext(ex.packets, log, followed, plan, t0))
     lab = label_flows(ex.flows, ex.frame, log, truth, mode=labels,  # type: ignore[arg-type]
                       min_attack_fraction=min_attack_fraction)
     df = lab.frame
+    if ctx is not None:  # label_flows keeps flow_id: rows may have been left out, never reordered
+        df[list(CONTEXT_FEATURES)] = ctx.to_numpy()[df["flow_id"].to_numpy()]
     rid = _check_run_id(rd.root, str(run_id or (info.run_id if info else None) or rd.root.resolve().name))
     df["run_id"], df["config"], df["seed"], df["view"] = rid, plan.config, plan.seed, view
     for k, v in plan.scenario.axes().items():
@@ -154,6 +164,7 @@ def extract_detailed(
             fidelity=info.fidelity.verdict if info is not None and info.fidelity is not None else None,
             complete=problem is None,
             run_exit_status=info.exit_status if info else None,
+            context_window_s=CONTEXT_WINDOW_S if context else None,
         ),
     )
     return Extracted(shard, ex.packets, ex.flows, followed, truth)

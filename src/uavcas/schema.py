@@ -18,7 +18,7 @@ from __future__ import annotations
 
 from uavcas import vocabulary as _v
 
-SCHEMA_VERSION = 2  # 2: feature standards, first_ts_ns
+SCHEMA_VERSION = 3  # 2: feature standards, first_ts_ns; 3: context columns (ctx_*)
 
 # Direction-independent statistics over all packets of the flow.
 FLOW_FEATURES: tuple[str, ...] = (
@@ -93,6 +93,48 @@ PAPER_FEATURES: tuple[str, ...] = (
     "Bwd IAT Total", "Bwd IAT Mean", "Bwd IAT Std", "Fwd Header Length", "Bwd Header Length",
 )  # fmt: skip
 assert len(PAPER_FEATURES) == 47 and len(set(PAPER_FEATURES)) == 47
+
+# Context features (`ctx_*`): what switch monitors observe around a flow, computed from the run's
+# captures at extraction time (`uavcas.flows.context`; definitions and what a deployed node must
+# observe for each: docs/formats.md). Not part of a feature standard: the flow features stay the
+# standard's 47, and models that use context (`uavcas.ids.baseline("context")`) add these.
+CONTEXT_FLOW_FEATURES: tuple[str, ...] = (
+    "ctx_path_len_mean", "ctx_delay_ms", "ctx_lost_frac", "ctx_offhome_frac", "ctx_ttl_off_frac",
+    "ctx_ttl_levels", "ctx_neardup_frac", "ctx_retx_frac", "ctx_seq_regress_frac", "ctx_rtt_ms",
+)  # fmt: skip
+# per host and window ...
+CONTEXT_HOST_METRICS: tuple[str, ...] = (
+    "flows", "unanswered_frac", "rtt_ms", "delay_ms", "out_share", "lost_out_frac", "lost_in_frac",
+    "offhome_frac", "ttl_off_frac", "path_len_mean",
+)  # fmt: skip
+# ... and against the median of the host's earlier windows (metric -> its shift)
+CONTEXT_HOST_SHIFTS: dict[str, str] = {
+    "flows": "flows_shift", "unanswered_frac": "unanswered_shift", "rtt_ms": "rtt_shift_ms",
+    "delay_ms": "delay_shift_ms", "out_share": "out_share_shift", "lost_out_frac": "lost_out_shift",
+    "path_len_mean": "path_len_shift",
+}  # fmt: skip
+# for the flow's initiator (src) and responder (dst)
+CONTEXT_HOST_FEATURES: tuple[str, ...] = tuple(
+    f"ctx_{role}_{m}" for role in ("src", "dst") for m in CONTEXT_HOST_METRICS + tuple(CONTEXT_HOST_SHIFTS.values())
+)
+# per window for the flow's host pair, and against the pair's earlier windows
+CONTEXT_PAIR_METRICS: tuple[str, ...] = ("flows", "unanswered_frac", "rtt_ms", "delay_ms", "lost_frac", "path_len_mean")
+CONTEXT_PAIR_SHIFTS: dict[str, str] = {
+    "unanswered_frac": "unanswered_shift", "rtt_ms": "rtt_shift_ms", "delay_ms": "delay_shift_ms",
+    "path_len_mean": "path_len_shift",
+}  # fmt: skip
+CONTEXT_PAIR_FEATURES: tuple[str, ...] = tuple(
+    f"ctx_pair_{m}" for m in CONTEXT_PAIR_METRICS + tuple(CONTEXT_PAIR_SHIFTS.values())
+)
+# the flow's own round trip, delay and path length less the median of its pair's earlier windows
+CONTEXT_FLOW_SHIFTS: tuple[str, ...] = ("ctx_rtt_shift_ms", "ctx_delay_shift_ms", "ctx_path_len_shift")
+CONTEXT_NET_FEATURES: tuple[str, ...] = ("ctx_net_lost_frac", "ctx_net_path_len_mean", "ctx_net_unanswered_frac")
+CONTEXT_FEATURES: tuple[str, ...] = (
+    CONTEXT_FLOW_FEATURES + CONTEXT_HOST_FEATURES + CONTEXT_PAIR_FEATURES + CONTEXT_FLOW_SHIFTS + CONTEXT_NET_FEATURES
+)
+CONTEXT_PREFIX = "ctx_"
+assert len(set(CONTEXT_FEATURES)) == len(CONTEXT_FEATURES) == 60
+assert all(c.startswith(CONTEXT_PREFIX) for c in CONTEXT_FEATURES)
 
 FEATURE_STANDARDS: dict[str, tuple[str, ...]] = {"cic": FEATURES, "paper": PAPER_FEATURES}
 DEFAULT_STANDARD = "cic"

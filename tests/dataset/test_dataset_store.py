@@ -11,7 +11,7 @@ from typer.testing import CliRunner
 
 from uavcas.cli import app
 from uavcas.dataset.parquet import COLUMNS, arrow_schema, read_flows
-from uavcas.schema import CLASSES, FEATURES, METADATA_COLUMNS, PAPER_FEATURES, SEQUENCE_COLUMNS
+from uavcas.schema import CLASSES, CONTEXT_FEATURES, FEATURES, METADATA_COLUMNS, PAPER_FEATURES, SEQUENCE_COLUMNS
 
 runner = CliRunner()
 
@@ -26,7 +26,7 @@ def test_extract_info_idempotent(synth_run_dir, tmp_path):
     assert r.exit_code == 0, r.output
     assert (ds / "shards" / "run-synth.parquet").exists()
     table = pq.read_table(ds / "flows.parquet")
-    assert table.schema.remove_metadata() == arrow_schema()
+    assert table.schema.remove_metadata() == arrow_schema(context=True)  # extraction adds the ctx_* columns
     assert set(METADATA_COLUMNS) | set(FEATURES) | set(SEQUENCE_COLUMNS) <= set(COLUMNS)
     card = json.loads((ds / "dataset.json").read_text())
     # 13 HTTP sessions, each cut in two by the server's FIN (CICFlowMeter's rule), the blackholed
@@ -34,6 +34,7 @@ def test_extract_info_idempotent(synth_run_dir, tmp_path):
     # and the flood
     assert card["n_flows"] == table.num_rows == N_FLOOD + 2 * 13 + 1
     assert card["features"]["standard"] == "cic" and card["features"]["units"]["Flow Duration"] == "us"
+    assert card["context"] == {"columns": len(CONTEXT_FEATURES), "window_s": 5.0}
     assert card["runs"][0]["flow_rules"]["idle_timeout_s"] == 15.0 and card["runs"][0]["flow_rules"]["fin_rst"]
     assert card["class_counts"]["DoS"] == N_FLOOD and set(CLASSES) <= set(card["class_counts"])
     assert card["views"] == ["5tuple"] and card["seeds"] == [7] and card["runs"][0]["run_id"] == "run-synth"

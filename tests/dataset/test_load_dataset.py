@@ -56,3 +56,14 @@ def test_external_sample_each_flow_its_own_group(shared_data):
         pytest.skip(f"{p} not found")
     X, y, groups, meta = uavcas.load_dataset(p)
     assert groups.is_unique and len(X) == len(y) and not set(X.columns) & set(meta.columns)
+
+
+def test_context_columns_on_request(synth_dir, synth_df, tmp_path):
+    from uavcas.dataset.synthetic import write_dataset
+
+    X = uavcas.load_dataset(synth_dir, context=True).X
+    assert list(X.columns) == list(schema.FEATURES) + list(schema.CONTEXT_FEATURES)
+    assert not any(c.startswith("ctx_") for c in uavcas.load_dataset(synth_dir).X.columns)
+    bare = write_dataset(tmp_path / "bare", synth_df.drop(columns=list(schema.CONTEXT_FEATURES)))
+    with pytest.raises(ValueError, match="no context columns"):
+        uavcas.load_dataset(bare, context=True)

@@ -1,4 +1,4 @@
-"""Every baseline passes scikit-learn's `check_estimator` suite.
+"""Every baseline, and the context detector, passes scikit-learn's `check_estimator` suite.
 
 The checking instances keep the paper's architectures and optimisers but use small batches and
 few epochs, so the networks learn the checks' 300-row toy problems (accuracy > 0.83 is one
@@ -17,7 +17,9 @@ from uavcas.ids.models import CLASSICAL, DEEP
 
 HAS_TORCH = importlib.util.find_spec("torch") is not None
 FAST = {"mlp": {"batch_size": 16, "max_iter": 20}, **{d: {"batch_size": 16, "epochs": 20, "n_threads": 1} for d in DEEP}}
-NAMES = CLASSICAL + (DEEP if HAS_TORCH else ())
+# the context detector (one class for its three variants: they differ in the columns they select
+# by name, and an array without names is taken whole)
+NAMES = CLASSICAL + (DEEP if HAS_TORCH else ()) + ("context",)
 ESTIMATORS = [baseline(n, **FAST.get(n, {})) for n in NAMES]
 
 # The same reason scikit-learn gives for RandomForestClassifier and SGDClassifier in its own

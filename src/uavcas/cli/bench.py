@@ -54,7 +54,7 @@ def ids_cmd(
     dataset: Path = typer.Argument(..., help="Dataset directory (flows.parquet), the authors' CSV (*_ts.csv) or a CICIDS2017/UNSW-NB15 sample."),
     out: Path = typer.Option(..., "--out", help="Output directory (one sub-directory per protocol when several)."),
     protocol: str = typer.Option("multiclass", "--protocol", help="binary | multiclass | ood | cross-condition, comma-separated, or all."),
-    models: str = typer.Option("all", "--models", help="Comma-separated: lr,sgd,rf,mlp,lightgbm,cnn1d,lstm,convnet,tinyml,cnn_bilstm (or all)."),
+    models: str = typer.Option("all", "--models", help="Comma-separated: lr,sgd,rf,mlp,lightgbm,cnn1d,lstm,convnet,tinyml,cnn_bilstm (all: these ten), context,context-flow,context-only (the context-aware detector and its ablation; need the dataset's ctx_* columns)."),
     scaler: str = typer.Option("standard", "--scaler", help="standard | minmax | robust."),
     epochs: int = typer.Option(50, "--epochs", min=1, help="Max epochs of the neural models (early stopping on the grouped validation split)."),
     holdout: list[str] = typer.Option([], "--holdout", help="AXIS=VALUE held out (cross-condition; repeatable)."),
@@ -71,7 +71,7 @@ def ids_cmd(
     import pandas as pd
 
     from uavcas.dataset.read import load_any
-    from uavcas.ids.models import DEEP, MODELS
+    from uavcas.ids.models import ALL_MODELS, DEEP, MODELS
     from uavcas.ids.protocols import PROTOCOLS, SCALERS, BenchConfig, execute, prepare
     from uavcas.ids.results import results_frame, write_results
     from uavcas.ids.torch_estimator import DL_MISSING
@@ -79,7 +79,7 @@ def ids_cmd(
     protocols = _parse_list(protocol, PROTOCOLS, "--protocol")
     if scaler not in SCALERS:
         raise fail(f"--scaler: unknown {scaler!r} (known: {', '.join(SCALERS)})")
-    names = _parse_list(models, MODELS, "--models")
+    names = MODELS if models.strip() == "all" else _parse_list(models, ALL_MODELS, "--models")
     if any(m in DEEP for m in names):
         try:
             import torch  # noqa: F401

@@ -3,7 +3,8 @@
     X, y, groups, meta = uavcas.load_dataset("ds", view="5tuple", features="cic")
 
 - `X`: DataFrame of the feature columns only (a feature set of `uavcas.schema`, or the columns
-  given), NaN and inf (a rate over a zero duration) set to 0 as the benchmark does;
+  given; `context=True` adds the dataset's `ctx_*` context columns, what `baseline("context")`
+  learns from), NaN and inf (a rate over a zero duration) set to 0 as the benchmark does;
 - `y`: the class of each flow (`label`, 'Benign' or an attack class);
 - `groups`: the run of each flow (`run_id`), for grouped splits (`sklearn.model_selection.GroupKFold`
   or `uavcas.ids.splits.grouped_split`): flows of one run share its channel and timing;
@@ -30,19 +31,25 @@ class Dataset(NamedTuple):
 
 
 def load_dataset(path: str | Path, view: str | None = None, features: str | Iterable[str] | None = None,
-                 fmt: str | None = None) -> Dataset:
+                 fmt: str | None = None, context: bool = False) -> Dataset:
     """Read `path` (any format `uavcas.dataset.read.load_any` reads; `fmt` names it when the path
     does not tell) and split it into features, labels, groups and metadata.
 
     `view` picks one flow view when the dataset holds several; `features` is a feature-set name of
-    the schema (e.g. 'cic', 'paper'), a list of feature columns, or None for the dataset's own.
+    the schema (e.g. 'cic', 'paper'), a list of feature columns, or None for the dataset's own;
+    `context` appends the context columns (`schema.CONTEXT_FEATURES`; an error when the dataset
+    has none).
     """
-    from uavcas.ids.features import finite_features, resolve_features
+    from uavcas.ids.features import context_matrix, finite_features, resolve_features
+    from uavcas.schema import CONTEXT_FEATURES
 
     df = load_any(path, fmt, view=view).reset_index(drop=True)
     if "label" not in df.columns:
         raise ValueError(f"{path}: no 'label' column")
     cols = resolve_features(df, features)
+    if context:
+        context_matrix(df.head(0))  # refuses a dataset without the columns
+        cols = cols + [c for c in CONTEXT_FEATURES if c not in cols]
     X = pd.DataFrame(finite_features(df, cols), columns=cols, index=df.index)
     groups = df["run_id"].astype(str).rename("run_id") if "run_id" in df.columns else pd.Series(
         df.index.astype(str), index=df.index, name="run_id")

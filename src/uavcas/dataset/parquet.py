@@ -7,7 +7,8 @@ noise_dbm float64; attacks, payload, pathloss, modulation, mission string); sequ
 columns: seq_time_s list<float64>, seq_size list<int32>, seq_flags list<int16>, seq_dir list<int8>
 (+1 forward, -1 backward), seq_effect list<string> (one of vocabulary.EFFECTS per packet); the
 47 features of the dataset's standard float64 (`schema.feature_columns`); attack_packets and
-attack_packets_<family> int64, attack_fraction float64; label_<family> bool; label, label_source string. Any column may hold nulls
+attack_packets_<family> int64, attack_fraction float64; label_<family> bool; label, label_source string;
+the context columns (`schema.CONTEXT_FEATURES`, all or none) float64. Any column may hold nulls
 where the source did not carry the value (an imported CSV has no ports, for instance).
 
 Files are written from Arrow arrays without pandas metadata, so plain `pandas.read_parquet` reads
@@ -28,6 +29,7 @@ from uavcas.atomic import atomic_path
 
 from uavcas.schema import (
     AXIS_COLUMNS,
+    CONTEXT_FEATURES,
     COUNT_COLUMNS,
     DEFAULT_STANDARD,
     ID_COLUMNS,
@@ -75,12 +77,14 @@ _SEQ_TYPES = {
 META_KEY = b"uavcas"
 
 
-def arrow_schema(standard: str = DEFAULT_STANDARD) -> pa.Schema:
+def arrow_schema(standard: str = DEFAULT_STANDARD, context: bool = False) -> pa.Schema:
+    """The columns of a shard: `context` adds the ctx_* columns after the features."""
     fields = [pa.field(c, _ID_TYPES[c]) for c in ID_COLUMNS]
     fields += [pa.field(c, _AXIS_TYPES[c]) for c in AXIS_COLUMNS]
     fields += [pa.field(c, _COUNT_TYPES[c]) for c in COUNT_COLUMNS]
     fields += [pa.field(c, _SEQ_TYPES[c]) for c in SEQUENCE_COLUMNS]
     fields += [pa.field(c, pa.float64()) for c in feature_columns(standard)]
+    fields += [pa.field(c, pa.float64()) for c in (CONTEXT_FEATURES if context else ())]
     fields += [pa.field(c, pa.float64() if c == "attack_fraction" else pa.int64()) for c in TRUTH_COLUMNS]
     fields += [pa.field(c, pa.bool_()) for c in LABEL_COLUMNS]
     fields += [pa.field("label", pa.string()), pa.field("label_source", pa.string())]
@@ -93,10 +97,15 @@ COLUMNS: tuple[str, ...] = tuple(arrow_schema().names)
 def to_table(df: pd.DataFrame, meta: dict | None = None, standard: str | None = None) -> pa.Table:
     """DataFrame with every schema column -> Arrow table in schema order and dtypes.
 
-    `standard` (default: `df.attrs["feature_standard"]`, else 'cic') picks the feature columns.
+    `standard` (default: `df.attrs["feature_standard"]`, else 'cic') picks the feature columns; the
+    context columns are written when `df` has them (all of them, or none).
     """
     standard = standard or df.attrs.get("feature_standard", DEFAULT_STANDARD)
-    schema = arrow_schema(standard)
+    ctx = [c for c in CONTEXT_FEATURES if c in df.columns]
+    if ctx and len(ctx) != len(CONTEXT_FEATURES):
+        missing = [c for c in CONTEXT_FEATURES if c not in df.columns]
+        raise ValueError(f"flow frame has some context columns but lacks {missing}")
+    schema = arrow_schema(standard, context=bool(ctx))
     missing = [c for c in schema.names if c not in df.columns]
     if missing:
         raise ValueError(f"flow frame lacks schema columns ({standard} features): {missing}")

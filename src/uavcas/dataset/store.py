@@ -28,7 +28,7 @@ import pyarrow.parquet as pq
 
 from uavcas.atomic import atomic_write_text, ensure_out_dir
 from uavcas.extract import ShardInfo, extract
-from uavcas.schema import CLASSES, EFFECTS, SCHEMA_VERSION
+from uavcas.schema import CLASSES, CONTEXT_FEATURES, EFFECTS, SCHEMA_VERSION
 from uavcas.versions import package_versions
 
 from .parquet import META_KEY, table_meta, table_standard, to_table, write_table
@@ -74,6 +74,10 @@ def rebuild(out_dir: Path) -> dict:
     if len(standards) > 1:
         raise DatasetError(f"{out_dir}: shards of different feature standards {standards}; extract every run with one --features")
     standard = standards[0]
+    with_ctx = {t.schema.get_field_index(CONTEXT_FEATURES[0]) >= 0 for t in tables}
+    if len(with_ctx) > 1:
+        raise DatasetError(f"{out_dir}: some shards have the context columns (ctx_*) and some do not; "
+                           "extract every run with the same uavcas version")
     union = pa.concat_tables([t.replace_schema_metadata(None) for t in tables])
     write_table(union.replace_schema_metadata({META_KEY: json.dumps({"feature_standard": standard}).encode()}),
                 out_dir / "flows.parquet")
@@ -85,6 +89,8 @@ def rebuild(out_dir: Path) -> dict:
     card = {
         "schema_version": SCHEMA_VERSION,
         "features": feature_card(standard),
+        # the ctx_* columns (uavcas.flows.context) and their window, null when the shards lack them
+        "context": {"columns": len(CONTEXT_FEATURES), "window_s": runs[0].get("context_window_s")} if with_ctx == {True} else None,
         "n_flows": union.num_rows,
         "n_runs": len(shards),
         "n_incomplete_runs": sum(1 for r in runs if r.get("complete") is False),

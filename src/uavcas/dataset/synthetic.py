@@ -12,7 +12,9 @@ The structure is chosen so expected outcomes are known:
 - Replay: benign-like plus duplicated packets (near-zero IATs).
 Benign IATs depend on the axes (swarm size, TX power, mission, path loss) so internal diversity
 per axis is non-zero. Each flow's packets go through the real extractor (`uavcas.flows`), so the
-features are exactly those of captured flows.
+features are exactly those of captured flows; so do the context columns (`uavcas.flows.context`),
+which carry little here: every flow has its own address and one capture point, so there is no
+host, window or vantage structure to observe.
 """
 
 from __future__ import annotations
@@ -143,6 +145,7 @@ def _packet_table(seqs, src_ips: list[int], src_ports: list[int], dst_ip: int, d
 def _flow_table(seqs, src_ips: list[int], src_ports: list[int], sequences: bool) -> pd.DataFrame:
     """Identity, counts, sequences and the 47 features of `seqs`, computed by uavcas.flows."""
     from uavcas.flows.assemble import FlowConfig, assemble
+    from uavcas.flows.context import context_frame
     from uavcas.flows.features import flow_frame
 
     dst_ip = int(ipaddress.IPv4Address(_SERVER_IP))
@@ -152,7 +155,7 @@ def _flow_table(seqs, src_ips: list[int], src_ports: list[int], sequences: bool)
     flows = assemble(table, whole)
     if flows.n_flows != len(seqs):  # every flow has its own key by construction
         raise AssertionError(f"{len(seqs)} synthetic flows assembled into {flows.n_flows}")
-    df = flow_frame(table, flows, sequences=sequences)
+    df = pd.concat([flow_frame(table, flows, sequences=sequences), context_frame(table, flows)], axis=1)
     # Flows come out in key order; put them back in generation order.
     key = pd.Series(np.arange(len(seqs)), index=pd.MultiIndex.from_arrays(
         [[str(ipaddress.IPv4Address(a)) for a in src_ips], src_ports]))

@@ -83,16 +83,22 @@ class LightGBMClassifier(EarlyStoppingClassifier):
     def _fit_core(self, X, yi, X_val, yv, rng) -> None:
         import lightgbm as lgb
 
-        model = lgb.LGBMClassifier(n_estimators=self.n_estimators, learning_rate=self.learning_rate,
-                                   num_leaves=self.num_leaves, n_jobs=self.n_jobs or default_threads(),
-                                   random_state=self.random_state, deterministic=True, verbose=-1)
+        params = self._lgbm_params()
+        model = lgb.LGBMClassifier(**params)
         kw = {}
         if X_val is not None:
             kw = {"eval_X": X_val, "eval_y": yv, "callbacks": [lgb.early_stopping(self.early_stopping_rounds, verbose=False)]}
+            if params.get("class_weight") is not None:  # stop on the loss the model is trained for
+                kw["eval_class_weight"] = [params["class_weight"]]
         model.fit(X, yi, **kw)
         self.model_ = model
         self.n_iter_ = int(model.best_iteration_ or model.n_estimators_)
         self.feature_importances_ = model.feature_importances_
+
+    def _lgbm_params(self) -> dict:
+        return dict(n_estimators=self.n_estimators, learning_rate=self.learning_rate, num_leaves=self.num_leaves,
+                    n_jobs=self.n_jobs or default_threads(), random_state=self.random_state, deterministic=True,
+                    verbose=-1)
 
     def _proba_core(self, X) -> np.ndarray:
         return self.model_.predict_proba(X)

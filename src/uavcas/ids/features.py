@@ -5,7 +5,9 @@ column that is no flow feature) must never reach a model — the authors' `confi
 features is the defect this module exists to prevent.
 
 Feature lists come from `uavcas.schema` only: its feature standards (`schema.FEATURE_STANDARDS`,
-e.g. 'cic' and 'paper', when the schema defines several) or its one list `schema.FEATURES`.
+e.g. 'cic' and 'paper', when the schema defines several) or its one list `schema.FEATURES`, and
+the context columns (`schema.CONTEXT_FEATURES`, observations of the switches around a flow),
+which only the models that ask for them receive (`context_matrix`).
 """
 
 from __future__ import annotations
@@ -28,7 +30,7 @@ def feature_sets() -> dict[str, tuple[str, ...]]:
 
 
 def known_features() -> set[str]:
-    return set(schema.FEATURES).union(*feature_sets().values())
+    return set(schema.FEATURES).union(*feature_sets().values(), schema.CONTEXT_FEATURES)
 
 
 def check_feature_columns(columns: Iterable[str]) -> list[str]:
@@ -84,3 +86,12 @@ def feature_matrix(df: pd.DataFrame, columns: Iterable[str] | str | None = None)
     x = finite_features(df, resolve_features(df, columns))
     # float32 overflows above 3.4e38; clip so huge rates stay finite
     return np.clip(x, -1e30, 1e30).astype(np.float32)
+
+
+def context_matrix(df: pd.DataFrame) -> np.ndarray:
+    """float32 matrix of the context columns (`schema.CONTEXT_FEATURES`) of `df`."""
+    missing = [c for c in schema.CONTEXT_FEATURES if c not in df.columns]
+    if missing:
+        raise ValueError(f"the dataset has no context columns ({len(missing)} ctx_* missing): extract its runs "
+                         "with this uavcas (`uavcas extract RUN_DIR --out DIR`) to add them")
+    return feature_matrix(df, list(schema.CONTEXT_FEATURES))

@@ -13,11 +13,11 @@ import numpy as np
 import pandas as pd
 
 from .metrics import STEALTH
-from .models import DISPLAY, MODELS
+from .models import ALL_MODELS, DISPLAY
 
 COLUMNS = ("protocol", "model", "metric", "class", "mean", "std")
 PROTOCOL_ORDER = ("binary", "multiclass", "ood", "cross-condition")
-MODEL_ORDER = [DISPLAY[m] for m in MODELS]
+MODEL_ORDER = [DISPLAY[m] for m in ALL_MODELS]
 # overall columns of each protocol's main table: (metric, class, header)
 MAIN: dict[str, tuple[tuple[str, str, str], ...]] = {
     "binary": (("f1_weighted", "", "weighted F1"), ("f1_macro", "", "macro F1"), ("auroc", "", "AUROC"),

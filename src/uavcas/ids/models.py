@@ -5,6 +5,10 @@ Classical (scikit-learn / LightGBM), as in Hassler et al. 2024 (LR, SGD, RF, MLP
 al. 2023 (LightGBM); deep ones are `TorchClassifier`s (see nets.py for the architectures). The
 models that early-stop (MLP, LightGBM, the five networks) take the protocol's grouped validation
 split: `fit(X, y, X_val=..., y_val=...)` (`accepts_validation`).
+
+Beyond the ten, the context-aware detector and its ablation (`CONTEXT_MODELS`, `ids/context.py`):
+`context` learns from the flow features and the dataset's `ctx_*` context columns,
+`context-flow` from the flow features only, `context-only` from the context columns only.
 """
 
 from __future__ import annotations
@@ -15,20 +19,24 @@ from sklearn.base import BaseEstimator
 
 from .base import EarlyStoppingClassifier
 from .classical import GroupedMLPClassifier, LightGBMClassifier
+from .context import VARIANTS, ContextClassifier
 from .torch_estimator import TorchClassifier, default_threads
 
 CLASSICAL = ("lr", "sgd", "rf", "mlp", "lightgbm")
 DEEP = ("cnn1d", "lstm", "convnet", "tinyml", "cnn_bilstm")
-MODELS: tuple[str, ...] = CLASSICAL + DEEP
-TREES = ("rf", "lightgbm")  # permutation importance is computed for these
+MODELS: tuple[str, ...] = CLASSICAL + DEEP  # the ten baselines
+CONTEXT_MODELS: tuple[str, ...] = tuple(VARIANTS)  # context, context-flow, context-only
+ALL_MODELS: tuple[str, ...] = MODELS + CONTEXT_MODELS
+TREES = ("rf", "lightgbm") + CONTEXT_MODELS  # permutation importance is computed for these
 DISPLAY: dict[str, str] = {
     "lr": "LR", "sgd": "SGD", "rf": "RF", "mlp": "MLP", "lightgbm": "LightGBM", "cnn1d": "1D-CNN",
     "lstm": "LSTM", "convnet": "ConvNet", "tinyml": "TinyML", "cnn_bilstm": "CNN-BiLSTM",
+    "context": "Context", "context-flow": "Context-flow", "context-only": "Context-only",
 }
 PATIENCE = 5
 # the parameter each model calls its epoch budget and its thread count
 EPOCH_PARAM = {"mlp": "max_iter", **{d: "epochs" for d in DEEP}}
-THREAD_PARAM = {"rf": "n_jobs", "lightgbm": "n_jobs", **{d: "n_threads" for d in DEEP}}
+THREAD_PARAM = {"rf": "n_jobs", "lightgbm": "n_jobs", **{d: "n_threads" for d in DEEP}, **{c: "n_jobs" for c in CONTEXT_MODELS}}
 
 
 def _lr() -> BaseEstimator:
@@ -57,15 +65,17 @@ _FACTORIES: dict[str, Callable[[], BaseEstimator]] = {
     "mlp": lambda: GroupedMLPClassifier(max_iter=50, n_iter_no_change=PATIENCE),
     "lightgbm": lambda: LightGBMClassifier(n_estimators=200, learning_rate=0.1, num_leaves=31),
     **{d: (lambda d=d: TorchClassifier(arch=d, epochs=50, patience=PATIENCE)) for d in DEEP},
+    **{c: (lambda i=i: ContextClassifier(inputs=i)) for c, i in VARIANTS.items()},
 }
 
 
 def baseline(name: str, **params) -> BaseEstimator:
-    """A fresh, unfitted estimator for baseline `name` (one of MODELS), e.g.
-    `baseline("rf", n_estimators=50)`; unknown names or parameters raise ValueError."""
+    """A fresh, unfitted estimator for model `name` (one of ALL_MODELS: the ten baselines and the
+    context models), e.g. `baseline("rf", n_estimators=50)`; unknown names or parameters raise
+    ValueError."""
     key = name.strip().lower()
     if key not in _FACTORIES:
-        raise ValueError(f"unknown model {name!r}; known: {', '.join(MODELS)}")
+        raise ValueError(f"unknown model {name!r}; known: {', '.join(ALL_MODELS)}")
     return _FACTORIES[key]().set_params(**params)
 
 
@@ -77,6 +87,11 @@ def make_model(name: str, random_state: int = 0, epochs: int = 50, n_threads: in
     if name in THREAD_PARAM:
         params[THREAD_PARAM[name]] = n_threads or default_threads()
     return baseline(name, **params)
+
+
+def uses_context(name: str) -> bool:
+    """Whether the protocols give model `name` the context columns (as a named frame)."""
+    return name in CONTEXT_MODELS
 
 
 def accepts_validation(est: BaseEstimator) -> bool:

@@ -28,9 +28,9 @@ from threadpoolctl import threadpool_limits
 from uavcas import schema
 from uavcas.vocabulary import families_of
 
-from .features import feature_matrix, resolve_features
+from .features import context_matrix, feature_matrix, resolve_features
 from .metrics import STEALTH, auroc, class_scores, confusion, pr_auc, scores
-from .models import DEEP, DISPLAY, MODELS, TREES, fit_model, make_model
+from .models import DEEP, DISPLAY, MODELS, TREES, fit_model, make_model, uses_context
 from .splits import DegenerateSplitError, Split, cap_rows, check_declared, grouped_split
 from .torch_estimator import default_threads
 
@@ -126,6 +126,7 @@ class Task:
     declared: list[str]
     score: Callable[["Task", Split, Predict], tuple[list, np.ndarray, np.ndarray]]
     fixed: dict[str, np.ndarray] = field(default_factory=dict)  # label of extra test runs -> rows
+    x_ctx: np.ndarray | None = None  # the context columns (schema.CONTEXT_FEATURES), for the context models
 
     def split(self, seed: int) -> Split:
         p = self.pool
@@ -254,10 +255,22 @@ def _split_rows(task: Task, seed: int, sp: Split) -> list[SplitRow]:
     return out
 
 
+def _inputs(task: Task, name: str, features: list[str]) -> tuple[np.ndarray, list[str] | None]:
+    """A model's matrix and, for the context models (which select their inputs by name), its
+    column names: the flow features followed by the context columns."""
+    if not uses_context(name):
+        return task.x, None
+    return np.hstack([task.x, task.x_ctx]), features + list(schema.CONTEXT_FEATURES)
+
+
 def _fit_one(res: ProtocolResult, task: Task, sp: Split, name: str, seed: int, cfg: BenchConfig) -> None:
     t0 = time.perf_counter()
-    scaler = SCALERS[cfg.scaler]().fit(task.x[sp.train])
-    tf = lambda rows: np.clip(scaler.transform(task.x[rows]), -1e6, 1e6).astype(np.float32)  # noqa: E731
+    x, names = _inputs(task, name, res.features)
+    scaler = SCALERS[cfg.scaler]().fit(x[sp.train])
+
+    def tf(rows):
+        z = np.clip(scaler.transform(x[rows]), -1e6, 1e6).astype(np.float32)
+        return z if names is None else pd.DataFrame(z, columns=names)
     est = make_model(name, random_state=seed, epochs=cfg.epochs, n_threads=cfg.n_threads)
     model = DISPLAY[name]
     # why: BLAS/OpenMP pools default to all cores and busy-wait; on a shared 2-core machine
@@ -270,7 +283,7 @@ def _fit_one(res: ProtocolResult, task: Task, sp: Split, name: str, seed: int, c
         res.add(seed, model, rows)
         res.confusion[(seed, model)] = confusion(task.y[main], pred, task.declared)
         if cfg.importance and name in TREES:
-            res.importance += _importance(est, tf, task, main, seed, model, cfg, res.features)
+            res.importance += _importance(est, tf, task, main, seed, model, cfg, names or res.features)
     epochs = getattr(est, "n_iter_", None) if name in ("mlp",) + DEEP else None
     res.fits.append(Fit(seed, model, seconds, None if epochs is None else int(epochs)))
     res.add(seed, model, [("fit_s", "", seconds)] + ([("epochs", "", epochs)] if epochs is not None else []))
@@ -320,6 +333,8 @@ def prepare(df: pd.DataFrame, protocol: str, cfg: BenchConfig) -> Prepared:
     features = resolve_features(df, cfg.features)
     notes: list[str] = []
     task = PREPARE[protocol](df, feature_matrix(df, features), notes, cfg)
+    if any(uses_context(m) for m in cfg.models):
+        task.x_ctx = context_matrix(df)
     splits = {seed: task.split(seed) for seed in cfg.seeds}
     source = df.attrs.get("source")
     if source and source not in ("uavcas", "uavcas-csv"):

@@ -1,0 +1,84 @@
+"""The context detector and its ablation: inputs selected by column name, and `bench ids
+--models context,context-flow,context-only` end to end on a dataset with context columns."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pytest
+from typer.testing import CliRunner
+
+from uavcas.cli import app
+from uavcas.dataset.synthetic import write_dataset
+from uavcas.ids import CONTEXT_MODELS, baseline
+from uavcas.ids.context import select_columns
+from uavcas.schema import CONTEXT_FEATURES, FEATURES
+
+runner = CliRunner()
+
+
+def _frame(n=400, seed=0):
+    """A flow feature and a context column; the class follows the context column only."""
+    rng = np.random.default_rng(seed)
+    ctx = rng.normal(size=n)
+    X = pd.DataFrame({"Flow Duration": rng.normal(size=n), "ctx_ttl_off_frac": ctx})
+    return X, np.where(ctx > 0, "Replay", "Benign")
+
+
+@pytest.mark.parametrize("name,learns", [("context", True), ("context-only", True), ("context-flow", False)])
+def test_each_variant_sees_only_its_inputs(name, learns):
+    X, y = _frame()
+    Xt, yt = _frame(seed=1)
+    est = baseline(name, n_jobs=1).fit(X, y)
+    acc = (est.predict(Xt) == yt).mean()
+    assert (acc > 0.95) if learns else (acc < 0.7)
+    assert list(est.feature_names_in_) == {"context": list(X.columns), "context-only": ["ctx_ttl_off_frac"],
+                                           "context-flow": ["Flow Duration"]}[name]
+
+
+def test_selection_by_name_and_refusals():
+    cols = ["Flow Duration", "ctx_rtt_ms", "ctx_lost_frac"]
+    assert select_columns(cols, "both") == cols
+    assert select_columns(cols, "flow") == ["Flow Duration"]
+    assert select_columns(cols, "context") == ["ctx_rtt_ms", "ctx_lost_frac"]
+    assert select_columns(None, "context") is None  # an array: taken whole
+    with pytest.raises(ValueError, match="no such column"):
+        select_columns(["Flow Duration"], "context")
+    with pytest.raises(ValueError, match="inputs"):
+        select_columns(cols, "everything")
+    X, y = _frame()
+    est = baseline("context-only", n_jobs=1).fit(X, y)
+    with pytest.raises(ValueError, match="lacks the columns"):
+        est.predict(X[["Flow Duration"]])
+    # without names every column is used
+    assert baseline("context-flow", n_jobs=1).fit(X.to_numpy(), y).n_features_in_ == 2
+
+
+def test_bench_context_models_with_importance(synth_dir, tmp_path):
+    r = runner.invoke(app, ["bench", "ids", str(synth_dir), "--out", str(tmp_path), "--protocol", "multiclass",
+                            "--models", ",".join(CONTEXT_MODELS), "--seeds", "0,1", "--threads", "1"])
+    assert r.exit_code == 0, r.output
+    res = pd.read_csv(tmp_path / "results.csv", keep_default_na=False)
+    assert set(res["model"]) == {"Context", "Context-flow", "Context-only"}
+    assert "stealth" in set(res["class"])
+    imp = pd.read_csv(tmp_path / "importance.csv")
+    feats = imp.groupby("model")["feature"].agg(set)
+    # every context model is given the flow features and the context columns; each uses its own
+    assert all(f == set(FEATURES) | set(CONTEXT_FEATURES) for f in feats)
+    flow_only = imp[imp["model"] == "Context-flow"]
+    assert (flow_only[flow_only["feature"].str.startswith("ctx_")]["mean"] == 0).all()
+    ctx_only = imp[imp["model"] == "Context-only"]
+    assert (ctx_only[~ctx_only["feature"].str.startswith("ctx_")]["mean"] == 0).all()
+    lb = (tmp_path / "leaderboard.md").read_text()
+    assert "Context-only" in lb
+
+
+def test_bench_context_needs_context_columns(synth_df, tmp_path):
+    ds = write_dataset(tmp_path / "no-ctx", synth_df.drop(columns=list(CONTEXT_FEATURES)))
+    r = runner.invoke(app, ["bench", "ids", str(ds), "--out", str(tmp_path / "o"), "--models", "lr,context"])
+    assert r.exit_code == 2 and "no context columns" in r.output and len(r.output.strip().splitlines()) <= 3, r.output
+    assert not (tmp_path / "o").exists()
+    # the baselines alone do not need them
+    r = runner.invoke(app, ["bench", "ids", str(ds), "--out", str(tmp_path / "lr"), "--models", "lr",
+                            "--seeds", "0", "--no-importance"])
+    assert r.exit_code == 0, r.output
