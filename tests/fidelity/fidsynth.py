@@ -31,11 +31,13 @@ def link(a: str, b: str, rate_mbps: float, delay_ms: float, loss: float = 0.0) -
                 rate_mbps=rate_mbps, delay_ms=delay_ms, loss=loss)
 
 
-def plan(rate_mbps: float = 8.0, delay_ms: float = 2.0, loss_b: float = 0.0) -> Plan:
+def plan(rate_mbps: float = 8.0, delay_ms: float = 2.0, loss_b: float = 0.0, loss_a: float = 0.0) -> Plan:
+    """Both windows: uav0 - uav1 with loss `loss_a`, uav1 - bs0 with loss `loss_b`."""
     nodes = [Node(name=n, kind="bs" if n.startswith("bs") else "uav", index=i, ip=IPS[n],
                   mac=f"02:00:00:00:01:{i:02x}") for i, n in enumerate(NAMES)]
     wins = [Window(index=k, t_s=5.0 * k, duration_s=5.0, positions={},
-                   links=[link("uav0", "uav1", rate_mbps, delay_ms), link("uav1", "bs0", rate_mbps, delay_ms, loss_b)],
+                   links=[link("uav0", "uav1", rate_mbps, delay_ms, loss_a),
+                          link("uav1", "bs0", rate_mbps, delay_ms, loss_b)],
                    routes=[Route(src="uav0", dst="bs0", hops=list(PATH))]) for k in range(2)]
     return Plan(config="test", seed=0, window_s=5.0, profile="test", area_m=(100.0, 100.0, 10.0, 50.0),
                 nodes=nodes, windows=wins, attacks=[])
@@ -115,7 +117,10 @@ def build(root: Path, p: Plan, traffic: Traffic, error: ErrorFn = lambda h, k: 0
         order = np.argsort(ready, kind="stable")
         idx, ready = idx[order], ready[order]
         keep = np.array([not drop(h, int(k)) for k in idx], dtype=bool)
-        start = fifo.serve(ready[keep], length[idx[keep]], np.full(int(keep.sum()), lk.rate_mbps))
+        # the port's rate by window, as the emulator rewrites it in place at each window's start
+        rates = [next(x for x in w.links if {x.a, x.b} == {a, b}).rate_mbps for w in p.windows]
+        start = fifo.serve(ready[keep], length[idx[keep]], T0 + np.array([w.t_s for w in p.windows]),
+                           np.array(rates))
         alive[idx[~keep]] = False
         got = idx[keep]
         t[got] = start + np.array([error(h, int(k)) for k in got])

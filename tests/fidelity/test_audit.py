@@ -102,6 +102,36 @@ def test_queue_tail_drops_are_told_from_random_loss(tmp_path):
     assert next(lw for lw in h.links if lw.src == "uav0").counters.queue_drops == g.lost
 
 
+def test_random_drops_at_a_full_queue_are_random_when_the_kernel_counted_them(tmp_path):
+    # uav0 -> uav1 plans 10 % loss. A burst fills the queue (two leave at once, `limit` wait), then
+    # a frame every 0.9 ms, 1/0.9 of the rate: the loss rule drops every tenth, which is exactly
+    # what keeps the queue at its limit without a tail drop. The model finds each lost frame at a
+    # full queue, so on its own it calls them all tail drops and the random loss far too low.
+    limit = queue_limit_pkts(8.0)
+    tr = Traffic()
+    for k in range(limit + 1):
+        tr.add(1.0, 1000, 6000)
+    for k in range(1000):
+        tr.add(1.0 + 0.0009 * (k + 1), 1000, 5000)
+    rd = build(tmp_path, plan(loss_a=0.1), tr, drop=lambda h, k: h == 0 and k > limit and (k - limit) % 10 == 0)
+    g = audit(rd.root)
+    assert g.lost == 100 and g.lost_tail == 100 and g.lost_random == 0
+    assert g.loss_sigma < -8 and g.failed == ["loss_sigma"]
+    hop = next(lw for lw in g.links if lw.src == "uav0")
+    assert (hop.loss_source, hop.loss_offered, hop.loss_drops) == ("model", 935, 0)
+    # the port's counters: no pfifo drop, 100 loss-rule drops out of 1035 frames offered
+    rec = {"window": 0, "src": "uav0", "dst": "uav1", "sent_packets": 935, "queue_drops": 0, "loss_drops": 100,
+           "link_drops": 0}
+    rd.shaping_jsonl.write_text(json.dumps(rec) + "\n")
+    f = audit(rd.root)
+    assert f.verdict == "pass" and f.lost_tail == 0 and f.lost_random == 100 and f.lost_unexplained == 0
+    assert f.loss_random_observed == 100 and f.loss_random_expected == pytest.approx(103.5)
+    assert f.loss_sigma == pytest.approx((100 - 103.5) / np.sqrt(1035 * 0.1 * 0.9), abs=1e-3)
+    assert f.loss_links_counted == 1 and f.queue_over_limit == 0
+    hop = next(lw for lw in f.links if lw.src == "uav0")
+    assert (hop.loss_source, hop.loss_offered, hop.loss_drops, hop.lost_random) == ("counters", 1035, 100, 100)
+
+
 def test_losses_at_a_window_change_are_counted_apart(tmp_path):
     tr = _steady(n=100, t0=4.8)  # 4.8 .. 5.2 s: across the change at 5 s
     f = audit(build(tmp_path, plan(), tr, drop=lambda h, k: h == 1 and k in (45, 50, 55)).root)
@@ -143,3 +173,23 @@ def test_tolerances_by_swarm_size():
     assert Tolerances.for_swarm(50).delay_error_p99_ms == 1.0
     assert Tolerances.for_swarm(100).delay_error_p99_ms == 2.0
     assert Tolerances.for_swarm(100, delay_error_p99_ms=0.7).delay_error_p99_ms == 0.7
+
+
+def test_audit_cli_re_audits_a_run_in_place(tmp_path):
+    from typer.testing import CliRunner
+
+    from uavcas.cli import app
+
+    lossy = plan(loss_b=0.1)
+    rd = build(tmp_path, lossy, _steady(), drop=lambda h, k: h == 1 and k % 10 < 3)
+    stale = write_fidelity(rd.root).model_copy(update={"schema_version": 1, "verdict": "pass", "failed": []})
+    rd.fidelity_json.write_text(stale.to_json())
+    r = CliRunner().invoke(app, ["audit", str(rd.root), "--links", "2"])
+    assert r.exit_code == 1, r.output  # the 30 % loss against 10 % planned fails, as before the stale file
+    f = read_fidelity(rd.root)
+    assert f.schema_version == 2 and f.failed == ["loss_sigma"] and f.lost_random == 120
+    assert RunDir(rd.root).read_info().fidelity.failed == ["loss_sigma"]
+    assert sorted(p.name for p in rd.root.iterdir() if p.is_file()) == ["fidelity.json", "forwarding.jsonl",
+                                                                        "plan.json", "run.json"]
+    r = CliRunner().invoke(app, ["audit", str(rd.root), "--loss-sigma", "100"])
+    assert r.exit_code == 0 and read_fidelity(rd.root).verdict == "pass"

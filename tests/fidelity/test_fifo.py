@@ -14,9 +14,11 @@ from uavcas.fidelity import fifo
 US = 1e-6
 
 
-def _serve(ready_us, length, rate=8.0, burst=1600):
-    n = len(ready_us)
-    return fifo.serve(np.array(ready_us, float) * US, np.array(length, float), np.full(n, rate), burst) / US
+def _serve(ready_us, length, rate=8.0, burst=1600, change_us=(), rates=()):
+    """Start times (us) at `rate`, then `rates[k]` from `change_us[k]` on."""
+    t = np.array([0.0, *change_us]) * US
+    return fifo.serve(np.array(ready_us, float) * US, np.array(length, float), t, np.array([rate, *rates]),
+                      burst) / US
 
 
 def test_idle_link_starts_every_frame_when_ready():
@@ -44,9 +46,45 @@ def test_fifo_never_reorders_and_small_frames_follow_the_queue():
 
 
 def test_rate_change_applies_to_frames_ready_after_it():
-    got = fifo.serve(np.zeros(4), np.full(4, 1000.0), np.array([8.0, 8.0, 16.0, 16.0]), 1600) / US
-    # third frame: debt 400 us from the first two at 8 Mbit/s; from there 500 us per frame
+    got = _serve([0] * 4, [1000] * 4, change_us=[300], rates=[16.0])
+    # third frame starts at 400 us (debt of the first two at 8 Mbit/s), after the change: it and
+    # the fourth cost 500 us each
     assert got == pytest.approx([0, 0, 400, 900])
+
+
+def test_frames_queued_across_a_change_are_charged_at_the_new_rate():
+    # all ready at 0 under 8 Mbit/s; the port goes to 16 Mbit/s at 1000 us: the fourth frame
+    # starts at 1400 us, after the change, and costs 500 us, not 1000 (HTB charges at dequeue)
+    got = _serve([0] * 5, [1000] * 5, change_us=[1000], rates=[16.0])
+    assert got == pytest.approx([0, 0, 400, 1400, 1900])
+
+
+# A change known only to lie in [1000, 3000) us, 8 -> 16 Mbit/s, ten 1000-byte frames ready at 0.
+# With the first h frames that start from 1000 us on still at 8 Mbit/s (frame 3 starts at 1400):
+AT_CHANGE = {
+    0: [0, 0, 400, 1400, 1900, 2400, 2900, 3400, 3900, 4400],  # the change at 1000 us
+    1: [0, 0, 400, 1400, 2400, 2900, 3400, 3900, 4400, 4900],  # between frames 3 and 4
+    2: [0, 0, 400, 1400, 2400, 3400, 3900, 4400, 4900, 5400],  # between frames 4 and 5
+}
+
+
+def _serve_uncertain(seen_us):
+    return fifo.serve(np.zeros(10), np.full(10, 1000.0), np.array([0.0, 1000 * US]), np.array([8.0, 16.0]), 1600,
+                      np.array([0.0, 3000 * US]), None if seen_us is None else np.array(seen_us, float) * US) / US
+
+
+def test_an_uncertain_change_is_placed_where_the_measured_starts_say():
+    jitter = np.array([30, -20, 10, -30, 20, -10, 30, -20, 10, 0])  # capture noise, well under a frame
+    for h, starts in AT_CHANGE.items():
+        assert _serve_uncertain(np.array(starts) + jitter) == pytest.approx(starts), h
+    # without measured starts the change is taken at the start of its interval
+    assert _serve_uncertain(None) == pytest.approx(AT_CHANGE[0])
+
+
+def test_an_uncertain_change_happened_by_the_end_of_its_interval():
+    # measured as if the rate never changed: frame 5 at the old rate would start at 3400 us, after
+    # the apply ended, so the latest candidate is the change before frame 5
+    assert _serve_uncertain([0, 0, 400, 1400, 2400, 3400, 4400, 5400, 6400, 7400]) == pytest.approx(AT_CHANGE[2])
 
 
 def test_backlog_and_busy_intervals():

@@ -66,8 +66,9 @@ def audit_cmd(
                        "[green]ok[/]" if ch.ok else "[red]FAIL[/]")
     console.print(checks)
     console.print(f"{f.n} hop crossings of {f.packets} packets; lost {f.lost} (queue tail {f.lost_tail}, "
-                  f"window change {f.lost_transition}, random {f.loss_random_observed} vs "
-                  f"{f.loss_random_expected:.1f} planned); gaps moved p50/p90 {f.gaps.shift_p50_ms} / "
+                  f"random {f.lost_random}, window change {f.lost_transition}, unexplained {f.lost_unexplained}); "
+                  f"loss rules dropped {f.loss_random_observed} of {f.loss_offered} vs "
+                  f"{f.loss_random_expected:.1f} planned; gaps moved p50/p90 {f.gaps.shift_p50_ms} / "
                   f"{f.gaps.shift_p90_ms} ms", highlight=False)
     if links:
         worst = sorted((lw for lw in f.links if lw.delay_error_p99_ms is not None),

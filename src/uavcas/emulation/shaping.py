@@ -111,13 +111,16 @@ def pfifo_line(verb: str, port: str, rate_mbps: float) -> str:
     return f"qdisc {verb} dev {port} parent 1:1 handle 10: pfifo limit {queue_limit_pkts(rate_mbps)}"
 
 
+def netem_limit_pkts(rate_mbps: float, delay_ms: float) -> int:
+    """netem's limit also holds the packets "on the wire" during the delay: add rate x delay."""
+    return queue_limit_pkts(rate_mbps) + math.ceil(rate_mbps * 1e6 * delay_ms / 1000 / (1514 * 8))
+
+
 def netem_line(verb: str, port: str, delay_ms: float, loss: float, rate_mbps: float) -> str:
     delay_us = round(delay_ms * 1000)
     loss_pct = f"{loss * 100:.4f}".rstrip("0").rstrip(".")
-    # netem's limit also holds the packets "on the wire" during the delay: add rate x delay.
-    in_flight = math.ceil(rate_mbps * 1e6 * delay_ms / 1000 / (1514 * 8))
     return (f"qdisc {verb} dev {port} parent 1:1 handle 10: netem delay {delay_us}us loss {loss_pct}% "
-            f"limit {queue_limit_pkts(rate_mbps) + in_flight}")
+            f"limit {netem_limit_pkts(rate_mbps, delay_ms)}")
 
 
 def nft_chain(port: str) -> str:

@@ -1,13 +1,14 @@
 """`audit(run_dir) -> Fidelity`: follow every packet of a run and hold each hop to the plan.
 
 Per hop crossing (a packet seen at switch i, then at the next switch j; `uavcas.flows.follow`)
-the measured hop delay is compared with the FIFO model of the plan (`fifo`): the delay error.
-Per link direction and window: delay-error quantiles, loss split into queue-tail and random
-(the model's queue was full / was not when the packet vanished) against the planned loss,
+the measured hop delay is compared with the FIFO model of the plan (`fifo`), fed the shaping
+in force on the port at the time (`inforce`): the delay error. Per link direction and window:
+delay-error quantiles, loss split by cause (`losses`: the kernel's counters where the run logged
+them, else how full the model's queue was) with random loss against the planned loss,
 throughput in saturated bins (the model's queue never empty for the whole bin) against the
-planned rate, and the kernel's drop counters where the run logged them. Per flow: how much the
-emulator moved inter-packet gaps end to end. The pooled figures and the schedule (window change
-time, lateness from run.json) are checked against `Tolerances`; any failed check fails the run.
+planned rate. Per flow: how much the emulator moved inter-packet gaps end to end. The pooled
+figures and the schedule (window change time, lateness from run.json) are checked against
+`Tolerances`; any failed check fails the run.
 
 Losses during a change of forwarding (a window change or an attack re-routing: from
 `TRANSITION_S` before the change began to `TRANSITION_S` after it ended) and losses on a link
@@ -24,16 +25,19 @@ from pathlib import Path
 
 import numpy as np
 
-from uavcas.flows.follow import Followed, Timeline, follow_run, node_of_point
+from uavcas.flows.follow import Followed, Timeline, follow_run, node_of_point, run_timeline
 from uavcas.flows.packets import PacketTable
 from uavcas.rundir import RunDir, RunInfo
 from uavcas.twin.model import Plan
 
-from . import fifo
+from . import fifo, losses
+from .inforce import PortShaping, port_shaping
 from .model import Check, Counters, Fidelity, GapDistortion, LinkWindow, Tolerances
 
-QUEUE_FULL_SLACK = 1  # a tail drop happens with the queue at its limit; allow one frame of model error
 TRANSITION_S = 0.05  # margin around a forwarding change (held packets, queues draining)
+# a frame the model sends within this long after another enters is timing noise, not backlog
+# (`queue_over_limit`: a 54-byte frame at 0.5 Mbit/s takes 0.8 ms)
+OVER_LIMIT_SLACK_S = 0.001
 
 
 @dataclass
@@ -55,6 +59,28 @@ class _Planned:
                 for a, v in zip(arrs, (lk.delay_ms, lk.rate_mbps, lk.loss)):
                     a[win.index, i, j] = a[win.index, j, i] = v
         return cls(*arrs)
+
+
+@dataclass(frozen=True)
+class _Port:
+    """The FIFO model of one link direction over the whole run (frames in service order)."""
+
+    shaping: PortShaping
+    entered_sorted: np.ndarray  # when each frame entered the queue, ascending
+    ready: np.ndarray
+    start: np.ndarray  # non-decreasing (FIFO)
+    rows: np.ndarray  # crossing indices
+
+    def backlog(self, t: np.ndarray) -> np.ndarray:
+        """Frames in the queue at each time t (entered at or before t, not started)."""
+        return (np.searchsorted(self.entered_sorted, t, side="right")
+                - np.searchsorted(self.start, t, side="right")).astype(np.int64)
+
+    def held_before(self, entered: np.ndarray, slack_s: float = 0.0) -> np.ndarray:
+        """Frames the queue held just before a frame entered at each time (those entered earlier),
+        not counting those it sends within `slack_s` after."""
+        return (np.searchsorted(self.entered_sorted, entered, side="left")
+                - np.searchsorted(self.start, entered + slack_s, side="right")).astype(np.int64)
 
 
 def _q(x: np.ndarray, p: float) -> float | None:
@@ -79,12 +105,7 @@ def audit(run_dir: str | Path, tolerances: Tolerances | None = None, table: Pack
     if tolerances is None:
         tolerances = Tolerances.for_swarm(sum(n.kind == "uav" for n in plan.nodes))
     table, fol = follow_run(rd.root, tolerances.max_hop_s, table=table)
-    epochs = rd.read_forwarding()
-    if epochs:
-        timeline = Timeline.from_epochs(plan, epochs)
-    else:
-        timeline = Timeline.from_plan(plan, info.t0_unix if info and info.t0_unix is not None else 0.0)
-    return _Audit(plan, info, rd, table, fol, timeline, tolerances).report()
+    return _Audit(plan, info, rd, table, fol, run_timeline(rd, plan), tolerances).report()
 
 
 class _Audit:
@@ -97,17 +118,10 @@ class _Audit:
         self.names = [x.name for x in plan.nodes]
         self.n = len(self.names)
         self.t0 = info.t0_unix if info is not None and info.t0_unix is not None else float(timeline.t_unix[0])
+        self.shaping = port_shaping(plan, timeline)
+        self.netem = info is not None and info.shaper_backend == "netem"
         self._crossings()
         self._losses()
-
-    def _window_of_link(self, t: np.ndarray, w: np.ndarray, i: np.ndarray, j: np.ndarray) -> np.ndarray:
-        """The window whose plan holds link i-j at time t: the one in force or, during a change-over,
-        the one being installed (links come up in the middle of an apply); -1: neither."""
-        e = self.tl.epoch_at(t)
-        e2 = np.minimum(e + 1, self.tl.t_unix.shape[0] - 1)
-        w2 = self.tl.window[e2].astype(np.int64)
-        has, has2 = self._has(w, i, j), self._has(w2, i, j)
-        return np.where(has, w, np.where(has2 & (t >= self.tl.t_begin_unix[e2] - TRANSITION_S), w2, -1))
 
     def _has(self, w: np.ndarray, i: np.ndarray, j: np.ndarray) -> np.ndarray:
         W = self.planned.delay_ms.shape[0]
@@ -120,77 +134,105 @@ class _Audit:
 
     # per crossing ----------------------------------------------------------------------------
     def _crossings(self) -> None:
+        """Every crossing of a port with known shaping goes through that port's FIFO (it loads the
+        queue whichever window it is reported in), with the shaping in force (`inforce`)."""
         c = self.fol.crossings()
         i, j = self.point_node[c.from_point], self.point_node[c.to_point]
-        w = self._window_of_link(c.t_from, c.window.astype(np.int64), i, j)
-        d_ms, rate = self._param(self.planned.delay_ms, w, i, j), self._param(self.planned.rate_mbps, w, i, j)
         length = self.table["frame_len"][c.row_from].astype(np.float64)
-        ready = c.t_from + d_ms / 1000.0
-        direction = np.where(w >= 0, i * self.n + j, -1)
-        order = np.lexsort((c.t_from, ready, direction))
-        order = order[direction[order] >= 0]
+        direction = np.where((i >= 0) & (j >= 0), i * self.n + j, -1)
+        w = np.full(len(c), -1, dtype=np.int64)
         start = np.full(len(c), np.nan)
-        self.model: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}  # direction -> ready, start, rows
-        for g in np.split(order, np.flatnonzero(np.diff(direction[order])) + 1) if order.shape[0] else []:
-            start[g] = fifo.serve(ready[g], length[g], rate[g], self.tol.burst_bytes)
-            self.model[int(direction[g[0]])] = (ready[g], start[g], g)
+        held = np.zeros(len(c), dtype=np.int64)
+        limit = np.zeros(len(c), dtype=np.int64)
+        self.ports: dict[int, _Port] = {}
+        by_dir = np.argsort(direction, kind="stable")
+        cuts = np.flatnonzero(np.diff(direction[by_dir])) + 1
+        for g in np.split(by_dir, cuts) if by_dir.shape[0] else []:
+            key = int(direction[g[0]])
+            ps = self.shaping.get(divmod(key, self.n)) if key >= 0 else None
+            if ps is None:
+                continue
+            k = ps.at(c.t_from[g])
+            g, k = g[k >= 0], k[k >= 0]
+            ready = c.t_from[g] + ps.delay_ms[k] / 1000.0
+            o = np.lexsort((c.t_from[g], ready))
+            g, k, ready = g[o], k[o], ready[o]
+            w[g] = ps.window[k]
+            start[g] = fifo.serve(ready, length[g], ps.t_s, ps.rate_mbps, self.tol.burst_bytes, ps.until_s,
+                                  c.t_to[g])
+            entered = c.t_from[g] if self.netem else ready
+            port = _Port(ps, np.sort(entered), ready, start[g], g)
+            self.ports[key] = port
+            held[g] = np.maximum(port.held_before(entered, OVER_LIMIT_SLACK_S), 0)
+            limit[g] = ps.queue_limit_pkts(ps.at(entered), self.netem)
         self.c, self.ci, self.cj, self.cw = c, i, j, w
         self.c_len, self.c_start = length, start
         self.err_ms = (c.t_to - start) * 1000.0
+        # the real queue took these frames, so it was not full: a model holding its limit is wrong
+        self.c_over = ~np.isnan(start) & (held >= limit)
 
     # losses ----------------------------------------------------------------------------------
     def _losses(self) -> None:
-        from uavcas.emulation.shaping import queue_limit_pkts
-
         lo = self.fol.losses
         routed = lo.to_point >= 0
         i = self.point_node[lo.from_point]
         j = np.where(routed, self.point_node[np.maximum(lo.to_point, 0)], -1)
-        w = self._window_of_link(lo.t_s, lo.window.astype(np.int64), i, j)
+        w = np.full(len(lo), -1, dtype=np.int64)
+        t_in = lo.t_s.copy()  # when it would have entered the queue
+        backlog = np.zeros(len(lo), dtype=np.int64)
+        limit = np.ones(len(lo), dtype=np.int64)
+        direction = np.where((i >= 0) & (j >= 0), i * self.n + j, -1)
+        by_dir = np.argsort(direction, kind="stable")
+        for g in np.split(by_dir, np.flatnonzero(np.diff(direction[by_dir])) + 1) if by_dir.shape[0] else []:
+            key = int(direction[g[0]])
+            ps = self.shaping.get(divmod(key, self.n)) if key >= 0 else None
+            if ps is None:
+                continue
+            k = ps.at(lo.t_s[g])
+            g, k = g[k >= 0], k[k >= 0]
+            w[g] = ps.window[k]
+            if not self.netem:
+                t_in[g] += ps.delay_ms[k] / 1000.0
+            port = self.ports.get(key)
+            if port is not None:
+                backlog[g] = port.backlog(t_in[g])
+            limit[g] = ps.queue_limit_pkts(ps.at(t_in[g]), self.netem)
         d = np.nan_to_num(self._param(self.planned.delay_ms, w, i, j))
         t_ready = lo.t_s + d / 1000.0
         # the link left the plan before the packet could have arrived, or forwarding was changing
         down = (w >= 0) & ~self._has(self.tl.window_at(t_ready + TRANSITION_S).astype(np.int64), i, j)
         for b, e in zip(self.tl.t_begin_unix[1:], self.tl.t_unix[1:]):
             down |= (lo.t_s >= b - TRANSITION_S) & (lo.t_s <= e + TRANSITION_S)
-        tail = np.zeros(len(lo), dtype=bool)
-        rate = self._param(self.planned.rate_mbps, w, i, j)
-        for k in np.flatnonzero((w >= 0) & ~down):
-            m = self.model.get(int(i[k] * self.n + j[k]))
-            if m is not None:
-                held = fifo.backlog(m[0], m[1], np.array([t_ready[k]]))[0]
-                tail[k] = held >= queue_limit_pkts(float(rate[k])) - QUEUE_FULL_SLACK
-        self.li, self.lj, self.lw, self.l_transition, self.l_tail = i, j, w, down, tail
+        self.li, self.lj, self.lw, self.l_transition = i, j, w, down
+        self.l_backlog, self.l_limit = backlog, limit
+        self.l_label = np.full(len(lo), losses.UNEXPLAINED, dtype=np.int8)  # set per link-window (_links)
 
     # aggregates --------------------------------------------------------------------------------
-    def _saturation(self, direction: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def _saturation(self, port: _Port) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Saturated bins of one direction: (bin start times, measured/planned rate, window)."""
-        ready, start, rows = self.model[direction]
-        busy = fifo.busy_intervals(ready, start)
+        busy = fifo.busy_intervals(port.ready, port.start)
         bs = self.tol.saturated_bin_s
+        e = np.zeros(0)
         if busy.shape[0] == 0:
-            e = np.zeros(0)
             return e, e, e.astype(np.int64)
         k0 = np.ceil((busy[:, 0] - self.t0) / bs).astype(np.int64)
         k1 = np.floor((busy[:, 1] - self.t0) / bs).astype(np.int64)
         bins = np.concatenate([np.arange(a, b) for a, b in zip(k0, k1) if b > a] or [np.zeros(0, np.int64)])
         if bins.shape[0] == 0:
-            e = np.zeros(0)
             return e, e, e.astype(np.int64)
+        rows = port.rows
         kb = np.floor((self.c.t_to[rows] - self.t0) / bs).astype(np.int64)
         sel = np.isin(kb, bins)
         bits = {}
         for k, L in zip(kb[sel].tolist(), self.c_len[rows][sel].tolist()):
             bits[k] = bits.get(k, 0.0) + L * 8.0
         t_bin = self.t0 + bins * bs
-        i, j = divmod(direction, self.n)
-        w_a = self.tl.window_at(t_bin).astype(np.int64)
-        w_b = self.tl.window_at(t_bin + bs).astype(np.int64)
-        same = (w_a == w_b) & self._has(w_a, np.full_like(w_a, i), np.full_like(w_a, j))
-        rate = self._param(self.planned.rate_mbps, np.where(same, w_a, -1), np.full_like(w_a, i), np.full_like(w_a, j))
+        # bins under one setting of the port (the rate it was serving at)
+        s_a, s_b = port.shaping.at(t_bin), port.shaping.at(t_bin + bs)
+        keep = (s_a == s_b) & (s_a >= 0)
         got = np.array([bits.get(k, 0.0) for k in bins.tolist()]) / bs / 1e6
-        keep = same & ~np.isnan(rate)
-        return t_bin[keep], got[keep] / rate[keep], w_a[keep]
+        s = s_a[keep]
+        return t_bin[keep], got[keep] / port.shaping.rate_mbps[s], port.shaping.window[s]
 
     def _gaps(self) -> GapDistortion:
         c, ok = self.c, ~np.isnan(self.err_ms)
@@ -222,40 +264,50 @@ class _Audit:
 
     def _links(self, sat: dict[tuple[int, int, int], np.ndarray]) -> list[LinkWindow]:
         n = self.n
+        counters = self._counters()
+        index = {x: k for k, x in enumerate(self.names)}
         ck = np.where(self.cw >= 0, (self.cw * n + self.ci) * n + self.cj, -1)
         lk = np.where(self.lw >= 0, (self.lw * n + self.li) * n + self.lj, -1)
-        keys = np.union1d(np.unique(ck[ck >= 0]), np.unique(lk[lk >= 0]))
+        # link-windows the kernel saw traffic on count for the loss test even if no packet was followed
+        kk = [(w * n + index[a]) * n + index[b] for (w, a, b), c in counters.items()
+              if a in index and b in index and 0 <= w < self.planned.loss.shape[0]
+              and losses.counted(c) and c.sent_packets + c.queue_drops + c.loss_drops > 0
+              and not np.isnan(self.planned.loss[w, index[a], index[b]])]
+        keys = np.union1d(np.union1d(np.unique(ck[ck >= 0]), np.unique(lk[lk >= 0])), np.array(kk, dtype=np.int64))
         order = np.argsort(ck, kind="stable")
         bounds = np.searchsorted(ck[order], keys), np.searchsorted(ck[order], keys, side="right")
-        counters = self._counters()
+        l_order = np.lexsort((self.fol.losses.t_s, lk))
+        l_bounds = np.searchsorted(lk[l_order], keys), np.searchsorted(lk[l_order], keys, side="right")
         out = []
-        for key, a, b in zip(keys.tolist(), *bounds):
-            rows = order[a:b]
+        for key, a, b, la, lb in zip(keys.tolist(), *bounds, *l_bounds):
+            rows, mine = order[a:b], l_order[la:lb]
             w, rest = divmod(key, n * n)
             i, j = divmod(rest, n)
-            err = self.err_ms[rows]
+            cnt = counters.get((w, self.names[i], self.names[j]))
+            p = float(self.planned.loss[w, i, j])
+            labels, stage = losses.classify(self.l_backlog[mine], self.l_limit[mine], self.l_transition[mine],
+                                            rows.shape[0], cnt, p)
+            self.l_label[mine] = labels
+            self.stages.append(stage)
+            sigma = _sigma(stage.dropped, stage.offered, p)
+            ratios = sat.get((w, i, j), np.zeros(0))
+            de = delay_errors(self.err_ms[rows])
+            ok = _delay_ok(de, self.tol) and abs(sigma or 0.0) <= self.tol.loss_sigma
             meas = (self.c.t_to[rows] - self.c.t_from[rows]) * 1000.0
             model = (self.c_start[rows] - self.c.t_from[rows]) * 1000.0
-            mine = lk == key
-            lost, tail, down = int(mine.sum()), int((mine & self.l_tail).sum()), int((mine & self.l_transition).sum())
-            cnt = counters.get((w, self.names[i], self.names[j]))
-            if cnt is not None and cnt.queue_drops:
-                # the kernel's own count of tail drops wins where the model's queue was not full
-                tail = min(lost - down, max(tail, cnt.queue_drops))
-            rnd = lost - tail - down
-            p = float(self.planned.loss[w, i, j])
-            offered = rows.shape[0] + rnd
-            sigma = _sigma(rnd, offered, p)
-            ratios = sat.get((w, i, j), np.zeros(0))
-            de = delay_errors(err)
-            ok = _delay_ok(de, self.tol) and abs(sigma or 0.0) <= self.tol.loss_sigma
+            count = np.bincount(labels, minlength=4)
             out.append(LinkWindow(
                 verdict="pass" if ok else "fail", src=self.names[i], dst=self.names[j], window=w, **de,
-                planned_delay_ms=float(self.planned.delay_ms[w, i, j]), planned_rate_mbps=float(self.planned.rate_mbps[w, i, j]),
-                planned_loss=p, measured_delay_p50_ms=_q(meas, 50), model_delay_p50_ms=_q(model, 50), lost=lost,
-                lost_tail=tail, lost_transition=down, loss_random=round(rnd / offered, 6) if offered else None,
-                loss_sigma=None if sigma is None else round(sigma, 3), saturated_bins=int(ratios.shape[0]),
-                throughput_ratio_p50=_q(ratios, 50), counters=cnt))
+                planned_delay_ms=float(self.planned.delay_ms[w, i, j]),
+                planned_rate_mbps=float(self.planned.rate_mbps[w, i, j]), planned_loss=p,
+                measured_delay_p50_ms=_q(meas, 50), model_delay_p50_ms=_q(model, 50),
+                queue_over_limit=int(self.c_over[rows].sum()), lost=int(mine.shape[0]),
+                lost_tail=int(count[losses.TAIL]), lost_random=int(count[losses.RANDOM]),
+                lost_transition=int(count[losses.TRANSITION]), lost_unexplained=int(count[losses.UNEXPLAINED]),
+                loss_source=stage.source, loss_offered=stage.offered, loss_drops=stage.dropped,
+                loss_random=round(stage.dropped / stage.offered, 6) if stage.offered else None,
+                loss_sigma=sigma, saturated_bins=int(ratios.shape[0]), throughput_ratio_p50=_q(ratios, 50),
+                counters=cnt))
         return out
 
     def _counters(self) -> dict[tuple[int, str, str], Counters]:
@@ -270,23 +322,20 @@ class _Audit:
         tol = self.tol
         sat: dict[tuple[int, int, int], np.ndarray] = {}
         all_ratios = []
-        for direction in self.model:
-            _, ratio, w = self._saturation(direction)
-            i, j = divmod(direction, self.n)
+        for key, port in self.ports.items():
+            _, ratio, w = self._saturation(port)
+            i, j = divmod(key, self.n)
             for wk in np.unique(w).tolist():
                 sat[(wk, i, j)] = ratio[w == wk]
             all_ratios.append(ratio)
         ratios = np.concatenate(all_ratios) if all_ratios else np.zeros(0)
+        self.stages: list[losses.LossStage] = []
         links = self._links(sat)
         err = self.err_ms[~np.isnan(self.err_ms)]
         pooled = delay_errors(err)
-        rnd_obs = sum(lw.lost - lw.lost_tail - lw.lost_transition for lw in links)
-        exp = var = 0.0
-        for lw in links:
-            offered = lw.n + (lw.lost - lw.lost_tail - lw.lost_transition)
-            exp += offered * lw.planned_loss
-            var += offered * lw.planned_loss * (1 - lw.planned_loss)
-        sigma = _sigma_pooled(rnd_obs, exp, var)
+        rnd_obs = sum(st.dropped for st in self.stages)
+        exp = sum(st.expected for st in self.stages)
+        sigma = _sigma_pooled(rnd_obs, exp, sum(st.variance for st in self.stages))
         change = [a.timings_s.get("total_s", 0.0) * 1000 for a in self.info.window_applies] if self.info else []
         late = [e.late_ms for e in self.info.schedule] if self.info else []
         checks = [
@@ -307,13 +356,17 @@ class _Audit:
                   ok=not late or max(late) <= tol.lateness_ms),
         ]
         failed = [ch.name for ch in checks if not ch.ok]
+        count = np.bincount(self.l_label, minlength=4)
         return Fidelity(
             verdict="fail" if failed else "pass", failed=failed, **pooled, packets=self.fol.n_packets,
-            crossings_unmodelled=int(np.isnan(self.err_ms).sum()), lost=len(self.fol.losses),
-            lost_tail=sum(lw.lost_tail for lw in links), lost_transition=int(self.l_transition.sum()),
-            loss_random_observed=rnd_obs, loss_random_expected=round(exp, 3),
-            loss_sigma=sigma, throughput_ratio_p50=_q(ratios, 50), saturated_bins=int(ratios.shape[0]),
-            gaps=self._gaps(), window_change_max_ms=round(max(change), 3) if change else None,
+            crossings_unmodelled=int(np.isnan(self.err_ms).sum()), queue_over_limit=int(self.c_over.sum()),
+            lost=len(self.fol.losses), lost_tail=int(count[losses.TAIL]), lost_random=int(count[losses.RANDOM]),
+            lost_transition=int(count[losses.TRANSITION]), lost_unexplained=int(count[losses.UNEXPLAINED]),
+            loss_links_counted=sum(st.source == "counters" for st in self.stages),
+            loss_offered=sum(st.offered for st in self.stages), loss_random_observed=rnd_obs,
+            loss_random_expected=round(exp, 3), loss_sigma=sigma, throughput_ratio_p50=_q(ratios, 50),
+            saturated_bins=int(ratios.shape[0]), gaps=self._gaps(),
+            window_change_max_ms=round(max(change), 3) if change else None,
             lateness_max_ms=round(max(late), 3) if late else None, checks=checks, tolerances=tol, links=links)
 
 

@@ -2,6 +2,9 @@
 
 Delay errors are *measured minus model* per hop crossing, in milliseconds (positive: the
 emulator was late); the model is `uavcas.fidelity.fifo`. Quantiles are of the signed error.
+Lost packets are split by `uavcas.fidelity.losses`. Schema 2 added the loss stage's own figures
+(`loss_source`, `loss_offered`, `loss_drops`), `lost_random`, `lost_unexplained` and
+`queue_over_limit`; they default to None when a schema-1 file is read.
 """
 
 from __future__ import annotations
@@ -12,7 +15,7 @@ from pydantic import BaseModel, ConfigDict, Field
 
 from uavcas.rundir import FidelitySummary
 
-SCHEMA_VERSION = 1
+SCHEMA_VERSION = 2
 Verdict = Literal["pass", "fail"]
 
 
@@ -84,11 +87,20 @@ class LinkWindow(DelayErrors):
     planned_loss: float
     measured_delay_p50_ms: float | None  # hop delay as measured (capture to capture)
     model_delay_p50_ms: float | None  # what the model gives the same packets
+    # crossings that entered a model queue already at its limit: the real queue took them, so
+    # it was not full, and the model carried a backlog the port did not have (0 when it is right)
+    queue_over_limit: int | None = None
     lost: int  # left src, never reached dst
-    lost_tail: int  # of those: the model's queue was full (queue-tail drops)
-    lost_transition: int  # of those: while forwarding changed, or the link was leaving the plan
-    loss_random: float | None  # random losses (lost - tail - transition) / packets offered to the link
-    loss_sigma: float | None  # (observed - planned random losses) / binomial sd
+    lost_tail: int  # of those: dropped at the tail of the queue
+    lost_random: int | None = None  # dropped by the random-loss rule
+    lost_transition: int  # while forwarding changed, or the link was leaving the plan
+    lost_unexplained: int | None = None  # not dropped by this port (counters): blackhole, detour, ...
+    # the random-loss rule: frames it saw and dropped ("counters": the kernel's; "model": the split above)
+    loss_source: Literal["counters", "model"] | None = None
+    loss_offered: int | None = None
+    loss_drops: int | None = None
+    loss_random: float | None  # loss_drops / loss_offered
+    loss_sigma: float | None  # (loss_drops - planned loss x loss_offered) / binomial sd
     saturated_bins: int
     throughput_ratio_p50: float | None  # measured / planned rate, median over saturated bins
     counters: Counters | None = None
@@ -118,10 +130,15 @@ class Fidelity(DelayErrors):
     verdict: Verdict
     failed: list[str]  # names of the checks that failed
     packets: int  # transmissions followed
-    crossings_unmodelled: int  # hop crossings over a link the plan did not have in that window
+    crossings_unmodelled: int  # hop crossings of a port whose shaping was not known then
+    queue_over_limit: int | None = None  # crossings that found the model's queue full (LinkWindow)
     lost: int
     lost_tail: int
+    lost_random: int | None = None
     lost_transition: int
+    lost_unexplained: int | None = None  # lost, but not by the ports' queues or loss rules (incl. unrouted)
+    loss_links_counted: int | None = None  # link-windows whose loss test used the kernel counters
+    loss_offered: int | None = None  # frames the loss rules saw (summed over link-windows)
     loss_random_observed: int
     loss_random_expected: float
     loss_sigma: float

@@ -39,7 +39,7 @@ import numpy as np
 from .packets import PacketTable, address_to_words, read_packets
 
 if TYPE_CHECKING:
-    from uavcas.rundir import ForwardingEpoch
+    from uavcas.rundir import ForwardingEpoch, RunDir
     from uavcas.twin.model import Plan
 
 KEY_COLUMNS: tuple[str, ...] = (
@@ -339,26 +339,30 @@ def _assemble(order, chain, ts, point, node, dst, window, points, point_node, ti
                     window.astype(np.int32))
 
 
+def run_timeline(rd: "RunDir", plan: "Plan") -> Timeline:
+    """The forwarding a run held: its own log (forwarding.jsonl) when present, else the plan's
+    windows at the times run.json says they were applied."""
+    from uavcas.rundir import RunDirError
+
+    epochs = rd.read_forwarding()
+    if epochs:
+        return Timeline.from_epochs(plan, epochs)
+    info, t0 = rd.read_info(), rd.read_t0()
+    if t0 is None:
+        raise RunDirError(f"{rd.root}: no forwarding.jsonl and no t0 (run.json or {rd.owner_path.name}): "
+                          "cannot place windows in time")
+    applied = [(a.t_unix - a.timings_s.get("total_s", 0.0), a.t_unix) for a in info.window_applies] if info else []
+    return Timeline.from_plan(plan, t0, applied or None)
+
+
 def follow_run(run_dir: str | Path, max_hop_s: float = MAX_HOP_S, table: PacketTable | None = None,
                allow_truncated: bool = True) -> tuple[PacketTable, Followed]:
-    """Read a run directory's captures (unless `table` is given) and follow its packets.
-
-    The forwarding is the run's own log (forwarding.jsonl) when present, else the plan's.
-    """
-    from uavcas.rundir import RunDir, RunDirError
+    """Read a run directory's captures (unless `table` is given) and follow its packets along
+    the forwarding the run held (`run_timeline`)."""
+    from uavcas.rundir import RunDir
 
     rd = RunDir(Path(run_dir))
     plan = rd.read_plan()
     if table is None:
         table = read_packets(rd.pcaps(), allow_truncated=allow_truncated)
-    epochs = rd.read_forwarding()
-    if epochs:
-        timeline = Timeline.from_epochs(plan, epochs)
-    else:
-        info, t0 = rd.read_info(), rd.read_t0()
-        if t0 is None:
-            raise RunDirError(f"{rd.root}: no forwarding.jsonl and no t0 (run.json or {rd.owner_path.name}): "
-                              "cannot place windows in time")
-        applied = [(a.t_unix - a.timings_s.get("total_s", 0.0), a.t_unix) for a in info.window_applies] if info else []
-        timeline = Timeline.from_plan(plan, t0, applied or None)
-    return table, follow(table, timeline, max_hop_s)
+    return table, follow(table, run_timeline(rd, plan), max_hop_s)
