@@ -132,6 +132,17 @@ class _Audit:
         ok = w >= 0
         return np.where(ok, arr[np.maximum(w, 0), np.maximum(i, 0), np.maximum(j, 0)], np.nan)
 
+    def _by_port(self, direction: np.ndarray, t: np.ndarray):
+        """(direction key, its `PortShaping`, rows, setting in force at each row's `t`) per shaped
+        link direction, rows of times before the port was shaped left out."""
+        by_dir = np.argsort(direction, kind="stable")
+        for g in np.split(by_dir, np.flatnonzero(np.diff(direction[by_dir])) + 1) if by_dir.shape[0] else []:
+            key = int(direction[g[0]])
+            ps = self.shaping.get(divmod(key, self.n)) if key >= 0 else None
+            if ps is not None:
+                k = ps.at(t[g])
+                yield key, ps, g[k >= 0], k[k >= 0]
+
     # per crossing ----------------------------------------------------------------------------
     def _crossings(self) -> None:
         """Every crossing of a port with known shaping goes through that port's FIFO (it loads the
@@ -145,15 +156,7 @@ class _Audit:
         held = np.zeros(len(c), dtype=np.int64)
         limit = np.zeros(len(c), dtype=np.int64)
         self.ports: dict[int, _Port] = {}
-        by_dir = np.argsort(direction, kind="stable")
-        cuts = np.flatnonzero(np.diff(direction[by_dir])) + 1
-        for g in np.split(by_dir, cuts) if by_dir.shape[0] else []:
-            key = int(direction[g[0]])
-            ps = self.shaping.get(divmod(key, self.n)) if key >= 0 else None
-            if ps is None:
-                continue
-            k = ps.at(c.t_from[g])
-            g, k = g[k >= 0], k[k >= 0]
+        for key, ps, g, k in self._by_port(direction, c.t_from):
             ready = c.t_from[g] + ps.delay_ms[k] / 1000.0
             o = np.lexsort((c.t_from[g], ready))
             g, k, ready = g[o], k[o], ready[o]
@@ -182,14 +185,7 @@ class _Audit:
         backlog = np.zeros(len(lo), dtype=np.int64)
         limit = np.ones(len(lo), dtype=np.int64)
         direction = np.where((i >= 0) & (j >= 0), i * self.n + j, -1)
-        by_dir = np.argsort(direction, kind="stable")
-        for g in np.split(by_dir, np.flatnonzero(np.diff(direction[by_dir])) + 1) if by_dir.shape[0] else []:
-            key = int(direction[g[0]])
-            ps = self.shaping.get(divmod(key, self.n)) if key >= 0 else None
-            if ps is None:
-                continue
-            k = ps.at(lo.t_s[g])
-            g, k = g[k >= 0], k[k >= 0]
+        for key, ps, g, k in self._by_port(direction, lo.t_s):
             w[g] = ps.window[k]
             if not self.netem:
                 t_in[g] += ps.delay_ms[k] / 1000.0
