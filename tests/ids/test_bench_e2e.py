@@ -133,6 +133,25 @@ def test_quick_like_dataset_is_refused_naming_the_class(synth_df, tmp_path):
         assert not (tmp_path / protocol).exists()
 
 
+def test_min_class_runs_leaves_out_the_rare_classes_and_says_so(synth_df, tmp_path):
+    """A class in one run makes the split degenerate; --min-class-runs 2 leaves out its flows
+    instead (named, with run and flow counts, in the notes) and fits on the rest."""
+    wormhole_runs = sorted(synth_df.loc[synth_df["label"] == "Wormhole", "run_id"].unique())
+    keep = ~synth_df["run_id"].isin(wormhole_runs[1:])  # Wormhole left in a single run
+    n_rare = int((synth_df[keep]["label"] == "Wormhole").sum())
+    assert n_rare > 0
+    ds = write_dataset(tmp_path / "rare", synth_df[keep])
+    args = ["bench", "ids", str(ds), "--protocol", "multiclass", "--models", "lr", "--seeds", "0,1", "--no-importance"]
+    r = runner.invoke(app, args + ["--out", str(tmp_path / "refused")])
+    assert r.exit_code == 2 and "Wormhole is in 1 run" in r.output, r.output
+    r = runner.invoke(app, args + ["--out", str(tmp_path / "kept"), "--min-class-runs", "2"])
+    assert r.exit_code == 0, r.output
+    res = pd.read_csv(tmp_path / "kept" / "results.csv")
+    assert "Wormhole" not in set(res["class"].dropna()) and "Blackhole" in set(res["class"].dropna())
+    md = (tmp_path / "kept" / "leaderboard.md").read_text()
+    assert f"Wormhole (1 run, {n_rare} flows)" in md
+
+
 @pytest.mark.parametrize(
     "args,msg",
     [

@@ -62,6 +62,7 @@ def ids_cmd(
     features: str = typer.Option(None, "--features", help="A feature set of the schema (e.g. cic, paper) or comma-separated columns (default: the dataset's)."),
     importance: bool = typer.Option(True, "--importance/--no-importance", help="Permutation importance of the tree models (RF, LightGBM)."),
     train_cap: int = typer.Option(0, "--train-cap", min=0, help="At most N training (and validation) flows per run and class, seeded (0: all); test flows are never capped."),
+    min_class_runs: int = typer.Option(0, "--min-class-runs", min=0, help="Leave out the flows of classes held by fewer than N runs, listed in the notes (0: refuse such a class, naming it)."),
     threads: int = typer.Option(0, "--threads", min=0, help="Threads per model (0: cores available)."),
     fmt: str = typer.Option("auto", "--format", help="auto | uavcas | uavcas-csv | cicids2017 | unsw-nb15."),
     view: str = typer.Option(None, "--view", help="Flow view when the dataset holds several (5tuple | hostpair)."),
@@ -90,7 +91,7 @@ def ids_cmd(
         feats = features.strip() if "," not in features else tuple(f.strip() for f in features.split(",") if f.strip())
     cfg = BenchConfig(models=names, scaler=scaler, epochs=epochs, seeds=_parse_seeds(seeds),
                       holdout=_parse_holdout(holdout), features=feats, importance=importance,
-                      train_cap=train_cap or None, n_threads=threads or None)
+                      train_cap=train_cap or None, min_class_runs=min_class_runs, n_threads=threads or None)
     try:
         df = load_any(dataset, None if fmt == "auto" else fmt, view=view)
         prepared = [prepare(df, p, cfg) for p in protocols]  # refuse bad input before any fit
@@ -101,7 +102,7 @@ def ids_cmd(
         cfg.progress = lambda msg, p=prep.protocol: err_console.print(f"[dim]{p}[/] {msg}", highlight=False)
         res = execute(prep, cfg)
         meta = {"dataset": str(dataset), "scaler": scaler, "epochs": epochs, "seeds": list(cfg.seeds),
-                "train_cap": cfg.train_cap,
+                "train_cap": cfg.train_cap, "min_class_runs": cfg.min_class_runs,
                 "models": list(names), "holdout": [f"{a}={v}" for a, v in cfg.holdout],
                 "absent_features": df.attrs.get("absent_features", [])}
         where = out if len(prepared) == 1 else out / prep.protocol

@@ -31,7 +31,7 @@ from uavcas.vocabulary import families_of
 from .features import context_matrix, feature_matrix, resolve_features
 from .metrics import STEALTH, auroc, class_scores, confusion, pr_auc, scores
 from .models import DEEP, DISPLAY, MODELS, TREES, fit_model, make_model, uses_context
-from .splits import DegenerateSplitError, Split, cap_rows, check_declared, grouped_split
+from .splits import DegenerateSplitError, Split, cap_rows, check_declared, grouped_split, runs_per_class
 from .torch_estimator import default_threads
 
 PROTOCOLS = ("binary", "multiclass", "ood", "cross-condition")
@@ -54,6 +54,9 @@ class BenchConfig:
     importance_rows: int = 2000  # test flows permuted (a seeded subsample when there are more)
     importance_repeats: int = 5
     train_cap: int | None = None  # at most this many training/validation flows per run and class
+    # classes held by fewer runs are left out (their flows dropped, named in the notes); 0: such a
+    # class makes the split degenerate and is refused
+    min_class_runs: int = 0
     n_threads: int | None = None
     progress: Callable[[str], None] | None = None  # told "<seed> <model>: <seconds>" after each fit
 
@@ -318,6 +321,22 @@ class Prepared:
     notes: list[str]
 
 
+def _drop_rare_classes(df: pd.DataFrame, min_runs: int, notes: list[str]) -> pd.DataFrame:
+    """The rows of the classes held by at least `min_runs` runs (all rows when 0)."""
+    if min_runs <= 0:
+        return df
+    groups = _groups(df, [])
+    per_class = runs_per_class(df["label"].astype(str).to_numpy(), groups)
+    rare = sorted(c for c, n in per_class.items() if n < min_runs)
+    if not rare:
+        return df
+    label = df["label"].astype(str)
+    listed = ", ".join(f"{c} ({int(per_class[c])} run{'s' if per_class[c] != 1 else ''}, "
+                       f"{int((label == c).sum())} flows)" for c in rare)
+    notes.append(f"left out, held by fewer than {min_runs} runs (--min-class-runs): {listed}")
+    return df[~label.isin(rare).to_numpy()]
+
+
 def prepare(df: pd.DataFrame, protocol: str, cfg: BenchConfig) -> Prepared:
     """Build the task and every seed's split; raises (ValueError, DegenerateSplitError) before
     anything is fitted."""
@@ -329,9 +348,9 @@ def prepare(df: pd.DataFrame, protocol: str, cfg: BenchConfig) -> Prepared:
         raise ValueError("the dataset has no 'label' column")
     if not cfg.seeds:
         raise ValueError("no seed given")
-    df = df.reset_index(drop=True)
-    features = resolve_features(df, cfg.features)
     notes: list[str] = []
+    df = _drop_rare_classes(df, cfg.min_class_runs, notes).reset_index(drop=True)
+    features = resolve_features(df, cfg.features)
     task = PREPARE[protocol](df, feature_matrix(df, features), notes, cfg)
     if any(uses_context(m) for m in cfg.models):
         task.x_ctx = context_matrix(df)
