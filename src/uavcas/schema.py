@@ -104,12 +104,12 @@ CONTEXT_FLOW_FEATURES: tuple[str, ...] = (
 )  # fmt: skip
 # per host and window ...
 CONTEXT_HOST_METRICS: tuple[str, ...] = (
-    "flows", "unanswered_frac", "rtt_ms", "delay_ms", "out_share", "lost_out_frac", "lost_in_frac",
+    "flow_share", "unanswered_frac", "rtt_ms", "delay_ms", "out_share", "lost_out_frac", "lost_in_frac",
     "offhome_frac", "ttl_off_frac", "path_len_mean",
 )  # fmt: skip
 # ... and against the median of the host's earlier windows (metric -> its shift)
 CONTEXT_HOST_SHIFTS: dict[str, str] = {
-    "flows": "flows_shift", "unanswered_frac": "unanswered_shift", "rtt_ms": "rtt_shift_ms",
+    "log_flows": "flows_log_ratio", "unanswered_frac": "unanswered_shift", "rtt_ms": "rtt_shift_ms",
     "delay_ms": "delay_shift_ms", "out_share": "out_share_shift", "lost_out_frac": "lost_out_shift",
     "path_len_mean": "path_len_shift",
 }  # fmt: skip
@@ -118,7 +118,7 @@ CONTEXT_HOST_FEATURES: tuple[str, ...] = tuple(
     f"ctx_{role}_{m}" for role in ("src", "dst") for m in CONTEXT_HOST_METRICS + tuple(CONTEXT_HOST_SHIFTS.values())
 )
 # per window for the flow's host pair, and against the pair's earlier windows
-CONTEXT_PAIR_METRICS: tuple[str, ...] = ("flows", "unanswered_frac", "rtt_ms", "delay_ms", "lost_frac", "path_len_mean")
+CONTEXT_PAIR_METRICS: tuple[str, ...] = ("flow_share", "unanswered_frac", "rtt_ms", "delay_ms", "lost_frac", "path_len_mean")
 CONTEXT_PAIR_SHIFTS: dict[str, str] = {
     "unanswered_frac": "unanswered_shift", "rtt_ms": "rtt_shift_ms", "delay_ms": "delay_shift_ms",
     "path_len_mean": "path_len_shift",

@@ -115,8 +115,9 @@ def test_packet_that_never_reaches_its_destination_switch():
     # captured at s-b (it saw every packet; s-a missed one); the server's FIN ends the flow (7 packets)
     f = flow(c, 40000)
     assert f["ctx_lost_frac"] == pytest.approx(1 / 7)
-    # lost packets count for neither path length nor delay
-    assert f["ctx_path_len_mean"] == 3
+    # a lost packet's path is how far it got: the lost segment was seen at s-b and s-r (2 switches,
+    # 1 ms), the other six at all three (2 ms)
+    assert f["ctx_path_len_mean"] == pytest.approx(20 / 7) and f["ctx_delay_ms"] == pytest.approx(13 / 7)
     assert f["ctx_dst_lost_out_frac"] == pytest.approx(1 / 4) and f["ctx_src_lost_in_frac"] == pytest.approx(1 / 4)
     assert f["ctx_dst_lost_in_frac"] == 0 and f["ctx_net_lost_frac"] == pytest.approx(1 / 8)
 
@@ -155,7 +156,9 @@ def test_blackholed_host_against_its_earlier_windows():
     assert late["ctx_dst_unanswered_frac"] == 1 and late["ctx_dst_unanswered_shift"] == 1
     assert late["ctx_dst_out_share"] == 0 and late["ctx_dst_out_share_shift"] == pytest.approx(-0.5)
     # earlier windows: the fetch and the lone FIN flow after it; now one attempt
-    assert late["ctx_dst_flows"] == 1 and late["ctx_dst_flows_shift"] == -1
+    # as shares of the window's flows (one of one now) and as a log ratio to the past
+    assert late["ctx_dst_flow_share"] == 1 and early["ctx_dst_flow_share"] == 1
+    assert late["ctx_dst_flows_log_ratio"] == pytest.approx(np.log(2 / 3))
     assert late["ctx_retx_frac"] == pytest.approx(0.5) and late["ctx_rtt_ms"] == -1
     assert late["ctx_dst_rtt_ms"] == -1 and late["ctx_dst_rtt_shift_ms"] == 0  # no round trip to compare
     assert late["ctx_net_unanswered_frac"] == 1 and early["ctx_net_unanswered_frac"] == 0
@@ -174,7 +177,7 @@ def test_detour_adds_a_switch_against_earlier_windows():
     assert flow(c, 40001)["ctx_dst_path_len_shift"] == 0
     assert f["ctx_net_path_len_mean"] == 4
     # the host pair's windows, and the flow itself against the pair's earlier windows
-    assert f["ctx_pair_path_len_mean"] == 4 and f["ctx_pair_path_len_shift"] == 1 and f["ctx_pair_flows"] == 2
+    assert f["ctx_pair_path_len_mean"] == 4 and f["ctx_pair_path_len_shift"] == 1 and f["ctx_pair_flow_share"] == 1
     assert f["ctx_path_len_shift"] == 1 and f["ctx_delay_shift_ms"] == pytest.approx(1.0)
     assert f["ctx_rtt_shift_ms"] == pytest.approx(2.0) and f["ctx_pair_rtt_shift_ms"] == pytest.approx(2.0)
     first = flow(c, 40000)
@@ -203,3 +206,22 @@ def test_invariant_to_row_order_and_address_names():
     pd.testing.assert_frame_equal(ctx(shuffled), base)
     renamed = {"a": "192.168.7.9", "b": "10.0.0.1", "r": "172.16.0.2", "x": "10.9.9.9"}
     pd.testing.assert_frame_equal(ctx(obs, renamed), base)
+
+
+def test_flood_lost_before_leaving_the_attackers_switch():
+    """A flood whose SYNs mostly die at the attacker's own switch (the victim out of reach) still
+    has a path (1 switch: how far they got) and no delay; the victim's share of the window's
+    flows does not grow with the flood's rate."""
+    syn = lambda k, path: send(0.5 + 0.01 * k, path, "x", "b", flags=SYN, seq=k, id=k, sport=50000 + k, dport=80)  # noqa: E731
+    obs = fetch(0.2, ["a", "r", "b"], 40000)  # B is home at s-b: it answers the fetch
+    flood = [o for k in range(4) for o in syn(k, ["x", "r", "b"] if k == 0 else ["x"])]
+    c = ctx(obs + flood)
+    lost = flow(c, 50001)
+    assert lost["ctx_lost_frac"] == 1 and lost["ctx_path_len_mean"] == 1 and lost["ctx_delay_ms"] == -1
+    reached = flow(c, 50000)
+    assert reached["ctx_lost_frac"] == 0 and reached["ctx_path_len_mean"] == 3 and reached["ctx_delay_ms"] == pytest.approx(2.0)
+    # window 0: the fetch, the lone flows its close leaves, and the 4 SYN flows; x is in 4 of them
+    n_window = len(c)
+    assert lost["ctx_src_flow_share"] == pytest.approx(4 / n_window) and lost["ctx_pair_flow_share"] == pytest.approx(4 / n_window)
+    twice = ctx(obs + flood + [o for k in range(4, 8) for o in syn(k, ["x"])])
+    assert flow(twice, 50001)["ctx_src_flow_share"] == pytest.approx(8 / len(twice))

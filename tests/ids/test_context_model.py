@@ -25,15 +25,38 @@ def _frame(n=400, seed=0):
     return X, np.where(ctx > 0, "Replay", "Benign")
 
 
-@pytest.mark.parametrize("name,learns", [("context", True), ("context-only", True), ("context-flow", False)])
+@pytest.mark.parametrize("name,learns", [("context", True), ("context-joint", True), ("context-only", True),
+                                         ("context-flow", False)])
 def test_each_variant_sees_only_its_inputs(name, learns):
     X, y = _frame()
     Xt, yt = _frame(seed=1)
     est = baseline(name, n_jobs=1).fit(X, y)
     acc = (est.predict(Xt) == yt).mean()
     assert (acc > 0.95) if learns else (acc < 0.7)
-    assert list(est.feature_names_in_) == {"context": list(X.columns), "context-only": ["ctx_ttl_off_frac"],
+    assert list(est.feature_names_in_) == {"context": list(X.columns), "context-joint": list(X.columns),
+                                           "context-only": ["ctx_ttl_off_frac"],
                                            "context-flow": ["Flow Duration"]}[name]
+
+
+def test_context_stage_adds_to_the_flow_models_scores():
+    """Two stages with named columns: the probabilities are the softmax of the flow model's raw
+    scores plus the context trees'; without names (an array) one model learns everything."""
+    rng = np.random.default_rng(0)
+    n = 600
+    X = pd.DataFrame({"Flow Duration": rng.normal(size=n), "ctx_ttl_off_frac": rng.normal(size=n)})
+    y = np.select([X["Flow Duration"] > 0.5, X["ctx_ttl_off_frac"] > 0.5], ["DoS", "Replay"], "Benign")
+    est = baseline("context", n_jobs=1).fit(X, y)
+    z = (est.flow_model_.predict(X[["Flow Duration"]].to_numpy(), raw_score=True)
+         + est.model_.predict(X.to_numpy(), raw_score=True))
+    np.testing.assert_allclose(est.predict_proba(X), np.exp(z) / np.exp(z).sum(1, keepdims=True), rtol=1e-9)
+    # the flow stage alone cannot tell Replay from Benign; the context stage can
+    Xt = pd.DataFrame({"Flow Duration": rng.normal(size=n), "ctx_ttl_off_frac": rng.normal(size=n)})
+    yt = np.select([Xt["Flow Duration"] > 0.5, Xt["ctx_ttl_off_frac"] > 0.5], ["DoS", "Replay"], "Benign")
+    flow_only = est.classes_[est.flow_model_.predict(Xt[["Flow Duration"]].to_numpy(), raw_score=True).argmax(1)]
+    rest = yt != "DoS"
+    assert (flow_only[rest] == yt[rest]).mean() < 0.75 and (est.predict(Xt)[rest] == yt[rest]).mean() > 0.9
+    assert baseline("context", n_jobs=1).fit(X.to_numpy(), y).flow_model_ is None
+    assert baseline("context-joint", n_jobs=1).fit(X, y).flow_model_ is None
 
 
 def test_selection_by_name_and_refusals():
@@ -59,7 +82,7 @@ def test_bench_context_models_with_importance(synth_dir, tmp_path):
                             "--models", ",".join(CONTEXT_MODELS), "--seeds", "0,1", "--threads", "1"])
     assert r.exit_code == 0, r.output
     res = pd.read_csv(tmp_path / "results.csv", keep_default_na=False)
-    assert set(res["model"]) == {"Context", "Context-flow", "Context-only"}
+    assert set(res["model"]) == {"Context", "Context-joint", "Context-flow", "Context-only"}
     assert "stealth" in set(res["class"])
     imp = pd.read_csv(tmp_path / "importance.csv")
     feats = imp.groupby("model")["feature"].agg(set)

@@ -54,7 +54,7 @@ def ids_cmd(
     dataset: Path = typer.Argument(..., help="Dataset directory (flows.parquet), the authors' CSV (*_ts.csv) or a CICIDS2017/UNSW-NB15 sample."),
     out: Path = typer.Option(..., "--out", help="Output directory (one sub-directory per protocol when several)."),
     protocol: str = typer.Option("multiclass", "--protocol", help="binary | multiclass | ood | cross-condition, comma-separated, or all."),
-    models: str = typer.Option("all", "--models", help="Comma-separated: lr,sgd,rf,mlp,lightgbm,cnn1d,lstm,convnet,tinyml,cnn_bilstm (all: these ten), context,context-flow,context-only (the context-aware detector and its ablation; need the dataset's ctx_* columns)."),
+    models: str = typer.Option("all", "--models", help="Comma-separated: lr,sgd,rf,mlp,lightgbm,cnn1d,lstm,convnet,tinyml,cnn_bilstm (all: these ten), context,context-joint,context-flow,context-only (the context-aware detector and its ablation; need the dataset's ctx_* columns)."),
     scaler: str = typer.Option("standard", "--scaler", help="standard | minmax | robust."),
     epochs: int = typer.Option(50, "--epochs", min=1, help="Max epochs of the neural models (early stopping on the grouped validation split)."),
     holdout: list[str] = typer.Option([], "--holdout", help="AXIS=VALUE held out (cross-condition; repeatable)."),

@@ -17,8 +17,9 @@ Observational notions, learned from the captures:
   (`follow.KEY_COLUMNS`: addresses, ports, protocol, IP id, TCP seq, flags, TTL, length), each
   within `MAX_HOP_S` of the previous, form one transmission; the k-th observation at a switch
   goes to the k-th transmission. Its *ingress* is the first switch that saw it, its *path
-  length* the number of switches that did, its *delay* the time from its first to its last
-  observation. No forwarding table is used: a packet's path is what the switches saw.
+  length* the number of switches that did (delivered or not: a lost packet's path is how far it
+  got), its *delay* the time from its first to its last observation (defined once two switches
+  saw it). No forwarding table is used: a packet's path is what the switches saw.
 * **home switch** of an address: the switch where most transmissions from that address entered
   the network (what a node's own switch knows of the hosts on its host port).
 * **usual TTL** of an address: the most common TTL of its transmissions.
@@ -79,11 +80,6 @@ class Transmissions:
     offhome: np.ndarray
     ttl_off: np.ndarray
     home: np.ndarray
-
-    @property
-    def crossed(self) -> np.ndarray:
-        """Delivered over at least one link: reached its destination's switch from another."""
-        return self.reached & (self.n_points > 1)
 
     @property
     def delay_ms(self) -> np.ndarray:
@@ -182,8 +178,9 @@ def flow_context(p: PacketTable, fl: Flows, t: Transmissions) -> pd.DataFrame:
     tcp = col("proto") == 6
     d = fwd.astype(np.int64)
 
-    crossed = t.crossed[tx]
-    n_crossed = np.maximum(np.bincount(g, weights=crossed, minlength=n), 1)
+    multi = t.n_points[tx] > 1
+    n_multi = np.bincount(g, weights=multi, minlength=n)
+    delay = np.bincount(g, weights=np.where(multi, t.delay_ms[tx], 0.0), minlength=n) / np.maximum(n_multi, 1)
     levels = np.zeros(n)
     if len(r):
         per_dir = np.unique(np.unique(np.stack([g, d, ttl], 1), axis=0)[:, :2], axis=0, return_counts=True)
@@ -198,8 +195,8 @@ def flow_context(p: PacketTable, fl: Flows, t: Transmissions) -> pd.DataFrame:
     retx = _count_repeats([g, d, seq, flen, flags, ttl], carries, g, n)
     size = np.maximum(np.bincount(g, minlength=n), 1)
     return pd.DataFrame({
-        "ctx_path_len_mean": np.bincount(g, weights=np.where(crossed, t.n_points[tx], 0), minlength=n) / n_crossed,
-        "ctx_delay_ms": np.bincount(g, weights=np.where(crossed, t.delay_ms[tx], 0.0), minlength=n) / n_crossed,
+        "ctx_path_len_mean": per(t.n_points[tx].astype(np.float64)),
+        "ctx_delay_ms": np.where(n_multi > 0, delay, -1.0),
         "ctx_lost_frac": per(~t.reached[tx]),
         "ctx_offhome_frac": per(t.offhome[tx]),
         "ctx_ttl_off_frac": per(t.ttl_off[tx]),
@@ -266,7 +263,7 @@ def _earlier_median(tab: pd.DataFrame, metric: str) -> pd.Series:
 class Observed:
     """What the windows aggregate. Per flow: `ini`, `res` (address codes of its initiator and
     responder), `win`, `unanswered`, `rtt` (ms, NaN without a handshake). Per transmission:
-    `win` and, over the ones that crossed a link, `path` and `delay` (NaN otherwise)."""
+    `win`, `path` and, over the ones seen at two switches or more, `delay` (NaN otherwise)."""
 
     ini: np.ndarray
     res: np.ndarray
@@ -287,8 +284,8 @@ class Observed:
             res=np.where(fwd_first, t.addr_dst[first], t.addr_src[first]),
             f_win=np.asarray(p["ts_ns"], dtype=np.int64)[first] // w_ns,
             unanswered=unanswered_requests(p, fl).astype(np.float64), rtt=np.where(rtt_ms >= 0, rtt_ms, np.nan),
-            t_win=t.t_ns // w_ns, path=np.where(t.crossed, t.n_points, np.nan),
-            delay=np.where(t.crossed, t.delay_ms, np.nan),
+            t_win=t.t_ns // w_ns, path=t.n_points.astype(np.float64),
+            delay=np.where(t.n_points > 1, t.delay_ms, np.nan),
         )
 
 
@@ -296,7 +293,7 @@ def _finish(tab: pd.DataFrame, shifts: dict[str, str]) -> pd.DataFrame:
     """Sort by (key, window), add the shifts against the key's earlier windows and the earlier
     medians (`base_<metric>`); times without a measurement are -1, everything else missing 0."""
     tab = tab.reset_index().sort_values(["key", "win"], kind="stable").reset_index(drop=True)
-    tab["flows"] = tab["flows"].fillna(0.0)
+    tab[["flow_share", "log_flows"]] = tab[["flow_share", "log_flows"]].fillna(0.0)
     for metric, shift in shifts.items():
         tab["base_" + metric] = _earlier_median(tab, metric)
         tab[shift] = (tab[metric] - tab["base_" + metric]).fillna(0.0)
@@ -308,12 +305,24 @@ def _finish(tab: pd.DataFrame, shifts: dict[str, str]) -> pd.DataFrame:
     return tab.set_index(["key", "win"])
 
 
+def _flow_counts(flows: pd.DataFrame, f_win: np.ndarray) -> pd.DataFrame:
+    """Per (key, window) of `flows` (columns key, win, u, rtt): `flow_share` (its flows over all
+    flows started in the window, so that neither the swarm's size nor a flood's rate sets the
+    scale), `log_flows` (log(1 + flows): its shift is the log ratio to the key's past),
+    `unanswered_frac`, `rtt_ms`."""
+    fa = flows.groupby(["key", "win"]).agg(n=("u", "size"), unanswered_frac=("u", "mean"), rtt_ms=("rtt", "median"))
+    total = pd.Series(f_win).value_counts()
+    fa["flow_share"] = fa["n"] / total.reindex(fa.index.get_level_values("win")).to_numpy()
+    fa["log_flows"] = np.log1p(fa.pop("n"))
+    return fa
+
+
 def host_windows(o: Observed, t: Transmissions) -> pd.DataFrame:
     """Per (host, window): `schema.CONTEXT_HOST_METRICS` and their shifts (`CONTEXT_HOST_SHIFTS`).
     A flow counts for both its hosts, a transmission for its source and its destination."""
     twice = lambda a: np.r_[a, a]  # noqa: E731
     flows = pd.DataFrame({"key": np.r_[o.ini, o.res], "win": twice(o.f_win), "u": twice(o.unanswered), "rtt": twice(o.rtt)})
-    fa = flows.groupby(["key", "win"]).agg(flows=("u", "size"), unanswered_frac=("u", "mean"), rtt_ms=("rtt", "median"))
+    fa = _flow_counts(flows, o.f_win)
     ntx = t.src.shape[0]
     txs = pd.DataFrame({
         "key": np.r_[t.src, t.dst], "win": twice(o.t_win), "out": np.r_[np.ones(ntx), np.zeros(ntx)],
@@ -335,7 +344,7 @@ def pair_windows(o: Observed, t: Transmissions) -> tuple[pd.DataFrame, np.ndarra
     n = int(max(o.ini.max(initial=0), o.res.max(initial=0), t.src.max(initial=0), t.dst.max(initial=0))) + 1
     code = lambda a, b: np.minimum(a, b) * n + np.maximum(a, b)  # noqa: E731
     flows = pd.DataFrame({"key": code(o.ini, o.res), "win": o.f_win, "u": o.unanswered, "rtt": o.rtt})
-    fa = flows.groupby(["key", "win"]).agg(flows=("u", "size"), unanswered_frac=("u", "mean"), rtt_ms=("rtt", "median"))
+    fa = _flow_counts(flows, o.f_win)
     txs = pd.DataFrame({"key": code(t.src, t.dst), "win": o.t_win, "lost": (~t.reached).astype(np.float64),
                         "path": o.path, "delay": o.delay})
     ta = txs.groupby(["key", "win"]).agg(lost_frac=("lost", "mean"), path_len_mean=("path", "mean"),

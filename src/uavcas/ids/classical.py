@@ -81,19 +81,27 @@ class LightGBMClassifier(EarlyStoppingClassifier):
         self.n_jobs = n_jobs
 
     def _fit_core(self, X, yi, X_val, yv, rng) -> None:
+        model = self._boost(X, yi, X_val, yv)
+        self.model_ = model
+        self.n_iter_ = int(model.best_iteration_ or model.n_estimators_)
+        self.feature_importances_ = model.feature_importances_
+
+    def _boost(self, X, yi, X_val, yv, init_score=None, val_init_score=None):
+        """One LightGBM model, early-stopped on (X_val, yv) when given; boosting starts from
+        `init_score` (raw scores, and `val_init_score` on the validation rows) when given."""
         import lightgbm as lgb
 
         params = self._lgbm_params()
         model = lgb.LGBMClassifier(**params)
-        kw = {}
+        kw = {} if init_score is None else {"init_score": init_score}
         if X_val is not None:
-            kw = {"eval_X": X_val, "eval_y": yv, "callbacks": [lgb.early_stopping(self.early_stopping_rounds, verbose=False)]}
+            kw.update(eval_X=X_val, eval_y=yv, callbacks=[lgb.early_stopping(self.early_stopping_rounds, verbose=False)])
+            if val_init_score is not None:
+                kw["eval_init_score"] = [val_init_score]
             if params.get("class_weight") is not None:  # stop on the loss the model is trained for
                 kw["eval_class_weight"] = [params["class_weight"]]
         model.fit(X, yi, **kw)
-        self.model_ = model
-        self.n_iter_ = int(model.best_iteration_ or model.n_estimators_)
-        self.feature_importances_ = model.feature_importances_
+        return model
 
     def _lgbm_params(self) -> dict:
         return dict(n_estimators=self.n_estimators, learning_rate=self.learning_rate, num_leaves=self.num_leaves,

@@ -8,7 +8,8 @@ split: `fit(X, y, X_val=..., y_val=...)` (`accepts_validation`).
 
 Beyond the ten, the context-aware detector and its ablation (`CONTEXT_MODELS`, `ids/context.py`):
 `context` learns from the flow features and the dataset's `ctx_*` context columns,
-`context-flow` from the flow features only, `context-only` from the context columns only.
+`context-flow` from the flow features only, `context-only` from the context columns only,
+`context-joint` from both in one model instead of the context's two stages.
 """
 
 from __future__ import annotations
@@ -25,13 +26,13 @@ from .torch_estimator import TorchClassifier, default_threads
 CLASSICAL = ("lr", "sgd", "rf", "mlp", "lightgbm")
 DEEP = ("cnn1d", "lstm", "convnet", "tinyml", "cnn_bilstm")
 MODELS: tuple[str, ...] = CLASSICAL + DEEP  # the ten baselines
-CONTEXT_MODELS: tuple[str, ...] = tuple(VARIANTS)  # context, context-flow, context-only
+CONTEXT_MODELS: tuple[str, ...] = tuple(VARIANTS)  # context, context-joint, context-flow, context-only
 ALL_MODELS: tuple[str, ...] = MODELS + CONTEXT_MODELS
 TREES = ("rf", "lightgbm") + CONTEXT_MODELS  # permutation importance is computed for these
 DISPLAY: dict[str, str] = {
     "lr": "LR", "sgd": "SGD", "rf": "RF", "mlp": "MLP", "lightgbm": "LightGBM", "cnn1d": "1D-CNN",
     "lstm": "LSTM", "convnet": "ConvNet", "tinyml": "TinyML", "cnn_bilstm": "CNN-BiLSTM",
-    "context": "Context", "context-flow": "Context-flow", "context-only": "Context-only",
+    "context": "Context", "context-joint": "Context-joint", "context-flow": "Context-flow", "context-only": "Context-only",
 }
 PATIENCE = 5
 # the parameter each model calls its epoch budget and its thread count
@@ -65,7 +66,7 @@ _FACTORIES: dict[str, Callable[[], BaseEstimator]] = {
     "mlp": lambda: GroupedMLPClassifier(max_iter=50, n_iter_no_change=PATIENCE),
     "lightgbm": lambda: LightGBMClassifier(n_estimators=200, learning_rate=0.1, num_leaves=31),
     **{d: (lambda d=d: TorchClassifier(arch=d, epochs=50, patience=PATIENCE)) for d in DEEP},
-    **{c: (lambda i=i: ContextClassifier(inputs=i)) for c, i in VARIANTS.items()},
+    **{c: (lambda kw=kw: ContextClassifier(**kw)) for c, kw in VARIANTS.items()},
 }
 
 
