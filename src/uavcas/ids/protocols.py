@@ -331,8 +331,11 @@ def _drop_rare_classes(df: pd.DataFrame, min_runs: int, notes: list[str]) -> pd.
     if not rare:
         return df
     label = df["label"].astype(str)
-    listed = ", ".join(f"{c} ({int(per_class[c])} run{'s' if per_class[c] != 1 else ''}, "
-                       f"{int((label == c).sum())} flows)" for c in rare)
+    def plural(n: int, word: str) -> str:
+        return f"{n} {word}{'' if n == 1 else 's'}"
+
+    listed = ", ".join(f"{c} ({plural(int(per_class[c]), 'run')}, {plural(int((label == c).sum()), 'flow')})"
+                       for c in rare)
     notes.append(f"left out, held by fewer than {min_runs} runs (--min-class-runs): {listed}")
     return df[~label.isin(rare).to_numpy()]
 
