@@ -101,11 +101,31 @@ def tables(lb: pd.DataFrame) -> str:
     if "cross-condition" in set(lb.protocol):
         cc = "cross-condition"
         out += ["### Cross-condition (a held-out channel setting), %", "",
-                "| model | weighted F1 | macro F1 | stealth macro F1 |", "|---|---|---|---|"]
+                "| model | weighted F1 held-out | macro F1 held-out | stealth macro F1 held-out | macro F1 seen settings |",
+                "|---|---|---|---|---|"]
         for m in models:
             out.append(f"| {m} | {_cell(_get(lb, cc, m, 'f1_weighted'))} | {_cell(_get(lb, cc, m, 'f1_macro'))} | "
-                       f"{_cell(_get(lb, cc, m, 'f1_macro', 'stealth'))} |")
+                       f"{_cell(_get(lb, cc, m, 'f1_macro', 'stealth'))} | {_cell(_get(lb, cc, m, 'f1_macro_iid'))} |")
         out.append("")
+    if "multiclass" in set(lb.protocol):
+        cols = [("f1_macro", "stealth"), ("f1_macro", ""), ("f1", "Blackhole"), ("f1", "Wormhole"), ("f1", "Replay"),
+                ("f1", "Replay+Wormhole"), ("f1", "DoS"), ("f1", "DDoS")]
+        out += ["### Context detector and ablation beside the best baselines (multiclass %, binary weighted F1)", "",
+                "| model | stealth macro-F1 | macro-F1 | Blackhole | Wormhole | Replay | Replay+Wormhole | DoS | DDoS | binary weighted F1 |",
+                "|---" * 10 + "|"]
+        stealth = {m: _get(lb, "multiclass", m, "f1_macro", "stealth") for m in MODELS}
+        best = max((m for m in MODELS if stealth[m] is not None), key=lambda m: stealth[m]["mean"], default=None)
+        for m in [x for x in CONTEXT if x in models] + ([best] if best else []):
+            cells = [_cell(_get(lb, "multiclass", m, metric, cls)) for metric, cls in cols]
+            label = f"{m} (best baseline)" if m == best else m
+            out.append(f"| {label} | " + " | ".join(cells) + f" | {_cell(_get(lb, 'binary', m, 'f1_weighted'), pct=False, digits=4)} |")
+        out.append("")
+    fits = [(m, {p: _get(lb, p, m, "fit_s") for p in ("binary", "multiclass", "ood", "cross-condition")}) for m in models]
+    out += ["### Fit time per model, s (mean ± std over seeds; training capped at 300 flows per run and class)", "",
+            "| model | binary | multiclass | ood | cross-condition |", "|---|---|---|---|---|"]
+    for m, f in fits:
+        out.append(f"| {m} | " + " | ".join(_cell(f[p], pct=False) for p in f) + " |")
+    out.append("")
     return "\n".join(out)
 
 
