@@ -82,3 +82,18 @@ def test_cli_manifest(tmp_path):
     r = subprocess.run([sys.executable, "-m", "uavcas.cli", "campaign", "manifest", "--shard", "9/4",
                         "--out", str(bad)], capture_output=True, text=True)
     assert r.returncode == 2 and "shard" in r.stderr and not bad.exists()
+
+
+def test_every_quick_attack_has_something_to_act_on():
+    """The main job must show every family: with the seeds the quick campaign gives its runs,
+    each wormhole has a planned detour in some window and every attack has victims in its window
+    (a wormhole without a usable detour is planned as a no-op: the quick run then had no
+    Wormhole flow at all)."""
+    from uavcas.twin.plan import plan
+
+    for e in manifest("quick"):
+        p = plan(e.config, seed=e.seed, windows=e.windows, window_s=e.window_s)
+        for a in p.attacks:
+            assert a.victims and a.attackers, (e.config, a)
+            if a.family == "wormhole":
+                assert any(o.victim in a.victims for w in p.windows for o in w.wormholes), e.config
