@@ -220,6 +220,17 @@ def kvm_worth_trying() -> bool:
     return not KVM_BROKEN.exists()
 
 
+def _reveal(repo: Path) -> str:
+    """Guest shell lines that make a checkout under /tmp visible again: the guest's /tmp is its own
+    tmpfs (the 9p root is read-only), which hides a clone made with `mktemp -d`. A second mount of
+    the root (a plain bind does not carry the tmpfs above it) bound over the path shows it
+    (read-only, as the rest of the host)."""
+    if not (repo == Path("/tmp") or Path("/tmp") in repo.parents):
+        return ""
+    r = shlex.quote(str(repo))
+    return f"mkdir -p /run/hostroot {r} && mount --bind / /run/hostroot && mount --bind /run/hostroot{r} {r}\n"
+
+
 def guest_script(k: GuestKernel, repo: Path, argv: list[str]) -> str:
     """What the guest runs after switch_root: modules, the command, its exit status, power off."""
     cmd = " ".join(shlex.quote(a) for a in argv)
@@ -230,7 +241,7 @@ up() {{ read -r s _ < /proc/uptime; echo "uavcas-vm: $1 at $s s" > /dev/console;
 up "guest kernel $(uname -r), root mounted"
 modprobe -d {shlex.quote(str(k.root))} -a {' '.join(GUEST_MODULES)} > $OUT/modprobe.log 2>&1
 up "modules loaded"
-cd {shlex.quote(str(repo))}
+{_reveal(repo)}cd {shlex.quote(str(repo))}
 {cmd} > $OUT/command.out 2>&1
 echo $? > $OUT/command.rc
 up "done"
