@@ -61,16 +61,25 @@ def _get(lb: pd.DataFrame, protocol: str, model: str, metric: str, cls: str = ""
     return None if m.empty else m.iloc[0]
 
 
+def _per_model(lb: pd.DataFrame, models: list[str], protocol: str, title: str,
+               columns: list[tuple[str, str, str, bool, int]], paper: dict | None = None) -> list[str]:
+    """One row per model; columns are (header, metric, class, in percent, digits)."""
+    head = ["model"] + (["paper"] if paper is not None else []) + [c[0] for c in columns]
+    rows = [f"### {title}", "", "| " + " | ".join(head) + " |", "|---" * len(head) + "|"]
+    for m in models:
+        cells = ([str(paper.get(m, "-"))] if paper is not None else []) + [
+            _cell(_get(lb, protocol, m, metric, cls), pct=pct, digits=digits) for _, metric, cls, pct, digits in columns]
+        rows.append(f"| {m} | " + " | ".join(cells) + " |")
+    return rows + [""]
+
+
 def tables(lb: pd.DataFrame) -> str:
     models = [m for m in MODELS + CONTEXT if m in set(lb.model)]
     out = []
     if "binary" in set(lb.protocol):
-        out += ["### Binary (Benign vs DoS), weighted F1 %", "", "| model | paper | ours (mean ± std over seeds) | AUROC % | fit s |",
-                "|---|---|---|---|---|"]
-        for m in models:
-            out.append(f"| {m} | {PAPER_BINARY.get(m, '-')} | {_cell(_get(lb, 'binary', m, 'f1_weighted'), digits=2)} | "
-                       f"{_cell(_get(lb, 'binary', m, 'auroc'), digits=2)} | {_cell(_get(lb, 'binary', m, 'fit_s'), pct=False)} |")
-        out.append("")
+        out += _per_model(lb, models, "binary", "Binary (Benign vs DoS), weighted F1 %",
+                          [("ours (mean ± std over seeds)", "f1_weighted", "", True, 2), ("AUROC %", "auroc", "", True, 2),
+                           ("fit s", "fit_s", "", False, 1)], paper=PAPER_BINARY)
     if "multiclass" in set(lb.protocol):
         mc = lb[lb.protocol == "multiclass"]
         classes = [c for c in PAPER_CLASSES if c in set(mc[mc.metric == "f1"]["class"])]
@@ -99,14 +108,10 @@ def tables(lb: pd.DataFrame) -> str:
             out.append(f"| {c} | " + " | ".join(cells) + " |")
         out.append("")
     if "cross-condition" in set(lb.protocol):
-        cc = "cross-condition"
-        out += ["### Cross-condition (a held-out channel setting), %", "",
-                "| model | weighted F1 held-out | macro F1 held-out | stealth macro F1 held-out | macro F1 seen settings |",
-                "|---|---|---|---|---|"]
-        for m in models:
-            out.append(f"| {m} | {_cell(_get(lb, cc, m, 'f1_weighted'))} | {_cell(_get(lb, cc, m, 'f1_macro'))} | "
-                       f"{_cell(_get(lb, cc, m, 'f1_macro', 'stealth'))} | {_cell(_get(lb, cc, m, 'f1_macro_iid'))} |")
-        out.append("")
+        out += _per_model(lb, models, "cross-condition", "Cross-condition (a held-out channel setting), %",
+                          [("weighted F1 held-out", "f1_weighted", "", True, 1), ("macro F1 held-out", "f1_macro", "", True, 1),
+                           ("stealth macro F1 held-out", "f1_macro", "stealth", True, 1),
+                           ("macro F1 seen settings", "f1_macro_iid", "", True, 1)])
     if "multiclass" in set(lb.protocol):
         cols = [("f1_macro", "stealth"), ("f1_macro", ""), ("f1", "Blackhole"), ("f1", "Wormhole"), ("f1", "Replay"),
                 ("f1", "Replay+Wormhole"), ("f1", "DoS"), ("f1", "DDoS")]
