@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import copy
+
 import numpy as np
 import pytest
 
@@ -143,3 +145,39 @@ def test_run_layer1_json_shape_and_scores(synth):
     assert ld["heldout_local_mean"]["rmse_db"] < j["models"]["logdistance_radpat"]["heldout_local_mean"]["rmse_db"] + 0.2
     assert j["checks"]["logdistance_beats_uma_av_heldout"]
     assert all(TRUE_K_DB - 1.2 < k < TRUE_K_DB + 0.5 for k in j["k_factor_db"]["k_db"])
+
+
+def test_ceiling_on_known_noise(groups):
+    """Target = log-distance + white noise of 2 dB: every bound reads the noise; a term in the
+    azimuth that log-distance cannot model is left to the log-distance rows and learnt by the trees."""
+    from uavcas.calibration.layer1_ceiling import layer1_ceiling
+
+    rng = np.random.default_rng(5)
+    gs = [copy.copy(g) for g in groups]
+    for g in gs:
+        g.pl_eff_db = 40.0 + 22.0 * np.log10(g.samples.d3d_m) + rng.normal(0.0, 2.0, len(g.samples))
+    c = layer1_ceiling(gs, seed=0)
+    assert c["fading_in_local_mean_db"] == pytest.approx(2.0, abs=0.06)
+    assert c["logdistance_insample"]["rmse_db"] == pytest.approx(2.0, abs=0.03)
+    assert c["logdistance_paper_split"]["rmse_db"] == pytest.approx(2.0, abs=0.05)
+    for key in ("geometry_gbm_heldout", "geometry_gbm_paper_split"):
+        assert 1.95 < c[key]["rmse_db"] < 2.3  # the trees cannot beat white noise, and lose little to it
+
+    for g in gs:
+        g.pl_eff_db = g.pl_eff_db + 6.0 * np.sin(3 * g.samples.azim_rad)
+    c2 = layer1_ceiling(gs, seed=0)
+    assert c2["logdistance_insample"]["rmse_db"] > 3.0  # most of 6 sin(3 az) is left in the residual
+    assert c2["geometry_gbm_heldout"]["rmse_db"] < 2.6
+    assert c2["fading_in_local_mean_db"] < 2.2  # the azimuth term changes little inside 5 s
+
+
+def test_ceiling_is_reported(synth):
+    root, _ = synth
+    res = run_layer1(load_maeng(root), load_multibw(root), load_pattern(root), seed=0)
+    j = layer1_json(res)
+    c = j["ceiling"]
+    # No held-out score of the fitted log-distance can beat the least-squares optimum on all samples by much.
+    assert j["models"]["logdistance"]["heldout_sample"]["rmse_db"] > c["logdistance_insample"]["rmse_db"] - 0.3
+    from uavcas.calibration.report import pathloss_md, summary_md
+
+    assert "What these samples allow" in pathloss_md(j) and "What these samples allow" in summary_md({"pathloss": j})

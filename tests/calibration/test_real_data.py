@@ -71,6 +71,12 @@ def test_real_pathloss_physical_and_beats_uma(calibrated):
     # Issue #13 targets on the absolute scale (paper: 4.40 held-out, 7.04 cross-validation), met on
     # the 5 s local mean the twin's path loss stands for; per sample the fast fading alone is ~4.5 dB.
     assert ld["heldout_local_mean"]["rmse_db"] < 4.40 and ld["crossval_local_mean"]["rmse_db"] < 7.04
+    # Per sample, 4.40 is out of reach of any log-distance fit on these samples (its least-squares
+    # optimum on all of them is ~6.2 dB); only a per-sample split with flexible trees gets near it.
+    c = j["ceiling"]
+    assert c["logdistance_insample"]["rmse_db"] > 4.40 and c["geometry_gbm_heldout"]["rmse_db"] > 4.40
+    assert c["geometry_gbm_paper_split"]["rmse_db"] < c["geometry_gbm_heldout"]["rmse_db"] - 1.0
+    assert ld["heldout_sample"]["rmse_db"] > c["logdistance_insample"]["rmse_db"]
     assert 9.0 < j["tx_height_m"] < 12.5  # the AERPAW LW1 tower is 10-12 m
     assert all(3.0 < k < 9.0 for k in j["k_factor_db"]["k_db"])
     assert 20.0 < j["shadowing_decorrelation_m"] < 150.0

@@ -6,9 +6,9 @@ sigma(h), K(h), two-ray, UMa-AV). Split: `segments.contiguous_split` (60 s block
 out per file, 5 s guards). Scores (e = predicted - measured, `metrics.error_metrics`), for
 each model, on two scales of the same held-out samples:
 
-* ``heldout_sample``: every held-out sample. Bounded below by the fast fading (about 4.5 dB std
-  of the samples about their 5 s local mean on these flights): no mean path-loss model can go
-  under it, whatever its quality.
+* ``heldout_sample``: every held-out sample. Bounded below by what the samples allow
+  (`layer1_ceiling`, reported beside it: the spread about the 5 s local mean, the
+  least-squares optimum of log-distance on all samples, boosted trees on the geometry).
 * ``heldout_local_mean``: 5 s local means (the twin's window; `segments.power_mean_db`) of the
   measured and the predicted loss - the quantity the twin's path loss stands for.
 
@@ -31,6 +31,7 @@ import numpy as np
 
 from uavcas.channel import KFactorProfile, PathLossProfile
 
+from .layer1_ceiling import layer1_ceiling
 from .layer1_fit import (
     FSPL_1M_DB,
     PATTERN_TERMS,
@@ -71,6 +72,7 @@ class Layer1Result:
     groups: list[Group]
     crossval_groups: list[Group]
     predictions: dict  # (model, "heldout"|"crossval", i) -> per-sample array over the scored samples
+    ceiling: dict  # `layer1_ceiling`: what these samples allow any model, per sample
 
     @property
     def profile(self) -> PathLossProfile:
@@ -152,7 +154,7 @@ def run_layer1(maeng: list[PathLossSamples], multibw: list[PathLossSamples], pat
             entry[name] = error_metrics(np.concatenate(p), np.concatenate(m)) if p else None
         models[model] = entry
     return Layer1Result(budgets, cv_budgets, fit, fit_free, fit_radpat, k_factor, d_corr, two_ray, uma_offset, models,
-                        groups, cv, preds)
+                        groups, cv, preds, layer1_ceiling(groups, seed))
 
 
 def layer1_json(res: Layer1Result) -> dict:
@@ -190,6 +192,7 @@ def layer1_json(res: Layer1Result) -> dict:
         "uma_av_offset_db": res.uma_offset_db,
         "crossval_files": [g.samples.label for g in res.crossval_groups],
         "models": res.models,
+        "ceiling": res.ceiling,
         "checks": {
             "pl_at_1m_within_10db_of_free_space": abs(res.pl_at_1m_db - FSPL_1M_DB) <= 10.0,
             "logdistance_beats_uma_av_heldout": res.models["logdistance"]["heldout_local_mean"]["rmse_db"]
