@@ -137,6 +137,14 @@ class AttackFamily(ABC):
     def stop(self, ex: "AttackExecutor", attack: "Attack") -> dict[str, Any]:
         """Undo the attack completely; returns the family's fields of the `stop` record."""
 
+    def halt(self, ex: "AttackExecutor", attack: "Attack") -> Callable[[], dict[str, Any]]:
+        """The time-critical part of `stop`: when it returns the attack acts no more. Returns the
+        rest (waiting for tools, reading counters, clean-up; it gives the `stop` record's
+        fields), which the executor runs off the schedule's thread so that an event due at the
+        same instant is not delayed by it. Default: all of `stop` now."""
+        extra = self.stop(ex, attack)
+        return lambda: extra
+
     def calibrate(self, ex: "AttackExecutor", attack: "Attack") -> None:
         pass
 

@@ -15,6 +15,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
@@ -102,21 +103,30 @@ class _Flood(AttackFamily):
         return {"t_unix": t, "hping_interval_us": [f.interval_us for f in floods]}
 
     def stop(self, ex: "AttackExecutor", attack: "Attack") -> dict[str, Any]:
-        from uavcas.emulation.apps.flood import quiet_after_s, stop_all
+        return self.halt(ex, attack)()
+
+    def halt(self, ex: "AttackExecutor", attack: "Attack") -> Callable[[], dict[str, Any]]:
+        from uavcas.emulation.apps.flood import close_all, collect_all, quiet_after_s
         from uavcas.events import AttackRate
 
-        results, t_closed = stop_all(ex.state.pop(attack.attack_id, []))
-        # no SYN left an attacker after t_closed; the last ones may still be crossing the network
-        quiet = max((quiet_after_s(_path_hops(ex, x, v)) for x in attack.attackers for v in attack.victims),
-                    default=0.0)
-        t = max(ex.now(), t_closed + quiet)
-        for r in results:
-            ex.log(AttackRate(attack_id=attack.attack_id, family=attack.family, attacker=r.attacker,
-                              measured_pps=round(r.measured_pps, 2), nominal_pps=r.nominal_pps,
-                              hping_interval_us=r.interval_us, syn_count=r.syn_count,
-                              seconds=round(r.seconds, 4), restarts=0, intervals_us=[r.interval_us],
-                              victim_ip=r.victim_ip, t_unix=t))
-        return {"t_unix": t, "syn_count": sum(r.syn_count for r in results)}
+        floods = ex.state.pop(attack.attack_id, [])
+        t_closed = close_all(floods)
+
+        def finish() -> dict[str, Any]:
+            results = collect_all(floods)
+            # no SYN left an attacker after t_closed; the last ones may still be crossing the network
+            quiet = max((quiet_after_s(_path_hops(ex, x, v)) for x in attack.attackers for v in attack.victims),
+                        default=0.0)
+            t = max(ex.now(), t_closed + quiet)
+            for r in results:
+                ex.log(AttackRate(attack_id=attack.attack_id, family=attack.family, attacker=r.attacker,
+                                  measured_pps=round(r.measured_pps, 2), nominal_pps=r.nominal_pps,
+                                  hping_interval_us=r.interval_us, syn_count=r.syn_count,
+                                  seconds=round(r.seconds, 4), restarts=0, intervals_us=[r.interval_us],
+                                  victim_ip=r.victim_ip, t_unix=t))
+            return {"t_unix": t, "syn_count": sum(r.syn_count for r in results)}
+
+        return finish
 
     # ground truth ------------------------------------------------------------------------------
     def effects(self, ctx: "TruthContext", windows: list["AttackWindow"]) -> np.ndarray:

@@ -146,15 +146,26 @@ class Replay(AttackFamily):
                            "to": [ex.emu.switch(x).host_port for x in attack.attackers]}}
 
     def stop(self, ex: "AttackExecutor", attack: "Attack") -> dict[str, Any]:
+        return self.halt(ex, attack)()
+
+    def halt(self, ex: "AttackExecutor", attack: "Attack") -> Callable[[], dict[str, Any]]:
         mirror_off(ex.emu.fabric_ns, ex.emu.switch(attack.victims[0]).host_port)
-        stats = {}
-        for x in attack.attackers:
-            proc = ex.state[f"{attack.attack_id}/{x}"]
-            proc.stop(signal.SIGTERM, grace_s=3.0)
-            for line in proc.stdout().splitlines():
-                if line.startswith("{"):
-                    stats[x] = json.loads(line).get("stats")
-        return {"replayer_stats": stats}
+        procs = {x: ex.state[f"{attack.attack_id}/{x}"] for x in attack.attackers}
+        for proc in procs.values():
+            if proc.alive():
+                proc.popen.send_signal(signal.SIGTERM)
+
+        def finish() -> dict[str, Any]:
+            # the stop record follows the replayers' exit: a buffered copy may leave until then
+            stats = {}
+            for x, proc in procs.items():
+                proc.stop(signal.SIGTERM, grace_s=3.0)
+                for line in proc.stdout().splitlines():
+                    if line.startswith("{"):
+                        stats[x] = json.loads(line).get("stats")
+            return {"replayer_stats": stats}
+
+        return finish
 
     # ground truth ------------------------------------------------------------------------------
     def effects(self, ctx: "TruthContext", windows: list["AttackWindow"]) -> np.ndarray:

@@ -106,7 +106,7 @@ def realize(plan: "Plan", out_dir: str | Path, options: RunOptions = RunOptions(
     prefix = options.prefix or new_prefix()
     prepare_out_dir(out, prefix)  # refuses a directory that is not an old run's (RunDirError)
     atomic_write_text(RunDir(out).plan_json, plan.to_json())
-    notify = on_event or (lambda e: None)
+    notify = _serialised(on_event or (lambda e: None))  # attack stops finish in worker threads
     st = _State(plan, out, time.time())
     try:
         with Emulation(plan, prefix=prefix, features=features, readback=False) as emu:
@@ -233,7 +233,7 @@ def _play(st: _State, opt: RunOptions, notify: Callable[[Progress], None]) -> No
             elif ev.kind == "start":
                 st.executor.start(ev.obj)
             elif ev.kind == "stop":
-                st.executor.stop(ev.obj)
+                st.executor.halt(ev.obj)  # its bookkeeping goes on in a worker: the next event is not kept waiting
             elif ev.kind == "calibrate":
                 st.executor.calibrate(ev.obj)
             took_ms = (time.time() - t_ev) * 1000
@@ -246,8 +246,19 @@ def _play(st: _State, opt: RunOptions, notify: Callable[[Progress], None]) -> No
             st.sampler.end()
         _prepare_next(st, opt, events[k + 1:])
     st.timings["schedule_s"] = time.time() - st.t0
+    st.executor.finish_all()
     starter.join()
     st.emu.shaper.check()  # a delay stage lost in the last window fails the run too
+
+
+def _serialised(fn: Callable[[Progress], None]) -> Callable[[Progress], None]:
+    lock = threading.Lock()
+
+    def call(e: Progress) -> None:
+        with lock:
+            fn(e)
+
+    return call
 
 
 class _Background:

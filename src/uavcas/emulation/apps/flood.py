@@ -17,8 +17,9 @@ restart reused source ports (one "flow" spanning separate bursts). Instead:
   chain marks them, an `ip rule` routes the mark to that veth): nothing reaches a switch, and
   the first gated SYN tells us hping3 is ready. `start_all` opens the gates, notes the time,
   then lets the pacers go: every SYN leaves after the logged start.
-* `stop_all` stops the pacers, closes the gates (a SYN still pending in hping3 is gated), stops
-  hping3 and reads the exact count of SYNs that left `eth0` (nft counter on postrouting). The
+* `close_all` stops the pacers, closes the gates (a SYN still pending in hping3 is gated) and
+  signals hping3; `collect_all` then waits for hping3 and reads the exact count of SYNs that
+  left `eth0` (nft counter on postrouting), off the schedule's thread. The
   attack's stop time is when the last of them can have crossed the network: the gate's
   closing plus, on the attacker -> victim path, each hop's planned delay and the sojourn of a
   full queue (`quiet_after_s`).
@@ -120,8 +121,8 @@ class FloodResult:
 
 
 class Flood:
-    """One attacker's SYN flood on a running Emulation (see the module docstring). `start_all`
-    and `stop_all` act on all of an attack's floods at once (their kernel calls concurrent)."""
+    """One attacker's SYN flood on a running Emulation (see the module docstring). `start_all`,
+    `close_all` and `collect_all` act on all of an attack's floods at once (their kernel calls concurrent)."""
 
     def __init__(self, emu, attack_id: str, attacker: str, victim_ip: str, nominal_pps: float,
                  log_dir: Path, max_s: float, port: int = 80) -> None:
@@ -213,22 +214,30 @@ def start_all(floods: Sequence[Flood]) -> float:
     return t
 
 
-def stop_all(floods: Sequence[Flood]) -> tuple[list[FloodResult], float]:
-    """Pacers stopped, gates closed, hping3 stopped, counts read, tables removed. Returns the
-    results and the time the gates were closed (no SYN leaves an attacker after it). Raises
-    only after every step ran for every flood."""
+def close_all(floods: Sequence[Flood]) -> float:
+    """Pacers stopped, gates closed (a SYN still pending in hping3 is gated), hping3 told to stop:
+    the time-critical half of a stop. Returns the time the gates were closed (no SYN leaves an
+    attacker after it)."""
     if not floods:
-        return [], time.time()
-    emu = floods[0].emu
+        return time.time()
     for f in floods:
         f._tell(b"stop")
     try:
-        _run_all(emu, [f.close_gate_job() for f in floods])
+        _run_all(floods[0].emu, [f.close_gate_job() for f in floods])
     finally:
         t_closed = time.time()
-        for f in floods:  # all at once; waited for below
+        for f in floods:  # all at once; waited for by `collect_all`
             if f.hping.alive():
                 f.hping.popen.send_signal(signal.SIGINT)
+    return t_closed
+
+
+def collect_all(floods: Sequence[Flood]) -> list[FloodResult]:
+    """The rest of a stop after `close_all`: pacer reports and counts read, hping3 waited for,
+    tables removed. Raises only after every step ran for every flood."""
+    if not floods:
+        return []
+    emu = floods[0].emu
     reports, errors = [], []
     for f in floods:
         try:
@@ -246,7 +255,7 @@ def stop_all(floods: Sequence[Flood]) -> tuple[list[FloodResult], float]:
     if errors:
         raise RuntimeError("; ".join(errors))
     return [FloodResult(f.attacker, f.victim_ip, f.nominal_pps, f.interval_us, n, r["signals"], r["seconds"],
-                        r["max_behind"]) for f, n, r in zip(floods, counts, reports)], t_closed
+                        r["max_behind"]) for f, n, r in zip(floods, counts, reports)]
 
 
 def _run_all(emu, jobs: list[tuple[str, list[str], str | None]], timeout_s: float = 15.0) -> list[str]:
