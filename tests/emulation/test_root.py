@@ -340,7 +340,8 @@ def test_flood_rate_holds_on_a_saturated_machine(tmp_path):
             assert f.counters() == {"syn": 0, "gated": 1}  # hping3's own first SYN never left
             flood.start_all([f])
             time.sleep(3.0)
-            (res,), _ = flood.stop_all([f])
+            flood.close_all([f])
+            (res,) = flood.collect_all([f])
     finally:
         for h in hogs:
             h.kill()
