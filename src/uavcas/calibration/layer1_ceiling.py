@@ -53,9 +53,10 @@ def _logd(g: Group) -> np.ndarray:
 def _logdistance(groups: list[Group], train, test) -> dict:
     pred, meas = [], []
     for g, tr, te in zip(groups, train, test):
-        coef, *_ = np.linalg.lstsq(_logd(g)[tr], g.target_db[tr], rcond=None)
-        pred.append(_logd(g)[te] @ coef)
-        meas.append(g.target_db[te])
+        x, y = _logd(g), g.target_db
+        coef, *_ = np.linalg.lstsq(x[tr], y[tr], rcond=None)
+        pred.append(x[te] @ coef)
+        meas.append(y[te])
     return error_metrics(np.concatenate(pred), np.concatenate(meas))
 
 
@@ -69,12 +70,14 @@ def _geometry(g: Group) -> np.ndarray:
 def _gbm(groups: list[Group], train, test, seed: int) -> dict:
     import lightgbm as lgb  # a core dependency; imported here so the fits that do not need it stay light
 
-    x_tr = np.concatenate([_geometry(g)[m] for g, m in zip(groups, train)])
-    y_tr = np.concatenate([g.target_db[m] for g, m in zip(groups, train)])
+    x, y = [_geometry(g) for g in groups], [g.target_db for g in groups]
+
+    def pick(arrays: list[np.ndarray], masks) -> np.ndarray:
+        return np.concatenate([a[m] for a, m in zip(arrays, masks)])
+
     model = lgb.LGBMRegressor(**GBM_PARAMS, random_state=seed, deterministic=True, force_row_wise=True,
-                              n_jobs=1, verbose=-1).fit(x_tr, y_tr)
-    x_te = np.concatenate([_geometry(g)[m] for g, m in zip(groups, test)])
-    return error_metrics(model.predict(x_te), np.concatenate([g.target_db[m] for g, m in zip(groups, test)]))
+                              n_jobs=1, verbose=-1).fit(pick(x, train), pick(y, train))
+    return error_metrics(model.predict(pick(x, test)), pick(y, test))
 
 
 def _per_sample_split(groups: list[Group], seed: int) -> tuple[list[np.ndarray], list[np.ndarray]]:
