@@ -20,7 +20,7 @@ SYN, ACK, PSH, FIN = 0x02, 0x10, 0x08, 0x01
 _DTYPES = {"ts_ns": np.int64, "ip_len": np.uint32, "frame_len": np.uint32, "cap_len": np.uint32, "ip_version": np.uint8,
            "src_hi": np.uint64, "src_lo": np.uint64, "dst_hi": np.uint64, "dst_lo": np.uint64, "sport": np.uint16,
            "dport": np.uint16, "proto": np.uint8, "tcp_flags": np.uint16, "ttl": np.uint8, "ip_id": np.uint32,
-           "tcp_seq": np.uint32, "ip_hdr_len": np.uint16, "l4_hdr_len": np.uint16, "frame_index": np.int64,
+           "tcp_seq": np.uint32, "tcp_ack": np.uint32, "ip_hdr_len": np.uint16, "l4_hdr_len": np.uint16, "frame_index": np.int64,
            "point": np.int16}
 
 
@@ -34,7 +34,7 @@ def table(obs: list[dict], ips: dict[str, str] = IPS) -> PacketTable:
         vals = {"ts_ns": round(T0) * 10**9 + round(o["t"] * 1e9), "frame_len": length, "cap_len": length, "ip_version": 4,
                 "ip_len": length - 14, "src_hi": shi, "src_lo": slo, "dst_hi": dhi, "dst_lo": dlo,
                 "sport": o["sport"], "dport": o["dport"], "proto": 6, "tcp_flags": o["flags"], "ttl": o.get("ttl", 64),
-                "ip_id": o["id"], "tcp_seq": o["seq"], "ip_hdr_len": 20, "l4_hdr_len": 20, "frame_index": k,
+                "ip_id": o["id"], "tcp_seq": o["seq"], "tcp_ack": o.get("ack", 0), "ip_hdr_len": 20, "l4_hdr_len": 20, "frame_index": k,
                 "point": POINTS.index("s-" + o["at"])}
         for c in COLUMNS:
             cols[c].append(vals[c])

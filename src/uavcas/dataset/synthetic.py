@@ -132,6 +132,7 @@ def _packet_table(seqs, src_ips: list[int], src_ports: list[int], dst_ip: int, d
         "ttl": np.full(total, 64, np.uint8),
         "ip_id": np.zeros(total, np.uint32),
         "tcp_seq": np.zeros(total, np.uint32),
+        "tcp_ack": np.zeros(total, np.uint32),
         "ip_len": np.maximum(size.astype(np.int64) - 14, 40).astype(np.uint32),  # Ethernet frames
         "ip_hdr_len": np.full(total, 20, np.uint16),
         "l4_hdr_len": np.full(total, 20, np.uint16),

@@ -205,6 +205,7 @@ def decode(raw: RawCapture) -> tuple[dict[str, np.ndarray], DecodeStats]:
     dport = np.zeros(m, dtype=np.uint16)
     flags = np.zeros(m, dtype=np.uint16)
     seq = np.zeros(m, dtype=np.uint32)
+    ack = np.zeros(m, dtype=np.uint32)
     l4_hdr = np.zeros(m, dtype=np.uint16)
     ports = tcp | udp
     if ports.any():
@@ -214,6 +215,7 @@ def decode(raw: RawCapture) -> tuple[dict[str, np.ndarray], DecodeStats]:
         q = l4[tcp]
         b12 = g.u8(q + 12).astype(np.uint16)
         seq[tcp] = g.be(q + 4, 4)
+        ack[tcp] = g.be(q + 8, 4)
         flags[tcp] = g.u8(q + 13).astype(np.uint16) | ((b12 & 1) << 8)  # NS bit as 0x100
         l4_hdr[tcp] = (b12 >> 4) * 4
     l4_hdr[udp | icmp] = 8
@@ -236,6 +238,7 @@ def decode(raw: RawCapture) -> tuple[dict[str, np.ndarray], DecodeStats]:
         "ttl": ttl,
         "ip_id": ip_id,
         "tcp_seq": seq,
+        "tcp_ack": ack,
         "ip_len": ip_len.astype(np.uint32),
         "ip_hdr_len": (l4 - l3).astype(np.uint16),
         "l4_hdr_len": l4_hdr,

@@ -6,7 +6,8 @@ Columns (all numpy arrays of equal length):
   is stored IPv4-mapped ::ffff:a.b.c.d so both families share one key), sport/dport uint16 (a later
   IP fragment carries its datagram's ports, `uavcas.flows.fragments`), proto uint8, tcp_flags
   uint16 (FIN 0x01 SYN 0x02 RST 0x04 PSH 0x08 ACK 0x10 URG 0x20 ECE 0x40 CWR 0x80 NS 0x100), ttl
-  uint8 (hop limit for IPv6), ip_id uint32 (IPv6: fragment id or 0), tcp_seq uint32, ip_len uint32
+  uint8 (hop limit for IPv6), ip_id uint32 (IPv6: fragment id or 0), tcp_seq uint32, tcp_ack
+  uint32 (the acknowledgement field; meaningful with ACK set, 0 outside TCP), ip_len uint32
   (IP total length from the header: bytes on the wire above the link layer, whatever the snap
   length), ip_hdr_len/l4_hdr_len uint16 (parsed header bytes, incl. options / extension headers;
   l4 0 for later fragments), frame_index int64 (record number in its file), point int16 (index
@@ -34,7 +35,7 @@ from .pcapio import CHUNK_BYTES, CaptureError, iter_capture
 
 COLUMNS: tuple[str, ...] = (
     "ts_ns", "frame_len", "cap_len", "ip_version", "src_hi", "src_lo", "dst_hi", "dst_lo",
-    "sport", "dport", "proto", "tcp_flags", "ttl", "ip_id", "tcp_seq", "ip_len", "ip_hdr_len",
+    "sport", "dport", "proto", "tcp_flags", "ttl", "ip_id", "tcp_seq", "tcp_ack", "ip_len", "ip_hdr_len",
     "l4_hdr_len", "frame_index", "point",
 )  # fmt: skip
 ETHERNET_HEADER = 14
@@ -139,7 +140,7 @@ def empty_columns() -> dict[str, np.ndarray]:
     dtypes = {"ts_ns": np.int64, "frame_len": np.uint32, "cap_len": np.uint32, "ip_version": np.uint8,
               "src_hi": np.uint64, "src_lo": np.uint64, "dst_hi": np.uint64, "dst_lo": np.uint64,
               "sport": np.uint16, "dport": np.uint16, "proto": np.uint8, "tcp_flags": np.uint16, "ttl": np.uint8,
-              "ip_id": np.uint32, "tcp_seq": np.uint32, "ip_len": np.uint32, "ip_hdr_len": np.uint16,
+              "ip_id": np.uint32, "tcp_seq": np.uint32, "tcp_ack": np.uint32, "ip_len": np.uint32, "ip_hdr_len": np.uint16,
               "l4_hdr_len": np.uint16, "frame_index": np.int64, "point": np.int16}  # fmt: skip
     return {c: np.zeros(0, dtype=dtypes[c]) for c in COLUMNS}
 
