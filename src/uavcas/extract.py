@@ -99,9 +99,11 @@ def extract_detailed(
     features: str = DEFAULT_STANDARD,
     allow_incomplete: bool = False,
     context: bool = True,
+    termination: str | None = None,
 ) -> Extracted:
     """Flows + labels of one run, with the packet-level results (for audits and tests). The run id
     is `run_id`, else run.json's, else the directory's name. `context`: add the `ctx_*` columns.
+    `termination`: the flow termination policy (`uavcas.flows.termination`; None: the view's default).
 
     Raises RunDirError for a run that did not finish cleanly, unless `allow_incomplete`."""
     rd = RunDir(Path(run_dir))
@@ -121,7 +123,8 @@ def extract_detailed(
     if t0 is None:
         raise RunDirError(f"{rd.root}: the run never reached its plan's t = 0 (no t0_unix in run.json or "
                           f"{rd.owner_path.name}): its packets cannot be placed in the plan")
-    cfg = FlowConfig(view=view, min_packets=min_packets, window_t0_unix=t0, window_s=plan.window_s)  # type: ignore[arg-type]
+    cfg = FlowConfig(view=view, termination=termination, min_packets=min_packets,  # type: ignore[arg-type]
+                     window_t0_unix=t0, window_s=plan.window_s)
     ex = extract_flows(pcaps, cfg, points=[p.stem for p in pcaps], allow_truncated=allow_truncated, standard=features)
     # from the captures and flows only: computed before the attack log is even read
     ctx = context_frame(ex.packets, ex.flows) if context else None

@@ -25,19 +25,24 @@ def tcp(t, src, dst, sport, dport, flags, payload=b"", seq=1, ack=0, ttl=64, ip_
 
 
 def http_session(t0=0.0, client=A, server=B, sport=40000, n_data=3, l2=Ether):
-    """Handshake, GET, n_data x 1000-byte responses with ACKs, FIN/ACK teardown."""
+    """Handshake, GET, n_data x 1000-byte responses with ACKs, FIN/ACK teardown (server first),
+    with consistent sequence and acknowledgement numbers (client ISN 1000, server ISN 5000)."""
+    get = b"GET / HTTP/1.1\r\n\r\n"
+    c, s = 1001, 5001  # next sequence numbers after the SYNs
     pk = [
-        tcp(t0, client, server, sport, 80, "S", l2=l2),
-        tcp(t0 + 0.010, server, client, 80, sport, "SA", l2=l2),
-        tcp(t0 + 0.020, client, server, sport, 80, "A", l2=l2),
-        tcp(t0 + 0.030, client, server, sport, 80, "PA", b"GET / HTTP/1.1\r\n\r\n", l2=l2),
+        tcp(t0, client, server, sport, 80, "S", seq=1000, l2=l2),
+        tcp(t0 + 0.010, server, client, 80, sport, "SA", seq=5000, ack=c, l2=l2),
+        tcp(t0 + 0.020, client, server, sport, 80, "A", seq=c, ack=s, l2=l2),
+        tcp(t0 + 0.030, client, server, sport, 80, "PA", get, seq=c, ack=s, l2=l2),
     ]
+    c += len(get)
     for k in range(n_data):
-        pk.append(tcp(t0 + 0.050 + 0.010 * k, server, client, 80, sport, "A", b"x" * 1000, l2=l2))
-    pk.append(tcp(t0 + 0.100, client, server, sport, 80, "A", l2=l2))
-    pk.append(tcp(t0 + 0.110, server, client, 80, sport, "FA", l2=l2))
-    pk.append(tcp(t0 + 0.120, client, server, sport, 80, "FA", l2=l2))
-    pk.append(tcp(t0 + 0.130, server, client, 80, sport, "A", l2=l2))
+        pk.append(tcp(t0 + 0.050 + 0.010 * k, server, client, 80, sport, "A", b"x" * 1000, seq=s, ack=c, l2=l2))
+        s += 1000
+    pk.append(tcp(t0 + 0.100, client, server, sport, 80, "A", seq=c, ack=s, l2=l2))
+    pk.append(tcp(t0 + 0.110, server, client, 80, sport, "FA", seq=s, ack=c, l2=l2))
+    pk.append(tcp(t0 + 0.120, client, server, sport, 80, "FA", seq=c, ack=s + 1, l2=l2))
+    pk.append(tcp(t0 + 0.130, server, client, 80, sport, "A", seq=s + 1, ack=c + 1, l2=l2))
     return pk
 
 

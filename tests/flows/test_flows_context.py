@@ -112,12 +112,12 @@ def test_packet_that_never_reaches_its_destination_switch():
     obs = fetch(0.5, ["a", "r", "b"], 40000)
     obs = [o for o in obs if not (o["id"] == 2 and o["at"] == "a")]  # B's first data segment: lost on r -> a
     c = ctx(obs)
-    # captured at s-b (it saw every packet; s-a missed one); the server's FIN ends the flow (7 packets)
+    # captured at s-b (it saw every packet; s-a missed one); the connection is one flow (8 packets)
     f = flow(c, 40000)
-    assert f["ctx_lost_frac"] == pytest.approx(1 / 7)
+    assert f["ctx_lost_frac"] == pytest.approx(1 / 8)
     # a lost packet's path is how far it got: the lost segment was seen at s-b and s-r (2 switches,
-    # 1 ms), the other six at all three (2 ms)
-    assert f["ctx_path_len_mean"] == pytest.approx(20 / 7) and f["ctx_delay_ms"] == pytest.approx(13 / 7)
+    # 1 ms), the other seven at all three (2 ms)
+    assert f["ctx_path_len_mean"] == pytest.approx(23 / 8) and f["ctx_delay_ms"] == pytest.approx(15 / 8)
     assert f["ctx_dst_lost_out_frac"] == pytest.approx(1 / 4) and f["ctx_src_lost_in_frac"] == pytest.approx(1 / 4)
     assert f["ctx_dst_lost_in_frac"] == 0 and f["ctx_net_lost_frac"] == pytest.approx(1 / 8)
 
@@ -128,11 +128,11 @@ def test_replayed_copy_enters_elsewhere_with_rewritten_fields():
     copy = {k: v for k, v in orig.items() if k not in ("t", "at")}
     copy.update(ttl=59, seq=orig["seq"] + 1)  # TTL - 5, seq + k: the replayer's rewrite
     obs += send(0.528, ["x", "r", "a"], **copy)  # injected at the attacker's switch, before the FINs
-    # s-a and s-r saw one packet more than s-b: captured at s-a; 8 packets up to the server's FIN
+    # s-a and s-r saw one packet more than s-b: captured at s-a; 9 packets (the connection and the copy)
     f = flow(ctx(obs), 40000)
-    assert f["ctx_offhome_frac"] == pytest.approx(1 / 8) and f["ctx_ttl_off_frac"] == pytest.approx(1 / 8)
-    assert f["ctx_ttl_levels"] == 1 and f["ctx_neardup_frac"] == pytest.approx(1 / 8)
-    assert f["ctx_seq_regress_frac"] == pytest.approx(1 / 8) and f["ctx_retx_frac"] == 0
+    assert f["ctx_offhome_frac"] == pytest.approx(1 / 9) and f["ctx_ttl_off_frac"] == pytest.approx(1 / 9)
+    assert f["ctx_ttl_levels"] == 1 and f["ctx_neardup_frac"] == pytest.approx(1 / 9)
+    assert f["ctx_seq_regress_frac"] == pytest.approx(1 / 9) and f["ctx_retx_frac"] == 0
     # per host: of the transmissions sourced by or sent to B in that window, one entered off-home
     assert f["ctx_dst_offhome_frac"] == pytest.approx(1 / 9) and f["ctx_dst_ttl_off_frac"] == pytest.approx(1 / 9)
 
@@ -142,7 +142,7 @@ def test_retransmission_is_not_a_copy():
     orig = [o for o in obs if o["id"] == 2]
     obs += [{**o, "t": o["t"] + 0.02, "id": 9} for o in orig]  # same segment, new IP id, same TTL
     f = flow(ctx(obs), 40000)
-    assert f["ctx_retx_frac"] == pytest.approx(1 / 8)
+    assert f["ctx_retx_frac"] == pytest.approx(1 / 9)  # the connection's 8 packets and the retransmission
     assert f["ctx_neardup_frac"] == 0 and f["ctx_seq_regress_frac"] == 0 and f["ctx_ttl_levels"] == 0
 
 
@@ -155,14 +155,14 @@ def test_blackholed_host_against_its_earlier_windows():
     assert early["ctx_dst_out_share"] == pytest.approx(0.5)  # B sent 4 of the 8 transmissions
     assert late["ctx_dst_unanswered_frac"] == 1 and late["ctx_dst_unanswered_shift"] == 1
     assert late["ctx_dst_out_share"] == 0 and late["ctx_dst_out_share_shift"] == pytest.approx(-0.5)
-    # earlier windows: the fetch and the lone FIN flow after it; now one attempt
-    # as shares of the window's flows (one of one now) and as a log ratio to the past
+    # earlier windows: one connection, one flow each; now one attempt: as shares of the window's
+    # flows (one of one) and as a log ratio to the past (as many flows as before)
     assert late["ctx_dst_flow_share"] == 1 and early["ctx_dst_flow_share"] == 1
-    assert late["ctx_dst_flows_log_ratio"] == pytest.approx(np.log(2 / 3))
+    assert late["ctx_dst_flows_log_ratio"] == pytest.approx(0.0)
     assert late["ctx_retx_frac"] == pytest.approx(0.5) and late["ctx_rtt_ms"] == -1
     assert late["ctx_dst_rtt_ms"] == -1 and late["ctx_dst_rtt_shift_ms"] == 0  # no round trip to compare
     assert late["ctx_net_unanswered_frac"] == 1 and early["ctx_net_unanswered_frac"] == 0
-    # the lone ACK / FIN flows a closed connection leaves are not unanswered requests
+    # a closed connection's flow is no unanswered request
     assert (c["ctx_src_unanswered_frac"].xs(40000, level="port") == 0).all()
 
 

@@ -16,7 +16,7 @@ from uavcas.flows import FlowConfig, extract_flows
 from uavcas.schema import FEATURES, PAPER_FEATURES
 
 US = 1e6
-CIC_RULES = FlowConfig(idle_timeout_s=0, syn_restart=False)  # CICFlowMeter's segmentation exactly
+CIC_RULES = FlowConfig(termination="cic")  # CICFlowMeter's segmentation exactly
 
 
 def _sstd(x):
@@ -60,7 +60,9 @@ def test_cic_http_session_by_hand(tmp_path):
 def test_cic_active_idle_single_packet_and_flags(tmp_path):
     pk = [udp(t, A, B, 1000, 2000, size=10) for t in (0, 1, 2, 8, 9, 20, 21)] + [udp(30, B, C, 9, 9, size=0)]
     pk += [tcp(40, A, C, 5, 6, "SE"), tcp(40.5, C, A, 6, 5, "AC")]  # ECE 0x40 / CWR 0x80 flags
-    df = extract_flows([write(tmp_path / "i.pcap", pk)], CIC_RULES).frame.set_index("src_port")
+    # min_packets=1: CICFlowMeter writes no one-packet flow, but the other policies do, with these features
+    df = extract_flows([write(tmp_path / "i.pcap", pk)], FlowConfig(termination="cic", min_packets=1)).frame.set_index("src_port")
+    assert 9 not in extract_flows([write(tmp_path / "i2.pcap", pk)], CIC_RULES).frame.src_port.tolist()
     r = df.loc[1000]
     # idle gaps > 5 s: 6 s and 11 s; the active stretches before them: 0->2 s and 8->9 s; the last
     # stretch (20->21 s) is never recorded (no endActiveIdleTime)

@@ -13,9 +13,9 @@ from pcapgen import A, B, C, http_session, syn_flood, udp, write
 from uavcas.flows import FlowConfig, extract_flows
 
 # nfstream's defaults: idle_timeout=120 s, active_timeout=1800 s, no FIN/RST or SYN rule.
-NFSTREAM = FlowConfig(idle_timeout_s=120, active_timeout_s=1800, fin_rst=False, syn_restart=False)
+NFSTREAM = FlowConfig(termination="timeout")
 # the paper's pipeline: one flow per 5-tuple
-WHOLE = FlowConfig(idle_timeout_s=0, active_timeout_s=0, fin_rst=False, syn_restart=False)
+WHOLE = FlowConfig(termination="timeout", idle_timeout_s=0, active_timeout_s=0)
 
 
 @pytest.mark.shared

@@ -13,6 +13,10 @@ from .common import atomic_path, console, err_console, fail
 
 TABLE_ROWS = 50  # the human-readable table shows this many flows; csv/parquet have them all
 FEATURES_HELP = "Feature standard: cic (CICFlowMeter's definitions, us) or paper (the authors' 47, s)."
+TERMINATION_HELP = ("How a TCP flow ends: connection (default: one connection one flow; closed on RST or the "
+                    "acknowledged last FIN, its trailing packets within 60 s join it), cic (CICFlowMeter exactly: "
+                    "first backward FIN or RST closes, duplicate forward FIN dropped, no 1-packet flows; reproduces "
+                    "its 'TCP appendix' flows) or timeout (nfstream's: idle/active timeouts only).")
 
 
 def _errors():
@@ -78,10 +82,10 @@ def flows_cmd(
     fmt: str = typer.Option("table", "--format", help="table, csv or parquet."),
     out: Path = typer.Option(None, "--out", help="Output file (default: standard output; required for parquet)."),
     allow_truncated: bool = typer.Option(False, "--allow-truncated", help="Keep the packets before a truncation."),
-    idle_timeout: float = typer.Option(None, "--idle-timeout", help="Idle timeout in s; 0 = none (default: 15 for 5tuple)."),
-    active_timeout: float = typer.Option(None, "--active-timeout", help="Active timeout in s; 0 = none (default: 120 for 5tuple)."),
-    fin_rst: bool = typer.Option(None, "--fin-rst/--no-fin-rst", help="End TCP flows at RST / backward FIN (default: on for 5tuple)."),
-    syn_restart: bool = typer.Option(None, "--syn-restart/--no-syn-restart", help="A new SYN starts a new flow (default: on for 5tuple)."),
+    termination: str = typer.Option(None, "--termination", help=TERMINATION_HELP),
+    idle_timeout: float = typer.Option(None, "--idle-timeout", help="Idle timeout in s; 0 = none (default: connection 15, cic none, timeout 120)."),
+    active_timeout: float = typer.Option(None, "--active-timeout", help="Active timeout in s; 0 = none (default: connection and cic 120, timeout 1800)."),
+    close_grace: float = typer.Option(None, "--close-grace", help="connection: s after a close during which the connection's packets join it (default 60)."),
 ) -> None:
     """Flows of one capture (streamed, bounded memory) or of several capture points (de-duplicated)."""
     from uavcas.atomic import check_target
@@ -99,8 +103,8 @@ def flows_cmd(
     try:
         if out is not None:
             check_target(out)
-        cfg = FlowConfig(view=view, min_packets=min_packets, idle_timeout_s=idle_timeout, active_timeout_s=active_timeout,
-                         fin_rst=fin_rst, syn_restart=syn_restart)  # type: ignore[arg-type]  # fmt: skip
+        cfg = FlowConfig(view=view, termination=termination, min_packets=min_packets, idle_timeout_s=idle_timeout,  # type: ignore[arg-type]
+                         active_timeout_s=active_timeout, grace_s=close_grace)  # fmt: skip
         frames = iter_flow_frames(pcaps, cfg, standard=features, sequences=fmt == "parquet",
                                   allow_truncated=allow_truncated, report=report)  # fmt: skip
         if fmt == "parquet":
@@ -188,6 +192,7 @@ def extract_cmd(
     features: str = typer.Option("cic", "--features", help=FEATURES_HELP),
     labels: str = typer.Option("ours", "--labels", help="ours (from each packet's effect) or paper (IP membership)."),
     min_packets: int = typer.Option(None, "--min-packets", help="Drop smaller flows (default by view)."),
+    termination: str = typer.Option(None, "--termination", help=TERMINATION_HELP),
     allow_truncated: bool = typer.Option(False, "--allow-truncated", help="Keep the packets before a truncation."),
     min_attack_fraction: float = typer.Option(
         0.0, "--min-attack-fraction", min=0.0, max=1.0,
@@ -199,7 +204,7 @@ def extract_cmd(
     from uavcas.dataset.store import extract_run
 
     try:
-        info = extract_run(run_dir, out, view=view, labels=labels, min_packets=min_packets,
+        info = extract_run(run_dir, out, view=view, labels=labels, min_packets=min_packets, termination=termination,
                            allow_truncated=allow_truncated, features=features,
                            min_attack_fraction=min_attack_fraction, allow_incomplete=allow_incomplete)  # fmt: skip
     except _errors() as exc:

@@ -152,7 +152,7 @@ def _flow_table(seqs, src_ips: list[int], src_ports: list[int], sequences: bool)
     dst_ip = int(ipaddress.IPv4Address(_SERVER_IP))
     table = _packet_table(seqs, src_ips, src_ports, dst_ip, _SERVER_PORT)
     # one flow per generated sequence: no termination rule may split one
-    whole = FlowConfig(view="5tuple", dedup=False, idle_timeout_s=0, active_timeout_s=0, fin_rst=False, syn_restart=False)
+    whole = FlowConfig(view="5tuple", termination="timeout", dedup=False, idle_timeout_s=0, active_timeout_s=0)
     flows = assemble(table, whole)
     if flows.n_flows != len(seqs):  # every flow has its own key by construction
         raise AssertionError(f"{len(seqs)} synthetic flows assembled into {flows.n_flows}")

@@ -3,11 +3,16 @@
 Each block's packets are assembled together with the packets of the flows still open after the
 previous block (`uavcas.flows.assemble`, whose termination rules only look backwards in time). A
 flow is finished, and its row computed, once no later packet can join it:
-- it was closed by FIN/RST (rule 4a), or
-- the idle timeout has passed since its last packet, or the active timeout since its first,
+- it was closed (`Flows.close_ns`) and the policy's grace period after the close has passed, or
+- it is open and the idle timeout has passed since its last packet, or the active timeout since
+  its first,
 measured against the newest packet seen so far less `REORDER_SLACK_NS` (captures are in arrival
 order up to small reorderings), or
-- a later flow of the same key has begun (packets go to a key's latest flow). At the end of the capture every open flow is finished. Rows are
+- a later flow of the same key has begun (packets go to a key's latest flow). At the end of the
+  capture every open flow is finished.
+One difference from reading whole: under `--termination cic`, a flow that CICFlowMeter continues
+after its 120 s flow timeout keeps its predecessor's orientation; when the predecessor was
+released in an earlier block, the continuation takes its own first packet's sender instead. Rows are
 released in order of first packet (flow_id continues across blocks): a finished flow waits while
 an earlier-starting flow is still open.
 
@@ -64,12 +69,12 @@ def _finished(p: PacketTable, fl: Flows, cfg: FlowConfig, horizon: int | None) -
     latest = np.full(int(fl.key.max()) + 1 if fl.n_flows else 0, -1, dtype=np.int64)
     np.maximum.at(latest, fl.key, np.arange(fl.n_flows))
     done = latest[fl.key] != np.arange(fl.n_flows)
-    if fl.closed is not None:
-        done |= fl.closed & (last_ns <= mark)
+    closed = fl.close_ns >= 0 if fl.close_ns is not None else np.zeros(fl.n_flows, dtype=bool)
+    done |= closed & (fl.close_ns + cfg.grace_ns <= mark)
     if cfg.idle_ns is not None:
-        done |= last_ns + cfg.idle_ns <= mark
+        done |= ~closed & (last_ns + cfg.idle_ns <= mark)
     if cfg.active_ns is not None:
-        done |= first_ns + cfg.active_ns < mark
+        done |= ~closed & (first_ns + cfg.active_ns < mark)
     return done
 
 
@@ -141,8 +146,7 @@ def iter_flow_frames(
     names = list(points) if points is not None else [p.stem for p in paths]
     report = report if report is not None else StreamReport()
     next_id = 0
-    ends = cfg.idle_ns or cfg.active_ns or cfg.effective_fin_rst or cfg.effective_syn_restart
-    if len(paths) == 1 and ends:
+    if len(paths) == 1 and cfg.ends_flows:
         frames = _stream_one(paths[0], names[0], cfg, standard, sequences, report, allow_truncated, chunk_bytes)
     else:
         pk = read_packets(paths, names, allow_truncated=allow_truncated, chunk_bytes=chunk_bytes)
