@@ -29,13 +29,13 @@ def test_extract_info_idempotent(synth_run_dir, tmp_path):
     assert table.schema.remove_metadata() == arrow_schema(context=True)  # extraction adds the ctx_* columns
     assert set(METADATA_COLUMNS) | set(FEATURES) | set(SEQUENCE_COLUMNS) <= set(COLUMNS)
     card = json.loads((ds / "dataset.json").read_text())
-    # 13 HTTP sessions, each cut in two by the server's FIN (CICFlowMeter's rule), the blackholed
-    # fetch (one flow: nothing came back), the replayed copies (they join the session's FIN flow)
-    # and the flood
-    assert card["n_flows"] == table.num_rows == N_FLOOD + 2 * 13 + 1
+    # 13 HTTP sessions, one flow each (one connection, one flow), the blackholed fetch (one flow:
+    # nothing came back), the replayed copies (they join their session's flow) and the flood
+    assert card["n_flows"] == table.num_rows == N_FLOOD + 13 + 1
     assert card["features"]["standard"] == "cic" and card["features"]["units"]["Flow Duration"] == "us"
     assert card["context"] == {"columns": len(CONTEXT_FEATURES), "window_s": 5.0}
-    assert card["runs"][0]["flow_rules"]["idle_timeout_s"] == 15.0 and card["runs"][0]["flow_rules"]["fin_rst"]
+    assert card["runs"][0]["flow_rules"]["idle_timeout_s"] == 15.0
+    assert card["runs"][0]["flow_rules"]["termination"] == "connection" and card["terminations"] == ["connection"]
     assert card["class_counts"]["DoS"] == N_FLOOD and set(CLASSES) <= set(card["class_counts"])
     assert card["views"] == ["5tuple"] and card["seeds"] == [7] and card["runs"][0]["run_id"] == "run-synth"
     # The twin profile the run was planned with is on the card (name -> SHA-256s; None when unrecorded).

@@ -35,8 +35,8 @@ def test_flood_flows_are_dos_only_inside_window(synth_run_dir):
     assert (inside.attack_packets == 1).all() and (inside.attack_packets_dos == 1).all()
     assert sorted(inside.packets.unique()) == [1, 3]
     assert all(e[0] == "flood" and set(e[1:]) <= {"benign"} for e in _effects(inside))
-    # two sessions outside, each two flows (the server's FIN ends the first; flows.assemble rule 4a)
-    assert outside.src_port.nunique() == 2 and len(outside) == 4
+    # two sessions outside, one flow each (one connection, one flow: flows.termination)
+    assert outside.src_port.nunique() == 2 and len(outside) == 2
     assert (outside.label == "Benign").all() and (outside.label_source == "none").all()
     assert not df[(df.src_ip == IPS["bs0"])].label_dos.any()
 
@@ -45,20 +45,21 @@ def test_replay_blackhole_and_channel_loss(synth_run_dir):
     df = _labelled(synth_run_dir)
     (rep,) = df[df.label_replay].itertuples()
     assert rep.src_port == 41001 and rep.label_source == "replay-injections"
-    # the session's trailing FIN flow (2 packets) plus the three injected copies, 1.3 s later
-    assert rep.packets == 2 + 3 and rep.attack_packets == rep.attack_packets_replay == 3  # the injected copies only
-    assert rep.attack_fraction == 3 / 5 and list(rep.seq_effect).count("replay") == 3
+    # the session (12 packets) plus the three injected copies, 1.3 s after its close (within the
+    # close grace period: they join the connection they copy)
+    assert rep.packets == 12 + 3 and rep.attack_packets == rep.attack_packets_replay == 3  # the injected copies only
+    assert rep.attack_fraction == 3 / 15 and list(rep.seq_effect).count("replay") == 3
     bh = df[df.label_blackhole]
     assert len(bh) == 1 and bh.iloc[0].dst_ip == IPS["uav3"] and bh.iloc[0].label == "Blackhole"
     assert bh.iloc[0].label_source == "blackhole-drops" and list(bh.iloc[0].seq_effect) == ["blackhole"] * 3
     assert T0 + BLACKHOLE_WINDOW[0] <= bh.iloc[0].first_ts < T0 + BLACKHOLE_WINDOW[1]
     # the victim's flows outside the window, with nothing affected, are Benign
     victim = df[(df.dst_ip == IPS["uav3"]) & ~df.label_blackhole & ~df.label_replay]
-    assert len(victim) == 9 and (victim.label == "Benign").all() and (victim.attack_packets == 0).all()
-    (lossy,) = df[(df.src_port == 41002) & (df.packets == 10)].itertuples()
+    assert len(victim) == 4 and (victim.label == "Benign").all() and (victim.attack_packets == 0).all()
+    (lossy,) = df[(df.src_port == 41002) & (df.packets == 12)].itertuples()
     assert list(lossy.seq_effect).count("channel_loss") == 1 and lossy.label == "Benign" and lossy.attack_packets == 0
     counts = df.label.value_counts().to_dict()
-    assert counts == {"DoS": N_FLOOD, "Benign": 25, "Replay": 1, "Blackhole": 1}
+    assert counts == {"DoS": N_FLOOD, "Benign": 12, "Replay": 1, "Blackhole": 1}
     assert set(LABEL_COLUMNS) | set(TRUTH_COLUMNS) <= set(df.columns)
     assert (df.attack_fraction == df.attack_packets / df.packets).all()
     assert (df.attack_packets == df[[c for c in TRUTH_COLUMNS if c.startswith("attack_packets_")]].sum(axis=1)).all()
@@ -83,7 +84,7 @@ def test_paper_ip_membership(synth_run_dir):
     assert (df.label_source == "ip-membership").all()
     # no time gating: the benign uav1 -> uav0 sessions outside the window are DoS too
     pair = df[(df.src_ip == IPS["uav1"])]
-    assert (pair.label == "DoS").all() and len(pair) == N_FLOOD + 2 * 2
+    assert (pair.label == "DoS").all() and len(pair) == N_FLOOD + 2
     assert (df[df.dst_ip == IPS["uav3"]].label == "Blackhole+Replay").all()
     assert df.attack_packets.sum() == _labelled(synth_run_dir).attack_packets.sum()  # effects do not depend on it
 
@@ -141,8 +142,8 @@ def test_wormhole_detour_and_ddos(synth_run_dir, tmp_path):
     add_wormhole(run)
     df = _labelled(run)
     worm = df[df.label_wormhole]
-    # the detoured session and its trailing FIN flow (flows.assemble rule 4a), every packet detoured
-    assert len(worm) == 2 and (worm.src_port == 40000).all() and (worm.label == "Wormhole").all()
+    # the detoured session, one flow, every packet detoured
+    assert len(worm) == 1 and (worm.src_port == 40000).all() and (worm.label == "Wormhole").all()
     assert (worm.label_source == "wormhole-detour").all() and (worm.attack_fraction == 1.0).all()
     # the victim's other flows during the attack did not cross the attacker's switch: Benign
     assert not df[(df.dst_ip == IPS["uav0"]) & (df.src_port != 40000)].label_wormhole.any()

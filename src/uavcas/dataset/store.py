@@ -95,6 +95,8 @@ def rebuild(out_dir: Path) -> dict:
         "n_runs": len(shards),
         "n_incomplete_runs": sum(1 for r in runs if r.get("complete") is False),
         "views": sorted({r.get("view") for r in runs if r.get("view")}),
+        # how flows end (uavcas.flows.termination): connection, cic or timeout
+        "terminations": sorted({(r.get("flow_rules") or {}).get("termination") for r in runs} - {None}),
         "label_modes": sorted({r.get("labels") for r in runs if r.get("labels")}),
         "class_counts": counts,
         # How flows got their labels: one rule text per (label mode, min_attack_fraction) in use.
