@@ -184,7 +184,8 @@ def flows_cmd(
 def extract_cmd(
     run_dir: Path = typer.Argument(..., help="Run directory (plan.json, run.json, attacks.jsonl, pcap/)."),
     out: Path = typer.Option(..., "--out", help="Dataset directory to add the run's shard to."),
-    view: str = typer.Option("5tuple", "--view", help="Flow key: 5tuple, hostpair or window-hostpair (one flow per host pair per plan window)."),
+    view: str = typer.Option("5tuple", "--view", help="Flow key: 5tuple, hostpair or window-hostpair (one flow per host pair per plan window); "
+                                                   "or window-host: episodes, one row per node per plan window (collaborative classes)."),
     features: str = typer.Option("cic", "--features", help=FEATURES_HELP),
     labels: str = typer.Option("ours", "--labels", help="ours (from each packet's effect) or paper (IP membership)."),
     min_packets: int = typer.Option(None, "--min-packets", help="Drop smaller flows (default by view)."),
@@ -224,7 +225,6 @@ def export_cmd(
     view: str = typer.Option(None, "--view", help="The flow view to export when the dataset holds several."),
 ) -> None:
     """Export a dataset in the authors' released layout (one stat and one ts CSV)."""
-    from uavcas.atomic import ensure_out_dir
     from uavcas.dataset.parquet import read_flows
     from uavcas.dataset.read import select_view
     from uavcas.dataset.uavcas_csv import write_layout
@@ -235,8 +235,7 @@ def export_cmd(
     if not path.is_file():
         raise fail(f"{dataset_dir}: no flows.parquet (not a dataset directory)")
     try:
-        ensure_out_dir(out)
-        df = read_flows(path)
+        df = read_flows(path)  # write_layout creates --out once the rows are known (a refusal writes nothing)
         standard = df.attrs.get("feature_standard")
         df = select_view(df, view)
         df.attrs["feature_standard"] = standard
