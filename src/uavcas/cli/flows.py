@@ -224,10 +224,11 @@ def export_cmd(
     include_flags: bool = typer.Option(False, "--include-flags", help="Add the packet_flag list column to the ts file."),
     view: str = typer.Option(None, "--view", help="The flow view to export when the dataset holds several."),
 ) -> None:
-    """Export a dataset in the authors' released layout (one stat and one ts CSV)."""
+    """Export a dataset in the authors' released layout (one stat and one ts CSV), one row per host
+    pair: 5-tuple flows are merged into host pairs from their packet sequences."""
     from uavcas.dataset.parquet import read_flows
     from uavcas.dataset.read import select_view
-    from uavcas.dataset.uavcas_csv import write_layout
+    from uavcas.dataset.uavcas_csv import layout_rows, write_layout
 
     if fmt != "uavcas-csv":
         raise fail(f"--format: {fmt!r} is not supported (uavcas-csv)")
@@ -239,10 +240,11 @@ def export_cmd(
         standard = df.attrs.get("feature_standard")
         df = select_view(df, view)
         df.attrs["feature_standard"] = standard
+        df, merged = layout_rows(df)  # the authors' rows are host pairs
         w = write_layout(df, out, embed_config=embed_config, include_flags=include_flags)
     except _errors() as exc:
         raise fail(str(exc)) from None
-    _warn(w.notes)
+    _warn(merged + w.notes)
     console.print(f"wrote {w.stat} ({w.n_stat} flows) and {w.ts} ({w.n_ts} flows)", highlight=False)
 
 

@@ -59,9 +59,18 @@ def extract_run(run_dir: Path, out_dir: Path, **options: Any) -> ShardInfo:
     shard = extract(run_dir, **options)
     out_dir = ensure_out_dir(out_dir)  # only once there is a shard to write: bad input leaves nothing
     with _locked(out_dir):
+        _check_unit(out_dir, shard.info.run_id, episodes="host" in shard.frame.columns)
         write_table(to_table(shard.frame, meta=asdict(shard.info), standard=shard.info.features), out_dir / "shards" / f"{shard.info.run_id}.parquet")
         rebuild(out_dir)
     return shard.info
+
+
+def _check_unit(out_dir: Path, run_id: str, episodes: bool) -> None:
+    """Refuse, before anything is written, a shard of flows among episode shards or the reverse."""
+    for path in sorted((out_dir / "shards").glob("*.parquet")):
+        if path.stem != run_id and (pq.read_schema(path).get_field_index("host") >= 0) != episodes:
+            raise DatasetError(f"{out_dir}: holds {'flow' if episodes else EPISODE_VIEW} shards; a dataset holds flows or "
+                               f"{EPISODE_VIEW} episodes, not both: extract into another --out")
 
 
 @contextlib.contextmanager

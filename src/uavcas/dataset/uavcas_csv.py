@@ -190,6 +190,7 @@ def layout_rows(df: pd.DataFrame) -> tuple[pd.DataFrame, list[str]]:
         return df, []
     if views == {"5tuple"}:
         merged = host_pair_rows(df)
+        merged.attrs["feature_standard"] = None  # the flows' features do not describe a pair: recomputed
         return merged, [f"{len(df)} 5-tuple flows merged into {len(merged)} host pairs (the authors' rows), from their "
                         "packet sequences; each 5-tuple kept its own capture point"]
     raise CsvFormatError(f"the uavcas-csv layout holds host-pair flows, not {', '.join(sorted(views))} rows; extract "
@@ -197,16 +198,13 @@ def layout_rows(df: pd.DataFrame) -> tuple[pd.DataFrame, list[str]]:
 
 
 def write_layout(df: pd.DataFrame, out_dir: Path, embed_config: bool = False, include_flags: bool = False) -> Written:
-    """Write `df` (our dataset's rows, one view) as the authors' stat and ts CSVs in `out_dir`.
-
-    5-tuple flows are first merged into host pairs (`layout_rows`); the ts rows are the pairs of
-    >= 2 packets and the stat rows the ts rows of >= 10, in the same order."""
-    standard = df.attrs.get("feature_standard")
-    df, merge_notes = layout_rows(df)
+    """Write `df` (flows with sequences, one view) as the authors' stat and ts CSVs in `out_dir`,
+    row for row: the ts rows are the flows of >= 2 packets and the stat rows the ts rows of >= 10,
+    in the same order. `uavcas export` first brings the rows to host pairs (`layout_rows`)."""
+    if "host" in df.columns:
+        raise CsvFormatError("window-host rows (episodes) have no packet sequences: the layout holds host-pair flows")
+    out_dir = ensure_out_dir(out_dir)
     df = df.reset_index(drop=True)
-    # merged rows carry no features of their own: computed from their sequences below
-    df.attrs["feature_standard"] = None if merge_notes else standard
-    out_dir = ensure_out_dir(out_dir)  # only once the rows are known: a refusal writes nothing
     n = len(df)
     if embed_config and df["config"].isna().any():
         raise CsvFormatError("--embed-config: some flows have no config string (imported without one)")
@@ -271,7 +269,7 @@ def write_layout(df: pd.DataFrame, out_dir: Path, embed_config: bool = False, in
             row += [_fmt_feature(f, feats[f][i]) for f in PAPER_FEATURES]
             row.append(labels[i])
             w.writerow(row)
-    notes = list(merge_notes)
+    notes = []
     if len(ts_rows) < n:
         notes.append(f"{n - len(ts_rows)} flows under {TS_MIN_PACKETS} packets are not in {ts_path.name} (the layout's minimum)")
     return Written(stat_path, ts_path, len(stat_rows), len(ts_rows), notes)
