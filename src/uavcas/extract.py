@@ -23,13 +23,17 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from uavcas.flows import FlowConfig, Flows, PacketTable, extract_flows
+from uavcas.flows import VIEWS, FlowConfig, Flows, PacketTable, extract_flows
 from uavcas.flows.context import CONTEXT_WINDOW_S, context_frame
 from uavcas.flows.follow import Followed, follow_run
 from uavcas.labels import PacketTruth, TruthContext, label_flows, packet_truth, read_attack_log, rule_text
 from uavcas.rundir import RunDir, RunDirError, RunInfo
-from uavcas.schema import CONTEXT_FEATURES, DEFAULT_STANDARD
+from uavcas.labels.episodes import episode_rule_text, host_window_frame
+from uavcas.schema import CONTEXT_FEATURES, DEFAULT_STANDARD, EPISODE_VIEW
 from uavcas.vocabulary import EFFECTS
+
+# the flow views, and the episode view (one row per plan node per plan window, uavcas.labels.episodes)
+EXTRACT_VIEWS: tuple[str, ...] = (*VIEWS, EPISODE_VIEW)
 
 
 @dataclass(frozen=True)
@@ -61,7 +65,8 @@ class ShardInfo:
 
 @dataclass(frozen=True)
 class Shard:
-    frame: pd.DataFrame  # schema.METADATA_COLUMNS + features (+ schema.CONTEXT_FEATURES), one row per flow
+    frame: pd.DataFrame  # schema.METADATA_COLUMNS + features (+ schema.CONTEXT_FEATURES), one row per flow;
+    # window-host: schema.EPISODE_METADATA_COLUMNS + episode features, one row per node and window
     info: ShardInfo
 
 
@@ -105,7 +110,15 @@ def extract_detailed(
     is `run_id`, else run.json's, else the directory's name. `context`: add the `ctx_*` columns.
     `termination`: the flow termination policy (`uavcas.flows.termination`; None: the view's default).
 
+    `view` "window-host" gives episodes (`uavcas.labels.episodes`) built from the 5-tuple flows.
+
     Raises RunDirError for a run that did not finish cleanly, unless `allow_incomplete`."""
+    episodes = view == EPISODE_VIEW
+    if view not in EXTRACT_VIEWS:
+        raise ValueError(f"unknown view {view!r}; known: {', '.join(EXTRACT_VIEWS)}")
+    if episodes and (labels != "ours" or min_attack_fraction > 0):  # both are rules about flows
+        raise ValueError("the window-host view labels episodes from packet effects: it takes neither "
+                         "--labels paper nor --min-attack-fraction")
     rd = RunDir(Path(run_dir))
     if not rd.root.is_dir():
         raise RunDirError(f"{rd.root}: not a directory")
@@ -123,19 +136,25 @@ def extract_detailed(
     if t0 is None:
         raise RunDirError(f"{rd.root}: the run never reached its plan's t = 0 (no t0_unix in run.json or "
                           f"{rd.owner_path.name}): its packets cannot be placed in the plan")
-    cfg = FlowConfig(view=view, termination=termination, min_packets=min_packets,  # type: ignore[arg-type]
-                     window_t0_unix=t0, window_s=plan.window_s)
+    cfg = FlowConfig(view="5tuple" if episodes else view, termination=termination,  # type: ignore[arg-type]
+                     min_packets=min_packets, window_t0_unix=t0, window_s=plan.window_s)
     ex = extract_flows(pcaps, cfg, points=[p.stem for p in pcaps], allow_truncated=allow_truncated, standard=features)
     # from the captures and flows only: computed before the attack log is even read
     ctx = context_frame(ex.packets, ex.flows) if context else None
     log = read_attack_log(rd.attacks_jsonl, plan, t0)
     _, followed = follow_run(rd.root, table=ex.packets)
     truth = packet_truth(TruthContext(ex.packets, log, followed, plan, t0))
-    lab = label_flows(ex.flows, ex.frame, log, truth, mode=labels,  # type: ignore[arg-type]
-                      min_attack_fraction=min_attack_fraction)
-    df = lab.frame
-    if ctx is not None:  # label_flows keeps flow_id: rows may have been left out, never reordered
-        df[list(CONTEXT_FEATURES)] = ctx.to_numpy()[df["flow_id"].to_numpy()]
+    if episodes:  # the 5-tuple flows first, then their packets and flows per node and window
+        ff = ex.frame.reset_index(drop=True)
+        if ctx is not None:
+            ff = pd.concat([ff, pd.DataFrame(ctx.to_numpy(), columns=list(CONTEXT_FEATURES))], axis=1)
+        df, impure, rule = host_window_frame(ex.packets, ex.flows, ff, truth, plan, t0, standard=features), 0, episode_rule_text()
+    else:
+        lab = label_flows(ex.flows, ex.frame, log, truth, mode=labels,  # type: ignore[arg-type]
+                          min_attack_fraction=min_attack_fraction)
+        df, impure, rule = lab.frame, lab.impure_dropped, rule_text(labels, min_attack_fraction)
+        if ctx is not None:  # label_flows keeps flow_id: rows may have been left out, never reordered
+            df[list(CONTEXT_FEATURES)] = ctx.to_numpy()[df["flow_id"].to_numpy()]
     rid = _check_run_id(rd.root, str(run_id or (info.run_id if info else None) or rd.root.resolve().name))
     df["run_id"], df["config"], df["seed"], df["view"] = rid, plan.config, plan.seed, view
     for k, v in plan.scenario.axes().items():
@@ -157,9 +176,9 @@ def extract_detailed(
             n_flows=len(df),
             class_counts=counts,
             min_attack_fraction=float(min_attack_fraction),
-            impure_dropped=lab.impure_dropped,
+            impure_dropped=impure,
             effect_counts={e: int(c) for e, c in zip(EFFECTS, effects)},
-            label_rule=rule_text(labels, min_attack_fraction),
+            label_rule=rule,
             truncations=[f"{t.path}@{t.offset}" for t in ex.packets.truncations],
             extracted_unix=time.time(),
             profile=plan.profile,

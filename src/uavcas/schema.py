@@ -178,3 +178,61 @@ EFFECTS, ATTACK_EFFECTS = _v.EFFECTS, _v.ATTACK_EFFECTS
 TRUTH_COLUMNS: tuple[str, ...] = ("attack_packets", "attack_fraction") + _v.ATTACK_PACKET_COLUMNS
 META_LABEL_COLUMNS: tuple[str, ...] = TRUTH_COLUMNS + LABEL_COLUMNS + ("label", "label_source")
 METADATA_COLUMNS: tuple[str, ...] = ID_COLUMNS + AXIS_COLUMNS + META_LABEL_COLUMNS
+
+# ---------------------------------------------------------------------------------------------
+# The episode view (`window-host`, `uavcas.labels.episodes`): one row per plan node per plan
+# window, the unit in which a collaborative attack (two families on one victim) is visible. Its
+# rows are no flows: they have their own identity columns and features, all with units in their
+# names, and the same truth and label columns as flows (attack_packets, label_<family>, label).
+EPISODE_VIEW = "window-host"
+EPISODE_ID_COLUMNS: tuple[str, ...] = (
+    "run_id", "config", "seed", "view", "host", "host_ip", "window", "first_ts", "last_ts", "first_ts_ns",
+)  # fmt: skip
+# The host's own packets in the window (sent: it is the source; received: the destination).
+EPISODE_PACKET_UNITS: dict[str, str] = {
+    "packets_out": "packets", "packets_in": "packets", "bytes_out": "bytes", "bytes_in": "bytes",
+    "packets_per_s": "packets/s", "bytes_per_s": "bytes/s", "active_s": "s",
+    "peers": "hosts", "peer_ports": "ports",
+    "syn_out": "packets", "syn_in": "packets", "synack_out": "packets", "synack_in": "packets",
+    "rst_out": "packets", "rst_in": "packets", "fin_out": "packets", "fin_in": "packets",
+    "udp_share": "ratio", "icmp_share": "ratio",
+    "flows": "flows", "flows_out": "flows", "flows_in": "flows",
+}  # fmt: skip
+# The summarised subset of a standard's 47 flow features: feature -> column stem (unit in the
+# stem; each gives <stem>_mean and <stem>_max over the 5-tuple flows that start in the window and
+# have the host as an endpoint). cic lengths are payload bytes, paper lengths frame bytes.
+EPISODE_FLOW_SUBSETS: dict[str, dict[str, str]] = {
+    "cic": {
+        "Flow Duration": "flow_duration_us", "Total Fwd Packets": "fwd_packets", "Total Backward Packets": "bwd_packets",
+        "Total Length of Fwd Packets": "fwd_payload_bytes", "Total Length of Bwd Packets": "bwd_payload_bytes",
+        "Flow Bytes/s": "flow_payload_bytes_per_s", "Flow Packets/s": "flow_packets_per_s",
+        "Flow IAT Mean": "flow_iat_mean_us", "Packet Length Mean": "payload_length_mean_bytes",
+    },
+    "paper": {
+        "Flow Duration": "flow_duration_s", "Total Fwd Packets": "fwd_packets", "Total Bwd Packets": "bwd_packets",
+        "Total Length of Fwd Packets": "fwd_frame_bytes", "Total Length of Bwd Packets": "bwd_frame_bytes",
+        "Flow Bytes/s": "flow_frame_bytes_per_s", "Flow Packets/s": "flow_packets_per_s",
+        "Flow IAT Mean": "flow_iat_mean_s", "Packet Length Mean": "frame_length_mean_bytes",
+    },
+}  # fmt: skip
+EPISODE_STATS: tuple[str, ...] = ("mean", "max")
+
+
+def episode_feature_columns(standard: str = DEFAULT_STANDARD) -> tuple[str, ...]:
+    """The episode view's feature columns when its flows follow `standard`."""
+    feature_columns(standard)  # refuses an unknown standard
+    return tuple(EPISODE_PACKET_UNITS) + tuple(
+        f"{stem}_{s}" for stem in EPISODE_FLOW_SUBSETS[standard].values() for s in EPISODE_STATS
+    )
+
+
+# the flows' context columns summarised per episode (mean and max over the same flows)
+EPISODE_CONTEXT_FEATURES: tuple[str, ...] = tuple(f"{c}_{s}" for c in CONTEXT_FEATURES for s in EPISODE_STATS)
+EPISODE_COUNT_COLUMNS: tuple[str, ...] = ("packets",)  # the host's packets in the window (truth's denominator)
+EPISODE_METADATA_COLUMNS: tuple[str, ...] = (
+    EPISODE_ID_COLUMNS + AXIS_COLUMNS + EPISODE_COUNT_COLUMNS + META_LABEL_COLUMNS
+)
+# feature sets of the episode view, by the standard of its flows (`ids.features.feature_sets`)
+EPISODE_FEATURE_SETS: dict[str, tuple[str, ...]] = {
+    f"{EPISODE_VIEW}-{s}": episode_feature_columns(s) for s in FEATURE_STANDARDS
+}

@@ -44,3 +44,28 @@ def test_only_done_runs_keep_their_shards(tmp_path):
     assert cdir.is_done(1) and cdir.shard_path(1).exists()
     cdir.reset(1)
     assert not cdir.is_done(1) and not cdir.shard_path(1).exists()
+
+
+def test_a_resumed_campaign_keeps_its_view(tmp_path):
+    cdir = CampaignDir(tmp_path)
+    cdir.bind_view("window-host")
+    cdir.bind_view("window-host")  # the same view: resume
+    with pytest.raises(CampaignError, match="--view window-host, not 5tuple"):
+        cdir.bind_view("5tuple")
+
+
+def test_a_campaign_from_before_the_view_was_recorded_is_checked_by_its_shards(tmp_path):
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    cdir = CampaignDir(tmp_path)
+    cdir.run_dir(0).mkdir(parents=True)
+    cdir.mark_done(0, {})
+    cdir.shard_path(0).parent.mkdir()
+    t = pa.table({"x": [1]}).replace_schema_metadata({b"uavcas": json.dumps({"view": "5tuple"}).encode()})
+    pq.write_table(t, cdir.shard_path(0))
+    with pytest.raises(CampaignError, match="--view 5tuple, not hostpair"):
+        cdir.bind_view("hostpair")
+    assert not cdir.view_path.exists()
+    cdir.bind_view("5tuple")
+    assert cdir.view_path.read_text() == "5tuple\n"

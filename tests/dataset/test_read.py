@@ -11,6 +11,7 @@ from typer.testing import CliRunner
 
 from uavcas.cli import app
 from uavcas.dataset.read import FORMATS, detect_format, load_any, select_view
+from uavcas.dataset.uavcas_csv import layout_rows
 from uavcas.schema import FEATURES, PAPER_FEATURES
 
 runner = CliRunner()
@@ -38,8 +39,10 @@ def test_ours_and_the_authors_csv_give_the_same_flows(dataset_and_csv, tmp_path)
     ours, theirs = load_any(ds), load_any(csv)
     assert ours.attrs["source"] == "uavcas" and theirs.attrs["source"] == "uavcas-csv"
     assert ours.attrs["feature_standard"] == "cic" and theirs.attrs["feature_standard"] == "paper"
-    # the layout keeps flows of >= 2 packets, in dataset order, with their labels
-    kept = ours[ours.packets >= 2].reset_index(drop=True)
+    # the layout holds host pairs (export merges the 5-tuple flows) of >= 2 packets, in order, with their labels
+    pairs, _ = layout_rows(ours)
+    assert len(pairs) < len(ours) and pairs.packets.sum() == ours.packets.sum()
+    kept = pairs[pairs.packets >= 2].reset_index(drop=True)
     assert theirs["label"].tolist() == kept["label"].tolist()
     assert theirs["packets"].tolist() == kept["packets"].tolist()
     # the stat rows (>= 10 packets) carry a run id (config_idx = the run's rank here) and features

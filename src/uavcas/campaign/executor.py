@@ -28,6 +28,7 @@ def run_local(
     on_retry: Callable[[RunOutcome, int], None] | None = None,
     min_attack_fraction: float = 0.0,
     fidelity: str = "flag",
+    view: str = "5tuple",
 ) -> Iterator[RunOutcome]:
     """Run entries `jobs` at a time into their run directories; retry a failure `retries` times
     (and a run whose fidelity failed, with `fidelity="retry"`: see `task.execute_entry`)."""
@@ -38,7 +39,7 @@ def run_local(
     def submit(pool: ThreadPoolExecutor, e: ManifestEntry) -> Future:
         tries.started(e.index)
         cdir.reset(e.index)
-        return pool.submit(execute_entry, e, str(cdir.run_dir(e.index)), profile,
+        return pool.submit(execute_entry, e, str(cdir.run_dir(e.index)), profile, view=view,
                            min_attack_fraction=min_attack_fraction, fidelity=fidelity)
 
     with ThreadPoolExecutor(max_workers=max(1, jobs)) as pool:
@@ -64,6 +65,7 @@ def run_dask(
     connect_timeout_s: float = 30.0,
     min_attack_fraction: float = 0.0,
     fidelity: str = "flag",
+    view: str = "5tuple",
 ) -> Iterator[RunOutcome]:
     """Submit every entry to the scheduler at `address` (tcp://HOST:8786); yield as they finish."""
     from distributed import Client, as_completed
@@ -80,6 +82,7 @@ def run_dask(
                 None,
                 profile,
                 return_files=True,
+                view=view,
                 min_attack_fraction=min_attack_fraction,
                 fidelity=fidelity,
                 resources={"emulator": 1},

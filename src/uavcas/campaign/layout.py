@@ -1,6 +1,7 @@
 """On-disk layout of a campaign inside its dataset directory, and what "done" means.
 
     DATASET_DIR/campaign.jsonl        the manifest being worked on (written once, then checked)
+    DATASET_DIR/campaign_view.txt     the view every run is extracted to (written once, then checked)
     DATASET_DIR/runs/<index>/         one run: plan.json, run.json, attacks.jsonl, shaping.jsonl,
                                       pcap/ (local runs), outcome.json
     DATASET_DIR/runs/<index>/DONE     written last, by rename: the run and its shard are complete
@@ -33,6 +34,27 @@ class CampaignDir:
     @property
     def manifest_path(self) -> Path:
         return self.root / "campaign.jsonl"
+
+    @property
+    def view_path(self) -> Path:
+        return self.root / "campaign_view.txt"
+
+    def bind_view(self, view: str) -> None:
+        """Record the extraction view; resuming with another view is refused (its shards would
+        mix two descriptions of the traffic, or flows with episodes). A campaign begun before the
+        view was recorded is checked against the views its DONE shards were extracted with."""
+        if self.view_path.exists():
+            views = {self.view_path.read_text().strip()}
+        else:
+            from uavcas.dataset.parquet import table_meta
+
+            views = {table_meta(s).get("view", "5tuple") for s in sorted((self.root / "shards").glob("*.parquet"))
+                     if s.stem.isdigit() and self.is_done(int(s.stem))}
+        if views and views != {view}:
+            raise CampaignError(f"{self.root} holds a campaign extracted with --view {', '.join(sorted(views))}, "
+                                f"not {view}; resume it with that view or use another --out")
+        if not self.view_path.exists():
+            atomic_write_text(self.view_path, view + "\n")
 
     def run_dir(self, index: int) -> Path:
         return self.root / "runs" / str(index)

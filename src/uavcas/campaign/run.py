@@ -61,6 +61,7 @@ def run_campaign(
     console: Console | None = None,
     min_attack_fraction: float = 0.0,
     fidelity: str = "flag",
+    view: str = "5tuple",
 ) -> CampaignResult:
     from uavcas.dataset.store import rebuild
 
@@ -74,6 +75,7 @@ def run_campaign(
     cdir = CampaignDir(Path(out_dir))
     cdir.root.mkdir(parents=True, exist_ok=True)
     cdir.bind_manifest(entries)
+    cdir.bind_view(view)  # a resumed campaign keeps its view: rows of two views never mix
     cdir.prune_orphan_shards()
     result = CampaignResult(out_dir=cdir.root)
     todo = []
@@ -102,10 +104,10 @@ def run_campaign(
             progress.update(task, status=status())
             outcomes = (
                 run_dask(todo, scheduler, profile, retries, on_retry, min_attack_fraction=min_attack_fraction,
-                         fidelity=fidelity)
+                         fidelity=fidelity, view=view)
                 if scheduler
                 else run_local(todo, cdir, jobs, profile, retries, on_retry, min_attack_fraction=min_attack_fraction,
-                               fidelity=fidelity)
+                               fidelity=fidelity, view=view)
             )
             for out in outcomes:
                 if out.ok:

@@ -52,11 +52,16 @@ def run_cmd(
     min_attack_fraction: float = typer.Option(
         0.0, "--min-attack-fraction", min=0.0, max=1.0,
         help="Leave out flows whose share of attack packets is above 0 but below this (default 0: keep all)."),
+    view: str = typer.Option("5tuple", "--view", help="What each run is extracted to: 5tuple, hostpair, window-hostpair "
+                                                      "(flows) or window-host (one row per node per plan window)."),
 ) -> None:
     """Plan, emulate, extract and label every scenario; append each run's shard to the dataset."""
     from uavcas.campaign import CampaignError, read_manifest, run_campaign
+    from uavcas.extract import EXTRACT_VIEWS
     from uavcas.schema import CLASSES
 
+    if view not in EXTRACT_VIEWS:  # before anything is planned or created
+        raise fail(f"--view: {view!r} is not one of {', '.join(EXTRACT_VIEWS)}")
     if preset is not None and manifest_file is not None:
         raise fail("give --preset or --manifest, not both")
     try:
@@ -75,7 +80,7 @@ def run_cmd(
 
             load_profile(profile)
         result = run_campaign(entries, out, jobs=jobs, scheduler=scheduler, profile=profile, retries=retries,
-                              min_attack_fraction=min_attack_fraction, fidelity=fidelity)
+                              min_attack_fraction=min_attack_fraction, fidelity=fidelity, view=view)
     except (CampaignError, ValueError) as e:
         raise fail(str(e).splitlines()[0]) from None
     except KeyboardInterrupt:

@@ -188,7 +188,8 @@ def flows_cmd(
 def extract_cmd(
     run_dir: Path = typer.Argument(..., help="Run directory (plan.json, run.json, attacks.jsonl, pcap/)."),
     out: Path = typer.Option(..., "--out", help="Dataset directory to add the run's shard to."),
-    view: str = typer.Option("5tuple", "--view", help="Flow key: 5tuple, hostpair or window-hostpair (one flow per host pair per plan window)."),
+    view: str = typer.Option("5tuple", "--view", help="Flow key: 5tuple, hostpair or window-hostpair (one flow per host pair per plan window); "
+                                                   "or window-host: episodes, one row per node per plan window (collaborative classes)."),
     features: str = typer.Option("cic", "--features", help=FEATURES_HELP),
     labels: str = typer.Option("ours", "--labels", help="ours (from each packet's effect) or paper (IP membership)."),
     min_packets: int = typer.Option(None, "--min-packets", help="Drop smaller flows (default by view)."),
@@ -228,11 +229,11 @@ def export_cmd(
     include_flags: bool = typer.Option(False, "--include-flags", help="Add the packet_flag list column to the ts file."),
     view: str = typer.Option(None, "--view", help="The flow view to export when the dataset holds several."),
 ) -> None:
-    """Export a dataset in the authors' released layout (one stat and one ts CSV)."""
-    from uavcas.atomic import ensure_out_dir
+    """Export a dataset in the authors' released layout (one stat and one ts CSV), one row per host
+    pair: 5-tuple flows are merged into host pairs from their packet sequences."""
     from uavcas.dataset.parquet import read_flows
     from uavcas.dataset.read import select_view
-    from uavcas.dataset.uavcas_csv import write_layout
+    from uavcas.dataset.uavcas_csv import layout_rows, write_layout
 
     if fmt != "uavcas-csv":
         raise fail(f"--format: {fmt!r} is not supported (uavcas-csv)")
@@ -240,15 +241,15 @@ def export_cmd(
     if not path.is_file():
         raise fail(f"{dataset_dir}: no flows.parquet (not a dataset directory)")
     try:
-        ensure_out_dir(out)
-        df = read_flows(path)
+        df = read_flows(path)  # write_layout creates --out once the rows are known (a refusal writes nothing)
         standard = df.attrs.get("feature_standard")
         df = select_view(df, view)
         df.attrs["feature_standard"] = standard
+        df, merged = layout_rows(df)  # the authors' rows are host pairs
         w = write_layout(df, out, embed_config=embed_config, include_flags=include_flags)
     except _errors() as exc:
         raise fail(str(exc)) from None
-    _warn(w.notes)
+    _warn(merged + w.notes)
     console.print(f"wrote {w.stat} ({w.n_stat} flows) and {w.ts} ({w.n_ts} flows)", highlight=False)
 
 

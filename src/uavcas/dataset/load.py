@@ -2,7 +2,8 @@
 
     X, y, groups, meta = uavcas.load_dataset("ds", view="5tuple", features="cic")
 
-- `X`: DataFrame of the feature columns only (a feature set of `uavcas.schema`, or the columns
+- `X`: DataFrame of the feature columns only (a feature set of `uavcas.schema`: for the window-host
+  view, episodes, its own set `schema.EPISODE_FEATURE_SETS`; or the columns
   given; `context=True` adds the dataset's `ctx_*` context columns, what `baseline("context")`
   learns from), NaN and inf (a rate over a zero duration) set to 0 as the benchmark does;
 - `y`: the class of each flow (`label`, 'Benign' or an attack class);
@@ -40,16 +41,15 @@ def load_dataset(path: str | Path, view: str | None = None, features: str | Iter
     `context` appends the context columns (`schema.CONTEXT_FEATURES`; an error when the dataset
     has none).
     """
-    from uavcas.ids.features import context_matrix, finite_features, resolve_features
-    from uavcas.schema import CONTEXT_FEATURES
+    from uavcas.ids.features import context_columns, context_matrix, finite_features, resolve_features
 
     df = load_any(path, fmt, view=view).reset_index(drop=True)
     if "label" not in df.columns:
         raise ValueError(f"{path}: no 'label' column")
     cols = resolve_features(df, features)
     if context:
-        context_matrix(df.head(0))  # refuses a dataset without the columns
-        cols = cols + [c for c in CONTEXT_FEATURES if c not in cols]
+        context_matrix(df.head(1))  # refuses a dataset without the columns
+        cols = cols + [c for c in context_columns(df) if c not in cols]
     X = pd.DataFrame(finite_features(df, cols), columns=cols, index=df.index)
     groups = df["run_id"].astype(str).rename("run_id") if "run_id" in df.columns else pd.Series(
         df.index.astype(str), index=df.index, name="run_id")

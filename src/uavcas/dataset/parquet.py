@@ -8,7 +8,8 @@ columns: seq_time_s list<float64>, seq_size list<int32>, seq_flags list<int16>, 
 (+1 forward, -1 backward), seq_effect list<string> (one of vocabulary.EFFECTS per packet); the
 47 features of the dataset's standard float64 (`schema.feature_columns`); attack_packets and
 attack_packets_<family> int64, attack_fraction float64; label_<family> bool; label, label_source string;
-the context columns (`schema.CONTEXT_FEATURES`, all or none) float64. Any column may hold nulls
+the context columns (`schema.CONTEXT_FEATURES`, all or none) float64. A window-host shard
+(episodes, `uavcas.labels.episodes`) has its own columns instead: `episode_arrow_schema`. Any column may hold nulls
 where the source did not carry the value (an imported CSV has no ports, for instance).
 
 Files are written from Arrow arrays without pandas metadata, so plain `pandas.read_parquet` reads
@@ -32,10 +33,14 @@ from uavcas.schema import (
     CONTEXT_FEATURES,
     COUNT_COLUMNS,
     DEFAULT_STANDARD,
+    EPISODE_CONTEXT_FEATURES,
+    EPISODE_ID_COLUMNS,
+    EPISODE_PACKET_UNITS,
     ID_COLUMNS,
     LABEL_COLUMNS,
     SEQUENCE_COLUMNS,
     TRUTH_COLUMNS,
+    episode_feature_columns,
     feature_columns,
 )
 
@@ -92,6 +97,30 @@ def arrow_schema(standard: str = DEFAULT_STANDARD, context: bool = False) -> pa.
 
 
 COLUMNS: tuple[str, ...] = tuple(arrow_schema().names)
+_EPISODE_ID_TYPES = {**_ID_TYPES, "host": pa.string(), "host_ip": pa.string(), "window": pa.int64()}
+# counts of packets, bytes, peers, ports and flows are integers; rates, shares, spans and summaries floats
+_EPISODE_INT_UNITS = ("packets", "bytes", "hosts", "ports", "flows")
+
+
+def episode_arrow_schema(standard: str = DEFAULT_STANDARD, context: bool = False) -> pa.Schema:
+    """The columns of a window-host shard (`uavcas.labels.episodes`): identity, axes, packets,
+    the episode features (`schema.episode_feature_columns`), the summarised context columns
+    when `context`, then the same truth and label columns as flows."""
+    fields = [pa.field(c, _EPISODE_ID_TYPES[c]) for c in EPISODE_ID_COLUMNS]
+    fields += [pa.field(c, _AXIS_TYPES[c]) for c in AXIS_COLUMNS]
+    fields += [pa.field("packets", pa.int64())]
+    fields += [pa.field(c, pa.int64() if EPISODE_PACKET_UNITS.get(c) in _EPISODE_INT_UNITS else pa.float64())
+               for c in episode_feature_columns(standard)]
+    fields += [pa.field(c, pa.float64()) for c in (EPISODE_CONTEXT_FEATURES if context else ())]
+    fields += [pa.field(c, pa.float64() if c == "attack_fraction" else pa.int64()) for c in TRUTH_COLUMNS]
+    fields += [pa.field(c, pa.bool_()) for c in LABEL_COLUMNS]
+    fields += [pa.field("label", pa.string()), pa.field("label_source", pa.string())]
+    return pa.schema(fields)
+
+
+def is_episode_frame(df: pd.DataFrame) -> bool:
+    """A window-host frame (rows are node-windows, `host` names the node), not a flow frame."""
+    return "host" in df.columns
 
 
 def to_table(df: pd.DataFrame, meta: dict | None = None, standard: str | None = None) -> pa.Table:
@@ -101,11 +130,13 @@ def to_table(df: pd.DataFrame, meta: dict | None = None, standard: str | None = 
     context columns are written when `df` has them (all of them, or none).
     """
     standard = standard or df.attrs.get("feature_standard", DEFAULT_STANDARD)
-    ctx = [c for c in CONTEXT_FEATURES if c in df.columns]
-    if ctx and len(ctx) != len(CONTEXT_FEATURES):
-        missing = [c for c in CONTEXT_FEATURES if c not in df.columns]
+    episodes = is_episode_frame(df)
+    all_ctx = EPISODE_CONTEXT_FEATURES if episodes else CONTEXT_FEATURES
+    ctx = [c for c in all_ctx if c in df.columns]
+    if ctx and len(ctx) != len(all_ctx):
+        missing = [c for c in all_ctx if c not in df.columns]
         raise ValueError(f"flow frame has some context columns but lacks {missing}")
-    schema = arrow_schema(standard, context=bool(ctx))
+    schema = (episode_arrow_schema if episodes else arrow_schema)(standard, context=bool(ctx))
     missing = [c for c in schema.names if c not in df.columns]
     if missing:
         raise ValueError(f"flow frame lacks schema columns ({standard} features): {missing}")

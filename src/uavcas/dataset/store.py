@@ -28,7 +28,17 @@ import pyarrow.parquet as pq
 
 from uavcas.atomic import atomic_write_text, ensure_out_dir
 from uavcas.extract import ShardInfo, extract
-from uavcas.schema import CLASSES, CONTEXT_FEATURES, EFFECTS, SCHEMA_VERSION
+from uavcas.schema import (
+    CLASSES,
+    CONTEXT_FEATURES,
+    EFFECTS,
+    EPISODE_CONTEXT_FEATURES,
+    EPISODE_FLOW_SUBSETS,
+    EPISODE_PACKET_UNITS,
+    EPISODE_STATS,
+    EPISODE_VIEW,
+    SCHEMA_VERSION,
+)
 from uavcas.versions import package_versions
 
 from .parquet import META_KEY, table_meta, table_standard, to_table, write_table
@@ -49,9 +59,18 @@ def extract_run(run_dir: Path, out_dir: Path, **options: Any) -> ShardInfo:
     shard = extract(run_dir, **options)
     out_dir = ensure_out_dir(out_dir)  # only once there is a shard to write: bad input leaves nothing
     with _locked(out_dir):
+        _check_unit(out_dir, shard.info.run_id, episodes="host" in shard.frame.columns)
         write_table(to_table(shard.frame, meta=asdict(shard.info), standard=shard.info.features), out_dir / "shards" / f"{shard.info.run_id}.parquet")
         rebuild(out_dir)
     return shard.info
+
+
+def _check_unit(out_dir: Path, run_id: str, episodes: bool) -> None:
+    """Refuse, before anything is written, a shard of flows among episode shards or the reverse."""
+    for path in sorted((out_dir / "shards").glob("*.parquet")):
+        if path.stem != run_id and (pq.read_schema(path).get_field_index("host") >= 0) != episodes:
+            raise DatasetError(f"{out_dir}: holds {'flow' if episodes else EPISODE_VIEW} shards; a dataset holds flows or "
+                               f"{EPISODE_VIEW} episodes, not both: extract into another --out")
 
 
 @contextlib.contextmanager
@@ -74,7 +93,14 @@ def rebuild(out_dir: Path) -> dict:
     if len(standards) > 1:
         raise DatasetError(f"{out_dir}: shards of different feature standards {standards}; extract every run with one --features")
     standard = standards[0]
-    with_ctx = {t.schema.get_field_index(CONTEXT_FEATURES[0]) >= 0 for t in tables}
+    # episodes (window-host) and flows are different units with different columns: one per dataset
+    episodes = {t.schema.get_field_index("host") >= 0 for t in tables}
+    if len(episodes) > 1:
+        raise DatasetError(f"{out_dir}: holds flow shards, and a {EPISODE_VIEW} shard would mix episodes with flows; "
+                           f"extract the {EPISODE_VIEW} view into another --out")
+    episode = episodes == {True}
+    with_ctx = {t.schema.get_field_index((EPISODE_CONTEXT_FEATURES if episode else CONTEXT_FEATURES)[0]) >= 0
+                for t in tables}
     if len(with_ctx) > 1:
         raise DatasetError(f"{out_dir}: some shards have the context columns (ctx_*) and some do not; "
                            "extract every run with the same uavcas version")
@@ -88,9 +114,11 @@ def rebuild(out_dir: Path) -> dict:
         counts[item["values"]] = counts.get(item["values"], 0) + int(item["counts"])
     card = {
         "schema_version": SCHEMA_VERSION,
-        "features": feature_card(standard),
+        "features": feature_card(standard, episodes=episode),
+        # what a row is: a flow, or (window-host) one plan node's traffic in one plan window
+        "unit": "host-window" if episode else "flow",
         # the ctx_* columns (uavcas.flows.context) and their window, null when the shards lack them
-        "context": {"columns": len(CONTEXT_FEATURES), "window_s": runs[0].get("context_window_s")} if with_ctx == {True} else None,
+        "context": {"columns": len(EPISODE_CONTEXT_FEATURES if episode else CONTEXT_FEATURES), "window_s": runs[0].get("context_window_s")} if with_ctx == {True} else None,
         "n_flows": union.num_rows,
         "n_runs": len(shards),
         "n_incomplete_runs": sum(1 for r in runs if r.get("complete") is False),
@@ -125,14 +153,24 @@ def _effect_counts(runs: list[dict]) -> dict[str, int]:
     return out
 
 
-def feature_card(standard: str) -> dict:
-    """The card's record of a feature standard: its name, source and the unit of every column."""
+def feature_card(standard: str, episodes: bool = False) -> dict:
+    """The card's record of a feature standard: its name, source and the unit of every column.
+
+    `episodes`: the window-host view's columns instead (`uavcas.labels.episodes`): packet counts
+    and the mean / max of a subset of the standard's flow features (units of those features)."""
     from uavcas.flows import cic, paper
 
     mod = cic if standard == "cic" else paper
     source = ("CICFlowMeter-4.0 BasicFlow/FlowGenerator (uavcas.flows.cic)" if standard == "cic"
               else "Sripathm2/Collaborative-UAV-Dataset Scripts/6-build_stat_csv.py (uavcas.flows.paper)")
-    return {"standard": standard, "source": source, "units": dict(mod.UNITS)}
+    if not episodes:
+        return {"standard": standard, "source": source, "units": dict(mod.UNITS)}
+    units = dict(EPISODE_PACKET_UNITS)
+    summarised = EPISODE_FLOW_SUBSETS[standard]
+    for feat, stem in summarised.items():
+        units.update({f"{stem}_{s}": mod.UNITS[feat] for s in EPISODE_STATS})
+    return {"standard": standard, "source": f"{EPISODE_VIEW} episodes (uavcas.labels.episodes) of flows by {source}",
+            "summarised": {stem: feat for feat, stem in summarised.items()}, "units": units}
 
 
 def read_card(dataset_dir: Path) -> dict:

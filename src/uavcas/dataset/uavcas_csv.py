@@ -119,8 +119,90 @@ def _fmt_feature(name: str, v: float) -> str:
     return str(int(v)) if name in INT_FEATURES else repr(float(v))
 
 
+HOST_PAIR_VIEWS = ("hostpair", "window-hostpair")
+
+
+def host_pair_rows(df: pd.DataFrame) -> pd.DataFrame:
+    """5-tuple flows -> one row per (run, unordered address pair), from their packet sequences.
+
+    The authors' rows are host pairs; a flood's 5-tuple flows have 1-5 packets each, so exported
+    as they are they fall under the layout's 10-packet minimum and the DoS class vanishes. The
+    sequences (`seq_*`) hold every packet of every flow, so the pair's packets are their union,
+    ordered by time: direction +1 = sent by the string-smaller address (the row's src_ip),
+    flags of non-TCP packets empty, label = the union of its flows' families. Each 5-tuple flow
+    keeps its own capture point (the host-pair view picks one per pair), so a pair's packets may
+    come from several switches, microseconds apart; features are recomputed from the merged
+    sequences with the authors' definitions."""
+    if df.empty:
+        return df
+    t_rel, lens, null = _lists(df["seq_time_s"])
+    if null.any():
+        raise CsvFormatError("the dataset's 5-tuple flows lack packet sequences (seq_*); extract its runs with "
+                             "`uavcas extract RUN --view hostpair` to export host pairs")
+    sizes, _, _ = _lists(df["seq_size"])
+    dirs, _, _ = _lists(df["seq_dir"])
+    flags, _, _ = _lists(df["seq_flags"])
+    src, dst = df["src_ip"].astype(str).to_numpy(), df["dst_ip"].astype(str).to_numpy()
+    src_small = src <= dst
+    small, large = np.where(src_small, src, dst), np.where(src_small, dst, src)
+    pair = pd.DataFrame({"r": df["run_id"].astype(str).to_numpy(), "a": small, "b": large}).groupby(
+        ["r", "a", "b"], sort=False).ngroup().to_numpy(np.int64)
+    n = int(pair.max()) + 1
+    g = np.repeat(np.arange(len(df)), lens)
+    abs_ns = df["first_ts_ns"].to_numpy(np.int64)[g] + np.round(t_rel.astype(np.float64) * 1e9).astype(np.int64)
+    order = np.lexsort((np.arange(g.shape[0]), abs_ns, pair[g]))
+    gp, ns = pair[g][order], abs_ns[order]
+    tcp = df["protocol"].to_numpy(dtype=np.float64, na_value=np.nan) == 6
+    new_dir = np.where((dirs.astype(np.int64) == 1) == src_small[g], 1, -1).astype(np.int8)[order]
+    new_flags = np.where(tcp[g], flags.astype(np.int64), NO_FLAGS).astype(np.int16)[order]
+    plen = np.bincount(gp, minlength=n).astype(np.int64)
+    starts = np.concatenate(([0], np.cumsum(plen))).astype(np.int64)
+    first_ns, last_ns = ns[starts[:-1]], ns[starts[1:] - 1]
+    head = np.unique(pair, return_index=True)[1]  # each pair's first flow (dataset order)
+    out = df.iloc[head].reset_index(drop=True).copy()
+    out["src_ip"], out["dst_ip"] = small[head], large[head]
+    out["src_port"] = out["dst_port"] = out["protocol"] = pd.NA
+    out["flow_id"] = np.arange(n, dtype=np.int64)
+    out["view"] = "hostpair"
+    out["first_ts_ns"], out["first_ts"], out["last_ts"] = first_ns, ns_to_s(first_ns), ns_to_s(last_ns)
+    out["packets"] = plen
+    out["bytes"] = np.bincount(gp, weights=sizes.astype(np.float64)[order], minlength=n).astype(np.int64)
+    out["duration_s"] = (last_ns - first_ns) / 1e9
+    for c, v, t in (("seq_time_s", (ns - first_ns[gp]) / 1e9, pa.float64()), ("seq_size", sizes[order].astype(np.int32), pa.int32()),
+                    ("seq_flags", new_flags, pa.int16()), ("seq_dir", new_dir, pa.int8())):  # fmt: skip
+        out[c] = pd.arrays.ArrowExtensionArray(pa.ListArray.from_arrays(pa.array(starts.astype(np.int32)), pa.array(v, type=t)))
+    fams = []
+    for f in FAMILIES:
+        hit = np.bincount(pair, weights=df[f"label_{f}"].to_numpy(dtype=bool).astype(np.float64), minlength=n) > 0
+        out[f"label_{f}"] = hit
+        fams.append(hit)
+    out["label"] = ["+".join(FAMILY_CLASS[f] for f, h in zip(FAMILIES, hs) if h) or "Benign" for hs in zip(*fams)]
+    return out
+
+
+def layout_rows(df: pd.DataFrame) -> tuple[pd.DataFrame, list[str]]:
+    """The rows to export, at the authors' granularity (host pairs), and what was done to get them.
+
+    Host-pair views go as they are; 5-tuple flows are merged into host pairs (`host_pair_rows`);
+    episodes (window-host) are no flows and have no sequences: refused."""
+    views = set(df["view"].dropna().astype(str)) if "view" in df.columns else set()
+    if views <= set(HOST_PAIR_VIEWS):  # host pairs, or rows of an import (no view)
+        return df, []
+    if views == {"5tuple"}:
+        merged = host_pair_rows(df)
+        merged.attrs["feature_standard"] = None  # the flows' features do not describe a pair: recomputed
+        return merged, [f"{len(df)} 5-tuple flows merged into {len(merged)} host pairs (the authors' rows), from their "
+                        "packet sequences; each 5-tuple kept its own capture point"]
+    raise CsvFormatError(f"the uavcas-csv layout holds host-pair flows, not {', '.join(sorted(views))} rows; extract "
+                         "with `uavcas extract RUN --view hostpair` (or `uavcas campaign run --view hostpair`)")
+
+
 def write_layout(df: pd.DataFrame, out_dir: Path, embed_config: bool = False, include_flags: bool = False) -> Written:
-    """Write `df` (our dataset's rows, one view) as the authors' stat and ts CSVs in `out_dir`."""
+    """Write `df` (flows with sequences, one view) as the authors' stat and ts CSVs in `out_dir`,
+    row for row: the ts rows are the flows of >= 2 packets and the stat rows the ts rows of >= 10,
+    in the same order. `uavcas export` first brings the rows to host pairs (`layout_rows`)."""
+    if "host" in df.columns:
+        raise CsvFormatError("window-host rows (episodes) have no packet sequences: the layout holds host-pair flows")
     out_dir = ensure_out_dir(out_dir)
     df = df.reset_index(drop=True)
     n = len(df)

@@ -25,19 +25,30 @@ class MetadataLeakError(ValueError):
 
 
 def feature_sets() -> dict[str, tuple[str, ...]]:
-    """Named feature sets, from the schema (its standards; else its one list, named 'cic')."""
-    return dict(getattr(schema, "FEATURE_STANDARDS", None) or {"cic": schema.FEATURES})
+    """Named feature sets, from the schema (its standards; else its one list, named 'cic'), and
+    the episode view's (`schema.EPISODE_FEATURE_SETS`, 'window-host-cic', 'window-host-paper')."""
+    return {**(getattr(schema, "FEATURE_STANDARDS", None) or {"cic": schema.FEATURES}), **schema.EPISODE_FEATURE_SETS}
 
 
 def known_features() -> set[str]:
-    return set(schema.FEATURES).union(*feature_sets().values(), schema.CONTEXT_FEATURES)
+    return set(schema.FEATURES).union(*feature_sets().values(), schema.CONTEXT_FEATURES, schema.EPISODE_CONTEXT_FEATURES)
+
+
+def is_episode_table(df: pd.DataFrame) -> bool:
+    """Rows of the window-host view (episodes: one node in one plan window), not flows."""
+    return "view" in df.columns and len(df) > 0 and bool((df["view"].astype(str) == schema.EPISODE_VIEW).all())
+
+
+def context_columns(df: pd.DataFrame) -> tuple[str, ...]:
+    """The context columns of `df`'s kind of row: the flows' ctx_*, or their episode summaries."""
+    return schema.EPISODE_CONTEXT_FEATURES if is_episode_table(df) else schema.CONTEXT_FEATURES
 
 
 def check_feature_columns(columns: Iterable[str]) -> list[str]:
     """Return `columns` as a list if every one is a schema feature; raise otherwise."""
     cols = list(columns)
     known = known_features()
-    meta = [c for c in cols if c in schema.METADATA_COLUMNS]
+    meta = [c for c in cols if c in schema.METADATA_COLUMNS or c in schema.EPISODE_METADATA_COLUMNS]
     other = [c for c in cols if c not in known and c not in meta]
     if meta or other:
         raise MetadataLeakError(f"not flow features (never used by the IDS): {meta + other}")
@@ -49,13 +60,16 @@ def check_feature_columns(columns: Iterable[str]) -> list[str]:
 def resolve_features(df: pd.DataFrame, spec: str | Iterable[str] | None = None) -> list[str]:
     """The feature columns to use on `df`.
 
-    None: the dataset's feature set (`df.attrs['feature_standard']` when it names one, else the first set
-    whose columns `df` all has, else the schema features `df` has); a name: that set, every
+    None: the dataset's feature set (episodes: the window-host set of their flows' standard;
+    `df.attrs['feature_standard']` when it names one, else the first set whose columns `df` all
+    has, else the schema features `df` has); a name: that set, every
     column of which `df` must have; a list: those columns (checked to be features).
     """
     sets = feature_sets()
     if spec is None:
         named = df.attrs.get("feature_standard", df.attrs.get("features"))
+        if is_episode_table(df):
+            named = f"{schema.EPISODE_VIEW}-{named if named in schema.FEATURE_STANDARDS else schema.DEFAULT_STANDARD}"
         if isinstance(named, str) and named in sets:
             spec = named
         else:
@@ -89,9 +103,11 @@ def feature_matrix(df: pd.DataFrame, columns: Iterable[str] | str | None = None)
 
 
 def context_matrix(df: pd.DataFrame) -> np.ndarray:
-    """float32 matrix of the context columns (`schema.CONTEXT_FEATURES`) of `df`."""
-    missing = [c for c in schema.CONTEXT_FEATURES if c not in df.columns]
+    """float32 matrix of the context columns (`schema.CONTEXT_FEATURES`, or their episode
+    summaries for window-host rows: `context_columns`) of `df`."""
+    cols = context_columns(df)
+    missing = [c for c in cols if c not in df.columns]
     if missing:
         raise ValueError(f"the dataset has no context columns ({len(missing)} ctx_* missing): extract its runs "
                          "with this uavcas (`uavcas extract RUN_DIR --out DIR`) to add them")
-    return feature_matrix(df, list(schema.CONTEXT_FEATURES))
+    return feature_matrix(df, list(cols))
