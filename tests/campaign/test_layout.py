@@ -4,7 +4,7 @@ import json
 
 import pytest
 
-from uavcas.campaign import CampaignDir, CampaignError, read_manifest
+from uavcas.campaign import CampaignDir, CampaignError, Extraction, read_manifest
 from uavcas.scenario import manifest
 
 
@@ -46,26 +46,41 @@ def test_only_done_runs_keep_their_shards(tmp_path):
     assert not cdir.is_done(1) and not cdir.shard_path(1).exists()
 
 
-def test_a_resumed_campaign_keeps_its_view(tmp_path):
+def test_a_resumed_campaign_keeps_its_view_and_termination(tmp_path):
     cdir = CampaignDir(tmp_path)
-    cdir.bind_view("window-host")
-    cdir.bind_view("window-host")  # the same view: resume
-    with pytest.raises(CampaignError, match="--view window-host, not 5tuple"):
-        cdir.bind_view("5tuple")
+    cdir.bind_extraction(Extraction(view="window-host"))
+    cdir.bind_extraction(Extraction(view="window-host", termination="connection"))  # the same (default): resume
+    with pytest.raises(CampaignError, match="--view window-host --termination connection, not --view 5tuple"):
+        cdir.bind_extraction(Extraction(view="5tuple"))
+    with pytest.raises(CampaignError, match="not --view window-host --termination cic"):
+        cdir.bind_extraction(Extraction(view="window-host", termination="cic"))
+    with pytest.raises(ValueError, match="--termination: the hostpair view has no termination policy"):
+        Extraction(view="hostpair", termination="cic")
+    with pytest.raises(ValueError, match="--view: 'bogus' is not one of"):
+        Extraction(view="bogus")
 
 
-def test_a_campaign_from_before_the_view_was_recorded_is_checked_by_its_shards(tmp_path):
+def _shard_meta(cdir, index, meta):
     import pyarrow as pa
     import pyarrow.parquet as pq
 
+    cdir.run_dir(index).mkdir(parents=True)
+    cdir.mark_done(index, {})
+    cdir.shard_path(index).parent.mkdir(exist_ok=True)
+    t = pa.table({"x": [1]}).replace_schema_metadata({b"uavcas": json.dumps(meta).encode()})
+    pq.write_table(t, cdir.shard_path(index))
+
+
+def test_a_campaign_from_before_the_extraction_was_recorded_is_checked_by_its_shards(tmp_path):
     cdir = CampaignDir(tmp_path)
-    cdir.run_dir(0).mkdir(parents=True)
-    cdir.mark_done(0, {})
-    cdir.shard_path(0).parent.mkdir()
-    t = pa.table({"x": [1]}).replace_schema_metadata({b"uavcas": json.dumps({"view": "5tuple"}).encode()})
-    pq.write_table(t, cdir.shard_path(0))
-    with pytest.raises(CampaignError, match="--view 5tuple, not hostpair"):
-        cdir.bind_view("hostpair")
-    assert not cdir.view_path.exists()
-    cdir.bind_view("5tuple")
-    assert cdir.view_path.read_text() == "5tuple\n"
+    _shard_meta(cdir, 0, {"view": "5tuple", "flow_rules": {"termination": "connection"}})
+    with pytest.raises(CampaignError, match="--view 5tuple --termination connection, not --view hostpair"):
+        cdir.bind_extraction(Extraction(view="hostpair"))
+    assert not cdir.extraction_path.exists()
+    cdir.bind_extraction(Extraction(view="5tuple"))
+    assert json.loads(cdir.extraction_path.read_text()) == {"view": "5tuple", "termination": "connection"}
+    # a shard cut by the rules before the termination policies records none: refused
+    old = CampaignDir(tmp_path / "old")
+    _shard_meta(old, 0, {"view": "5tuple", "flow_rules": {"fin_rst": True}})
+    with pytest.raises(CampaignError, match="--termination None, not --view 5tuple --termination connection"):
+        old.bind_extraction(Extraction())

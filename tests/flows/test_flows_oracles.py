@@ -19,12 +19,14 @@ WHOLE = FlowConfig(termination="timeout", idle_timeout_s=0, active_timeout_s=0)
 
 
 @pytest.mark.shared
-def test_counts_equal_nfstream(shared_data):
+@pytest.mark.parametrize("cfg", [FlowConfig(), NFSTREAM], ids=["connection", "timeout"])
+def test_counts_equal_nfstream(shared_data, cfg):
+    # the default policy (one TCP connection, one flow) and nfstream's own timeouts alike
     pcaps = sorted((shared_data / "pcaps" / "nfstream-tests").glob("*.pcap"))
     assert len(pcaps) == 5
     for pcap in pcaps:
         ref = pd.read_csv(f"{pcap}.nfstream_result.csv")
-        df = extract_flows([pcap], NFSTREAM, sequences=False).frame
+        df = extract_flows([pcap], cfg, sequences=False).frame
         ours = sorted(zip(df.packets.tolist(), df.bytes.tolist()))
         theirs = sorted(zip(ref.bidirectional_packets.tolist(), ref.bidirectional_bytes.tolist()))
         assert ours == theirs, pcap.name

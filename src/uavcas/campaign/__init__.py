@@ -2,12 +2,13 @@
 
 from .layout import CampaignDir, CampaignError, read_manifest
 from .run import CampaignResult, run_campaign
-from .task import RunOutcome, execute_entry
+from .task import Extraction, RunOutcome, execute_entry
 
 __all__ = [
     "CampaignDir",
     "CampaignError",
     "CampaignResult",
+    "Extraction",
     "RunOutcome",
     "execute_entry",
     "read_manifest",

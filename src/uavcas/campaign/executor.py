@@ -16,7 +16,7 @@ from uavcas.scenario import ManifestEntry
 
 from .layout import CampaignDir
 from .retry import Retries
-from .task import RunOutcome, execute_entry
+from .task import Extraction, RunOutcome, execute_entry
 
 
 def run_local(
@@ -26,9 +26,8 @@ def run_local(
     profile: str | None,
     retries: int,
     on_retry: Callable[[RunOutcome, int], None] | None = None,
-    min_attack_fraction: float = 0.0,
+    extraction: Extraction = Extraction(),
     fidelity: str = "flag",
-    view: str = "5tuple",
 ) -> Iterator[RunOutcome]:
     """Run entries `jobs` at a time into their run directories; retry a failure `retries` times
     (and a run whose fidelity failed, with `fidelity="retry"`: see `task.execute_entry`)."""
@@ -39,8 +38,8 @@ def run_local(
     def submit(pool: ThreadPoolExecutor, e: ManifestEntry) -> Future:
         tries.started(e.index)
         cdir.reset(e.index)
-        return pool.submit(execute_entry, e, str(cdir.run_dir(e.index)), profile, view=view,
-                           min_attack_fraction=min_attack_fraction, fidelity=fidelity)
+        return pool.submit(execute_entry, e, str(cdir.run_dir(e.index)), profile, extraction=extraction,
+                           fidelity=fidelity)
 
     with ThreadPoolExecutor(max_workers=max(1, jobs)) as pool:
         running: set[Future] = set()
@@ -63,9 +62,8 @@ def run_dask(
     retries: int,
     on_retry: Callable[[RunOutcome, int], None] | None = None,
     connect_timeout_s: float = 30.0,
-    min_attack_fraction: float = 0.0,
+    extraction: Extraction = Extraction(),
     fidelity: str = "flag",
-    view: str = "5tuple",
 ) -> Iterator[RunOutcome]:
     """Submit every entry to the scheduler at `address` (tcp://HOST:8786); yield as they finish."""
     from distributed import Client, as_completed
@@ -82,8 +80,7 @@ def run_dask(
                 None,
                 profile,
                 return_files=True,
-                view=view,
-                min_attack_fraction=min_attack_fraction,
+                extraction=extraction,
                 fidelity=fidelity,
                 resources={"emulator": 1},
                 pure=False,

@@ -1,7 +1,7 @@
 """On-disk layout of a campaign inside its dataset directory, and what "done" means.
 
     DATASET_DIR/campaign.jsonl        the manifest being worked on (written once, then checked)
-    DATASET_DIR/campaign_view.txt     the view every run is extracted to (written once, then checked)
+    DATASET_DIR/campaign_extraction.json  the view and termination policy runs are extracted with (likewise)
     DATASET_DIR/runs/<index>/         one run: plan.json, run.json, attacks.jsonl, shaping.jsonl,
                                       pcap/ (local runs), outcome.json
     DATASET_DIR/runs/<index>/DONE     written last, by rename: the run and its shard are complete
@@ -18,9 +18,13 @@ import json
 import shutil
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from uavcas.atomic import atomic_write_text
 from uavcas.scenario import ManifestEntry
+
+if TYPE_CHECKING:
+    from .task import Extraction
 
 
 class CampaignError(ValueError):
@@ -36,25 +40,32 @@ class CampaignDir:
         return self.root / "campaign.jsonl"
 
     @property
-    def view_path(self) -> Path:
-        return self.root / "campaign_view.txt"
+    def extraction_path(self) -> Path:
+        return self.root / "campaign_extraction.json"
 
-    def bind_view(self, view: str) -> None:
-        """Record the extraction view; resuming with another view is refused (its shards would
-        mix two descriptions of the traffic, or flows with episodes). A campaign begun before the
-        view was recorded is checked against the views its DONE shards were extracted with."""
-        if self.view_path.exists():
-            views = {self.view_path.read_text().strip()}
+    def bind_extraction(self, extraction: "Extraction") -> None:
+        """Record how runs are extracted (view and termination policy); resuming with another is
+        refused (its shards would mix two descriptions of the traffic, or flows with episodes). A
+        campaign begun before this was recorded is checked against its DONE shards."""
+        want = {"view": extraction.view, "termination": extraction.policy}
+        if self.extraction_path.exists():
+            have = [json.loads(self.extraction_path.read_text())]
         else:
             from uavcas.dataset.parquet import table_meta
 
-            views = {table_meta(s).get("view", "5tuple") for s in sorted((self.root / "shards").glob("*.parquet"))
-                     if s.stem.isdigit() and self.is_done(int(s.stem))}
-        if views and views != {view}:
-            raise CampaignError(f"{self.root} holds a campaign extracted with --view {', '.join(sorted(views))}, "
-                                f"not {view}; resume it with that view or use another --out")
-        if not self.view_path.exists():
-            atomic_write_text(self.view_path, view + "\n")
+            metas = [table_meta(s) for s in sorted((self.root / "shards").glob("*.parquet"))
+                     if s.stem.isdigit() and self.is_done(int(s.stem))]
+            # shards from before the termination policies record none (their flows were cut at
+            # the first backward FIN): they differ from any policy of today
+            have = [{"view": m.get("view", "5tuple"), "termination": (m.get("flow_rules") or {}).get("termination")}
+                    for m in metas]
+        for h in have:
+            if h != want:
+                raise CampaignError(
+                    f"{self.root} holds a campaign extracted with --view {h['view']} --termination {h['termination']}, "
+                    f"not --view {want['view']} --termination {want['termination']}; resume it with those or use another --out")
+        if not self.extraction_path.exists():
+            atomic_write_text(self.extraction_path, json.dumps(want) + "\n")
 
     def run_dir(self, index: int) -> Path:
         return self.root / "runs" / str(index)

@@ -16,7 +16,7 @@ from uavcas.scenario import ManifestEntry
 
 from .executor import run_dask, run_local
 from .layout import CampaignDir, CampaignError
-from .task import RunOutcome
+from .task import Extraction, RunOutcome
 
 DEFAULT_RETRIES = 2
 FIDELITY_POLICIES = ("flag", "retry")  # what becomes of a run whose fidelity audit failed
@@ -59,9 +59,8 @@ def run_campaign(
     profile: str | None = None,
     retries: int = DEFAULT_RETRIES,
     console: Console | None = None,
-    min_attack_fraction: float = 0.0,
+    extraction: Extraction = Extraction(),
     fidelity: str = "flag",
-    view: str = "5tuple",
 ) -> CampaignResult:
     from uavcas.dataset.store import rebuild
 
@@ -75,7 +74,7 @@ def run_campaign(
     cdir = CampaignDir(Path(out_dir))
     cdir.root.mkdir(parents=True, exist_ok=True)
     cdir.bind_manifest(entries)
-    cdir.bind_view(view)  # a resumed campaign keeps its view: rows of two views never mix
+    cdir.bind_extraction(extraction)  # a resumed campaign keeps its view and termination: rows never mix
     cdir.prune_orphan_shards()
     result = CampaignResult(out_dir=cdir.root)
     todo = []
@@ -103,11 +102,9 @@ def run_campaign(
 
             progress.update(task, status=status())
             outcomes = (
-                run_dask(todo, scheduler, profile, retries, on_retry, min_attack_fraction=min_attack_fraction,
-                         fidelity=fidelity, view=view)
+                run_dask(todo, scheduler, profile, retries, on_retry, extraction=extraction, fidelity=fidelity)
                 if scheduler
-                else run_local(todo, cdir, jobs, profile, retries, on_retry, min_attack_fraction=min_attack_fraction,
-                               fidelity=fidelity, view=view)
+                else run_local(todo, cdir, jobs, profile, retries, on_retry, extraction=extraction, fidelity=fidelity)
             )
             for out in outcomes:
                 if out.ok:

@@ -24,6 +24,40 @@ from .worker import WorkerRequest, realize_in_child
 RUN_SLACK_S = 120.0  # set-up, tear-down and extraction on top of the scenario's own duration
 
 
+@dataclass(frozen=True)
+class Extraction:
+    """How every run of a campaign is extracted (`uavcas.extract.extract`'s options): one value,
+    recorded with the campaign so that a resumed campaign cannot mix two kinds of rows."""
+
+    view: str = "5tuple"
+    termination: str | None = None  # None: the view's default (`uavcas.flows.termination`)
+    labels: str = "ours"
+    min_attack_fraction: float = 0.0
+
+    def __post_init__(self) -> None:
+        from uavcas.extract import EXTRACT_VIEWS
+        from uavcas.flows import TERMINATIONS
+        from uavcas.flows.assemble import HOST_VIEWS
+
+        if self.view not in EXTRACT_VIEWS:
+            raise ValueError(f"--view: {self.view!r} is not one of {', '.join(EXTRACT_VIEWS)}")
+        if self.termination is not None and self.termination not in TERMINATIONS:
+            raise ValueError(f"--termination: {self.termination!r} is not one of {', '.join(TERMINATIONS)}")
+        if self.termination is not None and self.view in HOST_VIEWS:
+            raise ValueError(f"--termination: the {self.view} view has no termination policy")
+
+    @property
+    def policy(self) -> str | None:
+        """The termination policy in force (None for the host-pair views, which have none)."""
+        from uavcas.flows.assemble import DEFAULT_TERMINATION, HOST_VIEWS
+
+        return None if self.view in HOST_VIEWS else self.termination or DEFAULT_TERMINATION
+
+    def options(self) -> dict:
+        return {"view": self.view, "termination": self.termination, "labels": self.labels,
+                "min_attack_fraction": self.min_attack_fraction}
+
+
 @dataclass
 class RunOutcome:
     index: int
@@ -49,10 +83,8 @@ def execute_entry(
     entry: ManifestEntry | dict,
     run_dir: str | None = None,
     profile: str | None = None,
-    view: str = "5tuple",
-    labels: str = "ours",
+    extraction: Extraction = Extraction(),
     return_files: bool = False,
-    min_attack_fraction: float = 0.0,
     fidelity: str = "flag",
 ) -> RunOutcome:
     """Run one manifest entry into `run_dir` (a temporary directory when None) and extract it.
@@ -81,8 +113,7 @@ def execute_entry(
         if not res.ok:
             out.error = res.error
             return out
-        shard = extract(base, view=view, labels=labels, run_id=str(entry.index),
-                        min_attack_fraction=min_attack_fraction)
+        shard = extract(base, run_id=str(entry.index), **extraction.options())
         buf = io.BytesIO()
         pq.write_table(to_table(shard.frame, meta=asdict(shard.info)), buf, compression="zstd")
         out.shard = buf.getvalue()

@@ -10,7 +10,7 @@ from rich.table import Table
 
 from uavcas.scenario import PRESETS, manifest, parse_shard, select_shard
 
-from .common import atomic_write_text, console, fail
+from .common import TERMINATION_HELP, atomic_write_text, console, fail
 
 campaign_app = typer.Typer(help="Campaigns of scenarios: manifests, runs.", no_args_is_help=True)
 
@@ -54,14 +54,16 @@ def run_cmd(
         help="Leave out flows whose share of attack packets is above 0 but below this (default 0: keep all)."),
     view: str = typer.Option("5tuple", "--view", help="What each run is extracted to: 5tuple, hostpair, window-hostpair "
                                                       "(flows) or window-host (one row per node per plan window)."),
+    termination: str = typer.Option(None, "--termination", help=TERMINATION_HELP),
 ) -> None:
     """Plan, emulate, extract and label every scenario; append each run's shard to the dataset."""
-    from uavcas.campaign import CampaignError, read_manifest, run_campaign
-    from uavcas.extract import EXTRACT_VIEWS
+    from uavcas.campaign import CampaignError, Extraction, read_manifest, run_campaign
     from uavcas.schema import CLASSES
 
-    if view not in EXTRACT_VIEWS:  # before anything is planned or created
-        raise fail(f"--view: {view!r} is not one of {', '.join(EXTRACT_VIEWS)}")
+    try:  # before anything is planned or created
+        extraction = Extraction(view=view, termination=termination, min_attack_fraction=min_attack_fraction)
+    except ValueError as e:
+        raise fail(str(e)) from None
     if preset is not None and manifest_file is not None:
         raise fail("give --preset or --manifest, not both")
     try:
@@ -80,7 +82,7 @@ def run_cmd(
 
             load_profile(profile)
         result = run_campaign(entries, out, jobs=jobs, scheduler=scheduler, profile=profile, retries=retries,
-                              min_attack_fraction=min_attack_fraction, fidelity=fidelity, view=view)
+                              extraction=extraction, fidelity=fidelity)
     except (CampaignError, ValueError) as e:
         raise fail(str(e).splitlines()[0]) from None
     except KeyboardInterrupt:

@@ -10,6 +10,10 @@ from uavcas.atomic import atomic_path, atomic_write_bytes, atomic_write_text  # 
 
 console = Console()
 err_console = Console(stderr=True)
+TERMINATION_HELP = ("How a TCP flow ends: connection (default: one connection one flow; closed on RST or the "
+                    "acknowledged last FIN, its trailing packets within 60 s join it), cic (CICFlowMeter exactly: "
+                    "first backward FIN or RST closes, duplicate forward FIN dropped, no 1-packet flows; reproduces "
+                    "its 'TCP appendix' flows) or timeout (nfstream's: idle/active timeouts only).")
 
 
 def fail(message: str, code: int = 2) -> "typer.Exit":

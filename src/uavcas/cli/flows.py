@@ -9,14 +9,10 @@ from pathlib import Path
 import typer
 from rich.table import Table
 
-from .common import atomic_path, console, err_console, fail
+from .common import TERMINATION_HELP, atomic_path, console, err_console, fail
 
 TABLE_ROWS = 50  # the human-readable table shows this many flows; csv/parquet have them all
 FEATURES_HELP = "Feature standard: cic (CICFlowMeter's definitions, us) or paper (the authors' 47, s)."
-TERMINATION_HELP = ("How a TCP flow ends: connection (default: one connection one flow; closed on RST or the "
-                    "acknowledged last FIN, its trailing packets within 60 s join it), cic (CICFlowMeter exactly: "
-                    "first backward FIN or RST closes, duplicate forward FIN dropped, no 1-packet flows; reproduces "
-                    "its 'TCP appendix' flows) or timeout (nfstream's: idle/active timeouts only).")
 
 
 def _errors():
@@ -78,7 +74,7 @@ def flows_cmd(
     pcaps: list[Path] = typer.Argument(..., help="Capture file(s), pcap or pcapng; several = capture points."),
     view: str = typer.Option("5tuple", "--view", help="Flow key: 5tuple or hostpair (the authors')."),
     features: str = typer.Option("cic", "--features", help=FEATURES_HELP),
-    min_packets: int = typer.Option(None, "--min-packets", help="Drop smaller flows (default 1 for 5tuple, 10 for hostpair)."),
+    min_packets: int = typer.Option(None, "--min-packets", help="Drop smaller flows (default 1 for 5tuple, 2 under --termination cic, 10 for hostpair)."),
     fmt: str = typer.Option("table", "--format", help="table, csv or parquet."),
     out: Path = typer.Option(None, "--out", help="Output file (default: standard output; required for parquet)."),
     allow_truncated: bool = typer.Option(False, "--allow-truncated", help="Keep the packets before a truncation."),

@@ -42,7 +42,8 @@ import numpy as np
 import pandas as pd
 
 from uavcas.attacks import family
-from uavcas.flows.assemble import TCP_ACK, TCP_FIN, TCP_RST, TCP_SYN, Flows
+from uavcas.flows.assemble import Flows
+from uavcas.flows.termination import TCP_ACK, TCP_FIN, TCP_RST, TCP_SYN
 from uavcas.flows.packets import PacketTable, address_to_words, ns_to_s
 from uavcas.schema import (
     CONTEXT_FEATURES,
