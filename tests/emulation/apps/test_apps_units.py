@@ -59,7 +59,9 @@ def test_client_log_parse():
             "1700000002.0\tskip\t0\t0\t3\n")
     f = client.parse_log(text)
     assert [x.ok for x in f] == [True, False] and f[0].size_bytes == 1234 and f[1].image == "img002.jpg"
-    assert client.skipped_windows(text) == [3]
+    assert client.skipped_windows(text) == [3] and f[0].local_port is None  # a log from before the port
+    now = client.parse_log("1700000000.5\t200\t1234\t0.05\t41234\timg001.jpg\n")
+    assert now[0].local_port == 41234 and now[0].image == "img001.jpg" and now[0].size_bytes == 1234
 
 
 def test_client_skips_the_windows_its_uav_is_disconnected(tmp_path):
@@ -76,6 +78,8 @@ def test_client_skips_the_windows_its_uav_is_disconnected(tmp_path):
     assert client.skipped_windows(text) == [1, 2]  # one line per skipped window
     fetched = [int((f.t_unix - t0) // 0.25) for f in client.parse_log(text)]
     assert fetched and 0 in fetched and 3 in fetched and not {1, 2} & set(fetched)
+    # curl's local_port is logged (a refused connect to 127.0.0.1:9 still bound a port)
+    assert all(f.local_port is not None for f in client.parse_log(text))
 
 
 def test_flood_pacing_interval_rules_and_quiet_time():

@@ -11,8 +11,10 @@ loop fetches nothing: it logs one `skip` line and sleeps to the end of that wind
 traffic is sent into the void (it would vanish exactly as a blackhole's does). Windows are
 counted from the run's t0 (`ClientSpec.t0_unix`), with bash's microsecond clock.
 
-Log line (tab separated): epoch start, HTTP code (000 = no answer), bytes, seconds, image; or
-epoch, `skip`, 0, 0, the window index for a window skipped while disconnected.
+Log line (tab separated): epoch start, HTTP code (000 = no answer), bytes, seconds, the client's
+TCP port (curl's `local_port`: it names the connection in the captures; 0 when the connect failed),
+image; or epoch, `skip`, 0, 0, the window index for a window skipped while disconnected. Logs
+written before the port was logged (five fields) still parse.
 """
 
 from __future__ import annotations
@@ -52,6 +54,7 @@ class Fetch:
     size_bytes: int
     seconds: float
     image: str
+    local_port: int | None = None  # None: a log from before the port was recorded
 
     @property
     def ok(self) -> bool:
@@ -71,7 +74,7 @@ def render_script(spec: ClientSpec) -> str:
     # Exponential think times, clipped: a bursty but bounded request process.
     thinks = np.clip(rng.exponential(spec.think_mean_s, SEQUENCE_LEN), 0.05, 4 * spec.think_mean_s)
     url = f"http://{spec.uav_ip}:{spec.port}/"
-    fmt = r"%{http_code}\t%{size_download}\t%{time_total}"
+    fmt = r"%{http_code}\t%{size_download}\t%{time_total}\t%{local_port}"
     offline = ""
     if spec.offline_windows:
         # ${EPOCHREALTIME/./}: the epoch in microseconds (bash 5 prints 6 decimals)
@@ -117,10 +120,11 @@ def parse_log(text: str) -> list[Fetch]:
     out = []
     for line in text.splitlines():
         parts = line.split("\t")
-        if len(parts) != 5 or parts[1] == "skip":
+        if len(parts) not in (5, 6) or parts[1] == "skip":
             continue
         try:
-            out.append(Fetch(float(parts[0]), int(parts[1]), int(float(parts[2])), float(parts[3]), parts[4]))
+            port = int(parts[4]) if len(parts) == 6 else None
+            out.append(Fetch(float(parts[0]), int(parts[1]), int(float(parts[2])), float(parts[3]), parts[-1], port))
         except ValueError:
             continue
     return out
