@@ -85,7 +85,7 @@ def rows_of(ctx: TruthContext, p: dict) -> np.ndarray:
     shi, slo = address_to_words(IPS[p["src"]])
     hit = (t["src_lo"] == np.uint64(slo)) & (t["dst_lo"] == np.uint64(address_to_words(IPS[p["dst"]])[1]))
     hit &= (t["sport"] == p["sport"]) & (t["dport"] == p["dport"]) & (t["proto"] == p["proto"])
-    hit &= (t["tcp_flags"] == p["flags"]) & (t["tcp_seq"] == p["seq"]) & (t["ip_id"] == p["ip_id"])
+    hit &= (t["tcp_flags"] == p["flags"]) & (t["tcp_seq"] == p["seq"]) & (t["ip_id"] == p["ip_id"]) & (t["ttl"] == p["ttl"])
     hit &= np.abs(t["ts_s"] - (T0 + p["t"])) < 0.5 * 1e-3 + len(p["at"]) * HOP_S
     assert hit.sum() == len(p["at"]), p
     return hit

@@ -26,6 +26,8 @@
       5961: an old or out-of-window segment is answered with an ACK at once): the pure ACK (no
       payload, no SYN/FIN/RST) on the copy's 5-tuple reversed whose nearest preceding packet of
       the copy's direction at the same capture point is the copy, within DUP_ACK_WITHIN_S of it.
+      The point is the ACK's first (its sender's switch, where the copy was just delivered):
+      further along, the order of the two directions tells nothing about cause.
 """
 
 from __future__ import annotations
@@ -218,14 +220,14 @@ class Replay(AttackFamily):
                | answers(p, without_ack, rst_ack, reverse=True, field="tcp_ack",
                          value=seq[without_ack] + seg_len[without_ack])
                | icmp_errors_quoting(p, made, exact=True)
-               | dup_acks(p, made))
+               | dup_acks(p, made, ctx.followed.hop == 0))
         return ctx.spread(hit) & ~made
 
 
-def dup_acks(p, copies: np.ndarray, within_s: float = DUP_ACK_WITHIN_S) -> np.ndarray:
+def dup_acks(p, copies: np.ndarray, first: np.ndarray, within_s: float = DUP_ACK_WITHIN_S) -> np.ndarray:
     """Pure ACKs answering a copy at once (module docstring, (d)): on the copy's 5-tuple
-    reversed, and the nearest earlier packet of the copy's direction at their capture point is
-    a copy, at most `within_s` before."""
+    reversed, and at the ACK's `first` observation (its sender's switch) the nearest earlier
+    packet of the copy's direction is a copy, at most `within_s` before."""
     import pandas as pd
 
     n = len(p)
@@ -257,7 +259,7 @@ def dup_acks(p, copies: np.ndarray, within_s: float = DUP_ACK_WITHIN_S) -> np.nd
     ts = both["ts"].to_numpy()
     ok &= copies[r[prev]] & (ts - ts[prev] <= round(within_s * 1e9))
     pure = tcp_flags_are(p, TCP_ACK, TCP_ACK | TCP_SYN | TCP_FIN | TCP_RST) & (payload_len(p) == 0)
-    ok &= pure[r]
+    ok &= pure[r] & first[r]
     out[r[ok]] = True
     return out
 
