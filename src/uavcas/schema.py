@@ -18,7 +18,7 @@ from __future__ import annotations
 
 from uavcas import vocabulary as _v
 
-SCHEMA_VERSION = 3  # 2: feature standards, first_ts_ns; 3: context columns (ctx_*)
+SCHEMA_VERSION = 4  # 2: feature standards, first_ts_ns; 3: context columns (ctx_*); 4: provoked effect, provoked_packets
 
 # Direction-independent statistics over all packets of the flow.
 FLOW_FEATURES: tuple[str, ...] = (
@@ -174,8 +174,9 @@ COUNT_COLUMNS: tuple[str, ...] = ("packets", "bytes", "duration_s")
 SEQUENCE_COLUMNS: tuple[str, ...] = ("seq_time_s", "seq_size", "seq_flags", "seq_dir", "seq_effect")
 EFFECTS, ATTACK_EFFECTS = _v.EFFECTS, _v.ATTACK_EFFECTS
 # Per-flow ground truth from the packets' effects (labels/effects.py): attack_fraction is exactly
-# attack_packets / packets; attack_packets_<family> split attack_packets by family.
-TRUTH_COLUMNS: tuple[str, ...] = ("attack_packets", "attack_fraction") + _v.ATTACK_PACKET_COLUMNS
+# attack_packets / packets; provoked_packets are the attack packets whose effect is `provoked`;
+# attack_packets_<family> split attack_packets by family.
+TRUTH_COLUMNS: tuple[str, ...] = ("attack_packets", "attack_fraction", "provoked_packets") + _v.ATTACK_PACKET_COLUMNS
 META_LABEL_COLUMNS: tuple[str, ...] = TRUTH_COLUMNS + LABEL_COLUMNS + ("label", "label_source")
 METADATA_COLUMNS: tuple[str, ...] = ID_COLUMNS + AXIS_COLUMNS + META_LABEL_COLUMNS
 

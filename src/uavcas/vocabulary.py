@@ -52,15 +52,25 @@ LABEL_COLUMNS: tuple[str, ...] = tuple(f"label_{f}" for f in FAMILIES)
 
 # What happened to one captured packet (its ground truth; `uavcas.labels.effects`): an attack
 # made it (flood, replay: an injected copy), the attack moved or dropped it (wormhole: carried
-# over the attacker's detour; blackhole: dropped at the victim's switch), the channel lost it on a
-# shaped link (channel_loss), or nothing did (benign).
-Effect = Literal["benign", "flood", "replay", "blackhole", "wormhole", "channel_loss"]
+# over the attacker's detour; blackhole: dropped at the victim's switch), it exists only because
+# an attack packet did (provoked: the victim's SYN-ACK to a flood SYN, the RST answering that,
+# an ICMP error quoting an attack packet, an answer to an injected copy), the channel lost it on
+# a shaped link (channel_loss), or nothing did (benign). New words go at the end: stored effect
+# codes keep their meaning.
+Effect = Literal["benign", "flood", "replay", "blackhole", "wormhole", "channel_loss", "provoked"]
 EFFECTS: tuple[str, ...] = get_args(Effect)
-# One effect per packet: where several apply, the first of this order wins (a packet an attack
+# One effect per packet: where several apply, the first of this order wins. A packet an attack
 # made stays that packet whatever happens to it later; one carried over a detour and then dropped
-# keeps the detour, so both families of blackhole+wormhole show in its flows).
-EFFECT_PRECEDENCE: tuple[str, ...] = ("replay", "flood", "wormhole", "blackhole", "channel_loss", "benign")
-ATTACK_EFFECTS: tuple[str, ...] = ("flood", "replay", "blackhole", "wormhole")  # count as attack packets
+# keeps the detour, so both families of blackhole+wormhole show in its flows. A provoked packet
+# that a blackhole drops or a wormhole detours shows that other family (so a blackhole+DoS
+# victim's dropped SYN-ACK shows both families in its flow: the SYN is the flood's, the SYN-ACK
+# the blackhole's); a provoked packet lost on the channel is still provoked (the loss is the
+# channel's chance, the packet's existence the attack's).
+EFFECT_PRECEDENCE: tuple[str, ...] = (
+    "replay", "flood", "wormhole", "blackhole", "provoked", "channel_loss", "benign",
+)  # fmt: skip
+# count as attack packets (the family that made, moved, dropped or provoked them)
+ATTACK_EFFECTS: tuple[str, ...] = ("flood", "replay", "blackhole", "wormhole", "provoked")
 # Per-family counts of attack packets in a flow (the family whose attack gave the packet its effect).
 ATTACK_PACKET_COLUMNS: tuple[str, ...] = tuple(f"attack_packets_{f}" for f in FAMILIES)
 

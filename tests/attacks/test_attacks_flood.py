@@ -5,6 +5,7 @@ from __future__ import annotations
 import dataclasses
 
 import numpy as np
+import pandas as pd
 import pytest
 from synth_run import DOS_WINDOW, IPS, N_FLOOD, T0
 
@@ -67,3 +68,103 @@ def test_effect_is_packet_exact_inside_the_window(truth_ctx):
     assert not family("dos").effects(truth_ctx, [later]).any()  # same host pair, outside the window
     wrong_way = dataclasses.replace(w, attacker_ips=w.victim_ips, victim_ips=w.attacker_ips)
     assert not family("dos").effects(truth_ctx, [wrong_way]).any()  # SYN-ACKs alone are no flood
+
+
+# Provoked packets (hand-built tables, tests/labels/hand_truth.py): uav1 floods uav0:80 in [20, 30).
+def _flood_run():
+    from hand_truth import ACK, RST, SYN, icmp_error, pkt
+
+    syn = pkt(21.0, "uav1", "uav0", 1500, 80, SYN, seq=1000, ip_id=1)
+    other = pkt(21.5, "uav1", "uav0", 1501, 81, SYN, seq=0xFFFFFFFF, ip_id=2)  # seq + 1 wraps to 0
+    p = {
+        "syn": syn, "other": other,
+        "synack": pkt(21.001, "uav0", "uav1", 80, 1500, SYN | ACK, seq=5000, ack=1001, ip_id=11),
+        "rst": pkt(21.002, "uav1", "uav0", 1500, 80, RST, seq=1001, ip_id=12),
+        "retx": pkt(22.001, "uav0", "uav1", 80, 1500, SYN | ACK, seq=5000, ack=1001, ip_id=13),
+        # the fifth retransmission, 31 s after the first SYN-ACK: long after the attack's stop
+        "late": pkt(52.001, "uav0", "uav1", 80, 1500, SYN | ACK, seq=5000, ack=1001, ip_id=14),
+        # a retransmission lost on the uav0 - uav1 link (seen at the victim's switch only)
+        "lost": pkt(24.001, "uav0", "uav1", 80, 1500, SYN | ACK, seq=5000, ack=1001, ip_id=15, at=["uav0"]),
+        "wrapped": pkt(21.501, "uav0", "uav1", 81, 1501, SYN | ACK, seq=6000, ack=0, ip_id=16),
+        # the same 5-tuple, an ack that answers no flood SYN: benign
+        "wrong_ack": pkt(23.0, "uav0", "uav1", 80, 1500, SYN | ACK, seq=5000, ack=4242, ip_id=17),
+        "wrong_rst": pkt(23.1, "uav1", "uav0", 1500, 80, RST, seq=999, ip_id=18),
+        # a benign connection between the same hosts in the window: uav1's SYN left before the start
+        "benign_syn": pkt(19.99, "uav1", "uav0", 2000, 80, SYN, seq=300, ip_id=19),
+        "benign_synack": pkt(20.01, "uav0", "uav1", 80, 2000, SYN | ACK, seq=700, ack=301, ip_id=20),
+        # the victim answers a flood SYN on a closed port with an ICMP error quoting it
+        "icmp": icmp_error(21.6, "uav0", "uav1", other, ip_id=21),
+        "icmp_other": icmp_error(21.7, "uav0", "uav1", dict(other, seq=123), ip_id=22),
+        # an answer that came before the SYN (its ports and ack match): no answer
+        "before": pkt(20.5, "uav0", "uav1", 80, 1500, SYN | ACK, seq=5000, ack=1001, ip_id=23),
+    }
+    return p
+
+
+@pytest.mark.parametrize("fam", ["dos", "ddos"])
+def test_flood_provokes_synacks_their_retransmissions_the_rst_and_icmp_errors(fam):
+    from hand_truth import context, rows_of, window
+
+    from uavcas.labels.effects import packet_truth
+    from uavcas.vocabulary import FAMILIES
+
+    p = _flood_run()
+    ctx = context(list(p.values()), [window(fam, "uav1", "uav0", 20.0, 30.0)])
+    truth = packet_truth(ctx)
+
+    def effects(name):
+        rows = rows_of(ctx, p[name])
+        return set(truth.effect_names(rows)), set(truth.family[rows].tolist())
+
+    k = FAMILIES.index(fam)
+    assert effects("syn") == effects("other") == ({"flood"}, {k})
+    for name in ("synack", "rst", "retx", "late", "lost", "wrapped", "icmp"):
+        assert effects(name) == ({"provoked"}, {k}), name
+    for name in ("wrong_ack", "wrong_rst", "benign_syn", "benign_synack", "icmp_other", "before"):
+        assert effects(name) == ({"benign"}, {-1}), name
+    # the lost retransmission is a channel loss when nothing provoked it
+    assert set(packet_truth(context([p["lost"]], [window(fam, "uav1", "uav0", 20.0, 30.0)])).effect_names()) == {
+        "channel_loss"}
+    # the hook itself: only rows outside `made`, and nothing without flood SYNs
+    made = family(fam).effects(ctx, ctx.log.of_family(fam))
+    prov = family(fam).provoked(ctx, ctx.log.of_family(fam), made)
+    assert not (prov & made).any() and prov.sum() == sum(len(p[n]["at"]) for n in
+                                                         ("synack", "rst", "retx", "late", "lost", "wrapped", "icmp"))
+    assert not family(fam).provoked(ctx, [], np.zeros(ctx.n, dtype=bool)).any()
+
+
+def test_provoked_beyond_the_bound_is_benign():
+    from hand_truth import ACK, SYN, context, pkt, rows_of, window
+
+    from uavcas.attacks.answers import ANSWER_WITHIN_S
+    from uavcas.labels.effects import packet_truth
+
+    syn = pkt(21.0, "uav1", "uav0", 1500, 80, SYN, seq=1000, ip_id=1)
+    far = pkt(21.0 + ANSWER_WITHIN_S + 1.0, "uav0", "uav1", 80, 1500, SYN | ACK, seq=5000, ack=1001, ip_id=2)
+    ctx = context([syn, far], [window("dos", "uav1", "uav0", 20.0, 30.0)])
+    assert set(packet_truth(ctx).effect_names(rows_of(ctx, far))) == {"benign"}
+
+
+def test_a_blackhole_drop_of_a_provoked_synack_shows_the_blackhole_and_the_flow_both_families():
+    """Blackhole+DoS on uav0: the blackhole starts at 25 s; a SYN-ACK the victim sends then is
+    dropped at its switch: it shows the blackhole, its flow holds the flood SYN too."""
+    from hand_truth import ACK, SYN, context, pkt, rows_of, window
+
+    from uavcas.flows import FlowConfig
+    from uavcas.flows.assemble import assemble
+    from uavcas.labels.effects import packet_truth
+    from uavcas.labels.label import label_flows
+
+    syn = pkt(24.9, "uav1", "uav0", 1500, 80, SYN, seq=1000, ip_id=1)
+    synack = pkt(24.901, "uav0", "uav1", 80, 1500, SYN | ACK, seq=5000, ack=1001, ip_id=2)
+    dropped = pkt(25.901, "uav0", "uav1", 80, 1500, SYN | ACK, seq=5000, ack=1001, ip_id=3, at=["uav0"])
+    ctx = context([syn, synack, dropped], [window("dos", "uav1", "uav0", 20.0, 30.0),
+                                            window("blackhole", "uav2", "uav0", 25.0, 30.0)])
+    truth = packet_truth(ctx)
+    assert set(truth.effect_names(rows_of(ctx, synack))) == {"provoked"}
+    assert set(truth.effect_names(rows_of(ctx, dropped))) == {"blackhole"}
+    fl = assemble(ctx.packets, FlowConfig(view="5tuple"))
+    frame = pd.DataFrame({"flow_id": np.arange(fl.n_flows)})
+    (row,) = label_flows(fl, frame, ctx.log, truth).frame.itertuples()
+    assert row.label == "Blackhole+DoS" and row.attack_packets == 3 and row.provoked_packets == 1
+    assert row.attack_packets_dos == 2 and row.attack_packets_blackhole == 1

@@ -42,3 +42,99 @@ def test_effect_matches_each_injection_within_the_tolerance(truth_ctx):
     assert injected_packets(truth_ctx.packets, late).sum() == 0
     other_ttl = AttackLog(log.windows, tuple(dataclasses.replace(i, ttl=i.ttl + 1) for i in log.injections))
     assert injected_packets(truth_ctx.packets, other_ttl).sum() == 0
+
+
+# Provoked packets (hand-built tables, tests/labels/hand_truth.py): uav2 replays uav3's traffic in
+# [10, 20); copies leave uav2's switch with TTL - 5 (and seq + k for TCP).
+def _replay_run():
+    from hand_truth import ACK, PSH, RST, SYN, icmp_error, pkt
+
+    via = ["uav2", "bs0", "uav3"]  # a copy for uav3 enters at the replayer's switch
+    orig_syn = pkt(12.0, "bs0", "uav3", 41000, 80, SYN, seq=5000, ip_id=100)
+    copy_syn = pkt(13.0, "bs0", "uav3", 41000, 80, SYN, seq=5003, ip_id=100, ttl=59, at=via)
+    closed_syn = pkt(13.5, "bs0", "uav3", 41009, 81, SYN, seq=800, ip_id=101, ttl=59, at=via)
+    copy_data = pkt(14.0, "uav3", "bs0", 80, 41001, PSH | ACK, seq=9002, ack=5026, ip_id=200, ttl=59, payload=1000,
+                    at=["uav2", "bs0"])
+    copy_live = pkt(15.0, "bs0", "uav3", 41002, 80, PSH | ACK, seq=5002, ack=9001, ip_id=300, ttl=59, payload=24,
+                    at=via)
+    copy_quiet = pkt(16.0, "bs0", "uav3", 41003, 80, PSH | ACK, seq=5002, ack=9001, ip_id=400, ttl=59, payload=24,
+                     at=via)
+    udp_orig = pkt(16.9999, "bs0", "uav3", 5000, 6000, proto=17, ip_id=500, payload=100)
+    udp_copy = pkt(17.0, "bs0", "uav3", 5000, 6000, proto=17, ip_id=500, ttl=59, payload=100, at=via)
+    t_in = 2 * 50e-6  # the copy reaches uav3's switch two hops after leaving uav2's
+    p = {
+        "orig_syn": orig_syn, "copy_syn": copy_syn, "closed_syn": closed_syn, "copy_data": copy_data,
+        "copy_live": copy_live, "copy_quiet": copy_quiet, "udp_orig": udp_orig, "udp_copy": udp_copy,
+        # the original handshake's SYN-ACK and its retransmission after the copy: ack 5001, not 5004
+        "orig_synack": pkt(12.01, "uav3", "bs0", 80, 41000, SYN | ACK, seq=9000, ack=5001, ip_id=1),
+        "orig_retx": pkt(13.2, "uav3", "bs0", 80, 41000, SYN | ACK, seq=9000, ack=5001, ip_id=2),
+        # (a) the copied SYN's SYN-ACK, and bs0's RST to it (bs0 never sent that SYN)
+        "synack": pkt(13.0 + t_in + 1e-4, "uav3", "bs0", 80, 41000, SYN | ACK, seq=7000, ack=5004, ip_id=3),
+        "synack_rst": pkt(13.01, "bs0", "uav3", 41000, 80, RST, seq=5004, ip_id=102),
+        # (b) a copied SYN to a closed port: RST|ACK with ack = seq + 1
+        "closed_rst": pkt(13.5 + t_in + 1e-4, "uav3", "bs0", 81, 41009, RST | ACK, seq=0, ack=801, ip_id=4),
+        # (b) bs0's connection 41001 is closed: it resets the copied segment, seq = the copy's ack
+        "data_rst": pkt(14.001, "bs0", "uav3", 41001, 80, RST, seq=5026, ip_id=103),
+        # (d) connection 41002 is live: uav3's immediate duplicate ACK ...
+        "dup_ack": pkt(15.0 + t_in + 1e-4, "uav3", "bs0", 80, 41002, ACK, seq=9001, ack=5026, ip_id=5),
+        # ... then bs0's genuine next segment and uav3's ACK of it: benign
+        "genuine": pkt(15.5, "bs0", "uav3", 41002, 80, PSH | ACK, seq=5026, ack=9001, ip_id=301, payload=24),
+        "genuine_ack": pkt(15.51, "uav3", "bs0", 80, 41002, ACK, seq=9001, ack=5050, ip_id=6),
+        # a reverse pure ACK long after the last copy (a keep-alive): benign
+        "late_ack": pkt(19.0, "uav3", "bs0", 80, 41003, ACK, seq=9001, ack=5026, ip_id=7),
+        # (c) an ICMP port unreachable quoting the copied datagram (its IP id and TTL) ...
+        "icmp": icmp_error(17.0 + t_in + 1e-4, "uav3", "bs0", udp_copy, ip_id=8),
+        # ... and one quoting the original (TTL 64), sent after the copy left: benign
+        "icmp_orig": icmp_error(17.0003, "uav3", "bs0", udp_orig, ip_id=9),
+    }
+    return p
+
+
+def test_replay_provokes_answers_to_its_copies():
+    from hand_truth import context, injection, rows_of, window
+
+    from uavcas.labels.effects import packet_truth
+    from uavcas.vocabulary import FAMILIES
+
+    p = _replay_run()
+    copies = ("copy_syn", "closed_syn", "copy_data", "copy_live", "copy_quiet", "udp_copy")
+    ctx = context(list(p.values()), [window("replay", "uav2", "uav3", 10.0, 20.0)], [injection(p[c]) for c in copies])
+    truth = packet_truth(ctx)
+    k = FAMILIES.index("replay")
+
+    def effects(name):
+        rows = rows_of(ctx, p[name])
+        return set(truth.effect_names(rows)), set(truth.family[rows].tolist())
+
+    for name in copies:
+        assert effects(name) == ({"replay"}, {k}), name
+    for name in ("synack", "synack_rst", "closed_rst", "data_rst", "dup_ack", "icmp"):
+        assert effects(name) == ({"provoked"}, {k}), name
+    for name in ("orig_syn", "orig_synack", "orig_retx", "genuine", "genuine_ack", "late_ack", "udp_orig", "icmp_orig"):
+        assert effects(name) == ({"benign"}, {-1}), name
+
+
+def test_dup_ack_needs_the_copy_to_be_the_nearest_earlier_packet_at_its_capture_point():
+    """The genuine segment arriving between the copy and the ACK makes the ACK its answer."""
+    from hand_truth import context, injection, rows_of, window
+
+    from uavcas.labels.effects import packet_truth
+
+    p = _replay_run()
+    # leaves bs0's switch after the copy passed it and reaches uav3's just before the ACK leaves
+    between = dict(p["genuine"], t=p["dup_ack"]["t"] - 7e-5, ip_id=999)
+    ctx = context([p["copy_live"], between, p["dup_ack"]], [window("replay", "uav2", "uav3", 10.0, 20.0)],
+                  [injection(p["copy_live"])])
+    assert set(packet_truth(ctx).effect_names(rows_of(ctx, p["dup_ack"]))) == {"benign"}
+    # the same ACK, when the segment comes after it at uav3's switch, answers the copy (it is also
+    # seen at bs0's switch after the segment there: only the ACK's first capture point decides)
+    later = dict(between, t=p["dup_ack"]["t"] - 1e-5)
+    ctx = context([p["copy_live"], later, p["dup_ack"]], [window("replay", "uav2", "uav3", 10.0, 20.0)],
+                  [injection(p["copy_live"])])
+    assert set(packet_truth(ctx).effect_names(rows_of(ctx, p["dup_ack"]))) == {"provoked"}
+    # the segment between copy and ACK at uav3's switch, missed by bs0's capture: at bs0's switch
+    # the copy is the ACK's nearest earlier packet, but only the ACK's first point decides
+    missed = dict(between, t=p["dup_ack"]["t"] - 2e-5, at=["uav3"])
+    ctx = context([p["copy_live"], missed, p["dup_ack"]], [window("replay", "uav2", "uav3", 10.0, 20.0)],
+                  [injection(p["copy_live"])])
+    assert set(packet_truth(ctx).effect_names(rows_of(ctx, p["dup_ack"]))) == {"benign"}

@@ -9,7 +9,7 @@ import pytest
 
 from uavcas.flows.assemble import FlowConfig, assemble
 from uavcas.flows.context import context_frame, transmissions
-from uavcas.flows.packets import COLUMNS, PacketTable, address_to_words
+from uavcas.flows.packets import COLUMNS, QUOTE_COLUMNS, PacketTable, address_to_words, empty_columns
 from uavcas.schema import CONTEXT_FEATURES
 
 T0 = 1_600_000_000.0  # a multiple of the 5 s window: window k is [T0 + 5k, T0 + 5k + 5)
@@ -21,7 +21,8 @@ _DTYPES = {"ts_ns": np.int64, "ip_len": np.uint32, "frame_len": np.uint32, "cap_
            "src_hi": np.uint64, "src_lo": np.uint64, "dst_hi": np.uint64, "dst_lo": np.uint64, "sport": np.uint16,
            "dport": np.uint16, "proto": np.uint8, "tcp_flags": np.uint16, "ttl": np.uint8, "ip_id": np.uint32,
            "tcp_seq": np.uint32, "tcp_ack": np.uint32, "ip_hdr_len": np.uint16, "l4_hdr_len": np.uint16, "frame_index": np.int64,
-           "point": np.int16}
+           "point": np.int16, **{c: empty_columns()[c].dtype for c in QUOTE_COLUMNS}}
+QUOTE_ZERO = {c: 0 for c in QUOTE_COLUMNS}  # TCP only: no ICMP error quotes a packet
 
 
 def table(obs: list[dict], ips: dict[str, str] = IPS) -> PacketTable:
@@ -35,7 +36,7 @@ def table(obs: list[dict], ips: dict[str, str] = IPS) -> PacketTable:
                 "ip_len": length - 14, "src_hi": shi, "src_lo": slo, "dst_hi": dhi, "dst_lo": dlo,
                 "sport": o["sport"], "dport": o["dport"], "proto": 6, "tcp_flags": o["flags"], "ttl": o.get("ttl", 64),
                 "ip_id": o["id"], "tcp_seq": o["seq"], "tcp_ack": o.get("ack", 0), "ip_hdr_len": 20, "l4_hdr_len": 20, "frame_index": k,
-                "point": POINTS.index("s-" + o["at"])}
+                "point": POINTS.index("s-" + o["at"]), **QUOTE_ZERO}
         for c in COLUMNS:
             cols[c].append(vals[c])
     return PacketTable({c: np.array(v, dtype=_DTYPES[c]) for c, v in cols.items()}, POINTS)

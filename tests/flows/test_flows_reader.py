@@ -229,3 +229,47 @@ def test_nanosecond_big_endian_and_empty(tmp_path):
 
     ex = extract_flows([empty])
     assert len(ex.packets) == 0 and len(ex.frame) == 0 and "Flow Duration" in ex.frame.columns
+
+
+def test_icmp_errors_carry_the_quoted_packet(tmp_path):
+    """A host-unreachable quoting a TCP SYN, a port-unreachable quoting a UDP datagram (each as a
+    router or host builds it: IP header + the offending packet), an ICMPv6 unreachable quoting a
+    SYN, an echo request (no error) and an error cut by the snap length: only the quotes
+    captured whole fill the q_* columns."""
+    from scapy.layers.inet import ICMP, UDP
+    from scapy.layers.inet6 import ICMPv6DestUnreach
+
+    syn = IP(src=A, dst=B, ttl=61, id=321) / TCP(sport=40001, dport=80, flags="S", seq=0xDEADBEEF)
+    dgram = IP(src=B, dst=A, ttl=7, id=654) / UDP(sport=5353, dport=9999) / Raw(b"q" * 30)
+    syn6 = IPv6(src="2001:db8::1", dst="2001:db8::2", hlim=50) / TCP(sport=4444, dport=443, flags="S", seq=99)
+
+    def at(t, p):
+        p.time = T0 + t
+        return p
+
+    pk = [
+        at(0.1, Ether() / IP(src="10.0.0.9", dst=A) / ICMP(type=3, code=1) / bytes(syn)),
+        at(0.2, Ether() / IP(src=A, dst=B) / ICMP(type=3, code=3) / bytes(dgram)),
+        at(0.3, Ether() / IPv6(src="2001:db8::2", dst="2001:db8::1") / ICMPv6DestUnreach(code=4) / bytes(syn6)),
+        icmp(0.4, A, B),
+        tcp(0.5, A, B, 1, 2, "A"),
+    ]
+    t = read_packets([write(tmp_path / "icmp.pcap", pk)]).to_pandas()
+    assert list(t.q_proto) == [6, 17, 6, 0, 0]
+    assert list(t.q_sport) == [40001, 5353, 4444, 0, 0] and list(t.q_dport) == [80, 9999, 443, 0, 0]
+    assert list(t.q_tcp_seq) == [0xDEADBEEF, 0, 99, 0, 0]
+    assert list(t.q_ip_id[:2]) == [321, 654] and list(t.q_ttl[:3]) == [61, 7, 50]
+    a, b = (0xFFFF00000000 | int.from_bytes(bytes(map(int, ip.split("."))), "big") for ip in (A, B))
+    assert list(t.q_src_lo[:2]) == [a, b] and list(t.q_dst_lo[:2]) == [b, a]
+    assert t.q_src_lo[2] == 1 and t.q_dst_lo[2] == 2  # 2001:db8::1 -> 2001:db8::2, low 64 bits
+    # the same error captured with the quote's transport bytes cut: no quote, nothing guessed
+    cut = write(tmp_path / "cut.pcap", pk[:1])
+    raw = bytearray(cut.read_bytes())
+    snap = 14 + 20 + 8 + 20 + 4  # Ethernet, IP, ICMP, quoted IP header, 4 of the 8 quoted TCP bytes
+    struct.pack_into("<I", raw, 16, snap)  # the file header's snap length
+    n = struct.unpack_from("<I", raw, 24 + 8)[0]
+    struct.pack_into("<I", raw, 24 + 8, snap)  # the record's captured length
+    del raw[24 + 16 + snap:24 + 16 + n]
+    (tmp_path / "cut.pcap").write_bytes(bytes(raw))
+    c = read_packets([tmp_path / "cut.pcap"]).to_pandas()
+    assert len(c) == 1 and c.proto[0] == 1 and c.q_proto[0] == 0 and c.q_sport[0] == 0

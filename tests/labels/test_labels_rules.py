@@ -31,10 +31,12 @@ def test_flood_flows_are_dos_only_inside_window(synth_run_dir):
     outside = pair.drop(inside.index)
     assert len(inside) == N_FLOOD and (inside.label == "DoS").all() and inside.label_dos.all()
     assert (inside.label_source == "flood-packets").all()
-    # the SYN is the flood; the victim's SYN-ACK and the attacker's RST are benign packets
-    assert (inside.attack_packets == 1).all() and (inside.attack_packets_dos == 1).all()
+    # the SYN is the flood; the victim's SYN-ACK and the attacker's RST answering it are provoked
+    # by it, counted for the DoS
     assert sorted(inside.packets.unique()) == [1, 3]
-    assert all(e[0] == "flood" and set(e[1:]) <= {"benign"} for e in _effects(inside))
+    assert (inside.attack_packets == inside.packets).all() and (inside.attack_packets_dos == inside.packets).all()
+    assert (inside.provoked_packets == inside.packets - 1).all()
+    assert all(e == ["flood"] + ["provoked"] * (len(e) - 1) for e in _effects(inside))
     # two sessions outside, one flow each (one connection, one flow: flows.termination)
     assert outside.src_port.nunique() == 2 and len(outside) == 2
     assert (outside.label == "Benign").all() and (outside.label_source == "none").all()
@@ -70,11 +72,13 @@ def test_min_attack_fraction_leaves_out_impure_flows(synth_run_dir):
     shard = extract(synth_run_dir, min_attack_fraction=0.7)
     df = shard.frame
     assert not df.label_replay.any()  # 3 of 5 packets injected
-    assert (df.label == "DoS").sum() == N_FLOOD - N_FLOOD // 5  # SYN + SYN-ACK + RST: 1/3 flood
-    assert shard.info.impure_dropped == 1 + N_FLOOD // 5 and shard.info.min_attack_fraction == 0.7
+    assert (df.label == "DoS").sum() == N_FLOOD  # SYN + the SYN-ACK and RST it provoked: all attack packets
+    assert shard.info.impure_dropped == 1 and shard.info.min_attack_fraction == 0.7
     assert ((df.attack_packets == 0) | (df.attack_fraction >= 0.7)).all()
     assert "attack_fraction < 0.7" in shard.info.label_rule
     assert shard.info.effect_counts["replay"] == 3 and shard.info.effect_counts["channel_loss"] == 1
+    # each answered flood SYN: its SYN-ACK and the RST, each seen at the switches of uav0 (and bs0: no)
+    assert shard.info.effect_counts["provoked"] == 2 * (N_FLOOD // 5)
     with pytest.raises(ValueError, match="min_attack_fraction"):
         extract(synth_run_dir, min_attack_fraction=1.5)
 
@@ -99,7 +103,9 @@ def test_hostpair_views_labels(synth_run_dir):
     assert len(bu) == 6 and len(set(((bu.first_ts - T0) // 5).astype(int))) == 6
     assert (win.last_ts - win.first_ts < 5.0).all() and (win.src_port == 0).all()
     fl = win[win.label_dos]
-    assert len(fl) == 2 and fl.attack_packets.sum() == N_FLOOD  # the flood spans windows 4 and 5
+    # the flood spans windows 4 and 5; every 5th SYN provoked a SYN-ACK and an RST
+    assert len(fl) == 2 and fl.attack_packets.sum() == N_FLOOD + 2 * (N_FLOOD // 5)
+    assert fl.provoked_packets.sum() == 2 * (N_FLOOD // 5)
 
 
 def test_plan_fallback_and_errors(tmp_path):
@@ -162,11 +168,12 @@ def test_cli_extract_records_the_rule_in_the_card(synth_run_dir, tmp_path):
     out = tmp_path / "ds"
     r = CliRunner().invoke(app, ["extract", str(synth_run_dir), "--out", str(out), "--min-attack-fraction", "0.7"])
     assert r.exit_code == 0, r.output
-    assert f"{1 + N_FLOOD // 5} flow(s) left out" in r.output
+    assert "1 flow(s) left out" in r.output
     card = json.loads((out / "dataset.json").read_text())
     (rule,) = card["label_rules"]
     assert "attack_fraction < 0.7" in rule and "blackhole:" in rule and "wormhole:" in rule
-    assert card["effect_counts"]["replay"] == 3 and card["runs"][0]["impure_dropped"] == 1 + N_FLOOD // 5
+    assert card["effect_counts"]["replay"] == 3 and card["runs"][0]["impure_dropped"] == 1
+    assert "provoked: the victim's SYN-ACKs" in rule and card["effect_counts"]["provoked"] == 2 * (N_FLOOD // 5)
     bad = CliRunner().invoke(app, ["extract", str(synth_run_dir), "--out", str(tmp_path / "no"),
                                    "--min-attack-fraction", "1.5"])
     assert bad.exit_code == 2 and not (tmp_path / "no").exists()

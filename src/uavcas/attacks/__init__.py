@@ -18,7 +18,7 @@ from uavcas.vocabulary import FAMILIES
 from .base import AttackFamily, ScenarioError, ScheduleDraw, SpecBase
 from .registry import families, family, register
 
-_INFRA = {"base", "registry"}
+_INFRA = {"answers", "base", "registry"}  # shared code, no family
 for _m in pkgutil.iter_modules(__path__):
     if _m.name not in _INFRA:
         importlib.import_module(f"{__name__}.{_m.name}")

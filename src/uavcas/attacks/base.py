@@ -4,8 +4,9 @@ A family (`AttackFamily` subclass, one per module of this package, registered by
 - its codec token and typed parameters (`spec`, `parse`),
 - its schedule rule (`attackers`: who attacks, given the shared victim and the swarm),
 - its executor on the kernel (`prepare`/`start`/`stop`/`calibrate`, plus routing hooks),
-- its ground-truth rule (`effect`, `effects`: which captured packets its attacks made, moved or
-  dropped; flows are labelled from their packets' effects, `uavcas.labels`).
+- its ground-truth rules (`effect`, `effects`: which captured packets its attacks made, moved or
+  dropped; `provoked`: which packets exist only because of those, e.g. the answers to a flood
+  SYN; flows are labelled from their packets' effects, `uavcas.labels`).
 
 Layers outside this package ask the registry (`uavcas.attacks.family(name)`) and never test a
 family name themselves. Modules here import the emulation, flows and labels code lazily, inside
@@ -97,6 +98,8 @@ class AttackFamily(ABC):
     label_source: ClassVar[str]  # label_source value of flows this family's truth rule marks
     effect: ClassVar[str]  # the packet effect its rule gives (vocabulary.EFFECTS)
     truth_rule: ClassVar[str]  # its effect rule in words (the dataset card records it)
+    # its provoked rule in words (the dataset card records it next to truth_rule)
+    provoked_rule: ClassVar[str] = "nothing"
     tools: ClassVar[tuple[str, ...]] = ()  # executables the executor needs on the host
     python_modules: ClassVar[tuple[str, ...]] = ()  # importable modules the executor needs
     min_uavs: ClassVar[int] = 2  # attacker(s) + victim
@@ -157,3 +160,10 @@ class AttackFamily(ABC):
     def effects(self, ctx: "TruthContext", windows: list["AttackWindow"]) -> np.ndarray:
         """Boolean mask over the packet-table rows: the packets this family's attacks affected
         (every observation of an affected transmission: `ctx.spread`)."""
+
+    def provoked(self, ctx: "TruthContext", windows: list["AttackWindow"], made: np.ndarray) -> np.ndarray:
+        """Boolean mask over the packet-table rows: packets that exist only because of a packet
+        in `made` (the rows this family's `effects` marked), matched packet to packet (header
+        fields tying an answer to what it answers), never by hosts or time alone. They get the
+        effect `provoked` with this family (`uavcas.labels.effects`). Default: nothing."""
+        return np.zeros(ctx.n, dtype=bool)

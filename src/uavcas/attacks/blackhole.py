@@ -14,7 +14,9 @@
 - truth (effect `blackhole`, label source "blackhole-drops"): a packet to or from a victim whose
   transmission was last seen at the victim's switch, at a time inside [start, stop): the rule
   dropped it there (seen before the victim's switch and not after it). Its other observations,
-  upstream, carry the same effect.
+  upstream, carry the same effect;
+- provoked: nothing (the default hook). What a drop leads to, the peers' retransmissions, is
+  sent to the victim again and judged by the drop rule itself.
 """
 
 from __future__ import annotations
@@ -89,6 +91,7 @@ class Blackhole(AttackFamily):
     effect = "blackhole"
     truth_rule = ("a packet to or from the victim last seen at the victim's switch inside [start, stop) "
                   "(dropped there)")
+    provoked_rule = "nothing (a peer's retransmission is dropped again, or reaches the victim after the stop)"
     tools = ("nft",)
 
     def attackers(self, spec: SpecBase, draw: ScheduleDraw) -> list[str]:

@@ -10,7 +10,17 @@
   the network; at stop one `rate` record per attacker with the SYNs that left it;
 - truth (effect `flood`, label source "flood-packets"): a TCP packet with SYN set and ACK clear
   from an attacker IP to a victim IP captured inside [start, stop) of the attack (packet-exact:
-  the same host pair outside the window, or the victim's answering SYN-ACKs, are not flood).
+  the same host pair outside the window, or the victim's answering SYN-ACKs, are not flood);
+- provoked (effect `provoked` with this family): what exists only because of a flood SYN,
+  matched to that SYN packet to packet (`attacks.answers`), within ANSWER_WITHIN_S after it and
+  not gated by the window's stop (the victim retransmits its SYN-ACKs for 31 s):
+  (a) the victim's SYN-ACKs on the SYN's 5-tuple reversed whose ack is the SYN's seq + 1
+      (mod 2^32), retransmissions included (they repeat seq and ack);
+  (b) the RST answering them: from the SYN's source to the victim on the SYN's 5-tuple with RST
+      set and seq = the SYN's seq + 1 (the attacker's kernel, which never sent the SYN, answers
+      the unexpected SYN-ACK with RST, seq = that SYN-ACK's ack; RFC 793);
+  (c) ICMP errors to the SYN's source that quote it (protocol, addresses, ports, seq).
+  A benign connection between the same hosts has its own ports and seq: it stays benign.
 """
 
 from __future__ import annotations
@@ -21,6 +31,7 @@ from typing import TYPE_CHECKING, Any, Literal
 import numpy as np
 from pydantic import Field
 
+from .answers import ANSWER_WITHIN_S, TCP_ACK, TCP_RST, TCP_SYN, answers, icmp_errors_quoting, tcp_flags_are
 from .base import AttackFamily, ScenarioError, ScheduleDraw, SpecBase, int_field
 from .registry import register
 
@@ -30,7 +41,6 @@ if TYPE_CHECKING:
     from uavcas.labels.effects import TruthContext
     from uavcas.twin.model import Attack
 
-TCP_SYN, TCP_ACK = 0x02, 0x10
 DEFAULT_INTERVAL_US = 1000
 
 
@@ -62,6 +72,10 @@ class _Flood(AttackFamily):
     label_source = "flood-packets"
     effect = "flood"
     truth_rule = "a TCP SYN (ACK clear) from an attacker to the victim captured inside [start, stop)"
+    provoked_rule = ("the victim's SYN-ACKs (retransmissions included) on a flood SYN's 5-tuple reversed with "
+                     "ack = its seq + 1; the RST from the SYN's source on its 5-tuple with seq = its seq + 1; "
+                     "ICMP errors quoting the SYN; each within "
+                     f"{ANSWER_WITHIN_S:g} s after the SYN, even after the attack's stop")
     tools = ("hping3",)
     routes_attack_traffic = True
 
@@ -137,6 +151,17 @@ class _Flood(AttackFamily):
             hit |= (syn_only & ctx.during(w.start_unix, w.stop_unix)
                     & ctx.packets_from(w.attacker_ips) & ctx.packets_to(w.victim_ips))
         return ctx.spread(hit)
+
+    def provoked(self, ctx: "TruthContext", windows: list["AttackWindow"], made: np.ndarray) -> np.ndarray:
+        p = ctx.packets
+        syn = made & tcp_flags_are(p, TCP_SYN, TCP_SYN | TCP_ACK)  # the flood SYNs (module docstring)
+        next_seq = p["tcp_seq"].astype(np.int64) + 1
+        synack = tcp_flags_are(p, TCP_SYN | TCP_ACK, TCP_SYN | TCP_ACK | TCP_RST)
+        rst = tcp_flags_are(p, TCP_RST, TCP_RST)
+        hit = (answers(p, syn, synack, reverse=True, field="tcp_ack", value=next_seq[syn])
+               | answers(p, syn, rst, reverse=False, field="tcp_seq", value=next_seq[syn])
+               | icmp_errors_quoting(p, syn))
+        return ctx.spread(hit) & ~made
 
 
 @register

@@ -11,7 +11,23 @@
 - truth (effect `replay`, label source "replay-injections"): a packet that matches an `inject`
   record of the attack on (src_ip, dst_ip, ip_id, ttl, and seq for TCP) captured within
   MATCH_TOLERANCE_S of the record's t_unix: an injected copy (packet-exact; the originals it
-  copied stay benign).
+  copied stay benign);
+- provoked (effect `provoked` with this family): the answers to an injected copy, matched to it
+  packet to packet (`attacks.answers`), after it and within ANSWER_WITHIN_S:
+  (a) a copy of a SYN (ACK clear): the SYN-ACK on its 5-tuple reversed with ack = its seq + 1,
+      and the RST its spoofed source answers that SYN-ACK with (it never sent the SYN): on the
+      copy's 5-tuple, RST set, seq = the copy's seq + 1 (as the flood's rule (b));
+  (b) the RST answering a copy (its 5-tuple reversed, RST set), as RFC 793 builds it: seq = the
+      copy's ack when the copy had ACK set, else ACK set and ack = the copy's seq + its payload
+      length (+1 for SYN, +1 for FIN);
+  (c) ICMP errors to the copy's source quoting it, IP id and TTL included (the copy differs
+      from its original there);
+  (d) for a live connection, the receiver's immediate duplicate / challenge ACK (RFC 793, RFC
+      5961: an old or out-of-window segment is answered with an ACK at once): the pure ACK (no
+      payload, no SYN/FIN/RST) on the copy's 5-tuple reversed whose nearest preceding packet of
+      the copy's direction at the same capture point is the copy, within DUP_ACK_WITHIN_S of it.
+      The point is the ACK's first (its sender's switch, where the copy was just delivered):
+      further along, the order of the two directions tells nothing about cause.
 """
 
 from __future__ import annotations
@@ -26,6 +42,8 @@ from pydantic import Field
 
 from uavcas.vocabulary import SEQ_MODES, SeqMode
 
+from .answers import (ANSWER_WITHIN_S, TCP_ACK, TCP_FIN, TCP_RST, TCP_SYN, answers, icmp_errors_quoting,
+                      payload_len, tcp_flags_are)
 from .base import AttackFamily, ScenarioError, SpecBase, choice, int_field
 from .registry import register
 
@@ -36,6 +54,10 @@ if TYPE_CHECKING:
     from uavcas.twin.model import Attack
 
 MATCH_TOLERANCE_S = 1.0
+# A duplicate or challenge ACK leaves at once (Linux: tcp_send_dupack / tcp_send_challenge_ack,
+# no delayed ACK); at the receiver's switch it follows the copy by the host's processing time.
+# 1 s leaves room for a loaded host and excludes a keep-alive or a later ACK of the connection.
+DUP_ACK_WITHIN_S = 1.0
 READY_S = 20.0  # the replayer's start-up (scapy import) must finish within this
 
 
@@ -87,6 +109,11 @@ class Replay(AttackFamily):
     effect = "replay"
     truth_rule = ("a packet matching an inject record (addresses, IP id, TTL, TCP seq) within "
                   f"{MATCH_TOLERANCE_S:g} s of it (an injected copy)")
+    provoked_rule = ("answers to an injected copy on its 5-tuple reversed: the SYN-ACK with ack = its seq + 1 (a "
+                     "copied SYN, and the RST on the copy's own 5-tuple with seq = its seq + 1); the RST with seq = its ack (copy with ACK) or ack = its seq + length (+1 SYN/FIN); "
+                     "ICMP errors quoting it (IP id and TTL included); each within "
+                     f"{ANSWER_WITHIN_S:g} s after it; and the pure ACK whose nearest preceding packet of the copy's "
+                     f"direction at the same capture point is the copy, within {DUP_ACK_WITHIN_S:g} s")
     python_modules = ("scapy",)
 
     def parse(self, arg: str | None, tok: str) -> ReplaySpec:
@@ -174,6 +201,67 @@ class Replay(AttackFamily):
         ids = {w.attack_id for w in windows}
         mine = AttackLog(injections=tuple(i for i in ctx.log.injections if i.attack_id in ids))
         return ctx.spread(injected_packets(ctx.packets, mine))
+
+    def provoked(self, ctx: "TruthContext", windows: list["AttackWindow"], made: np.ndarray) -> np.ndarray:
+        p = ctx.packets
+        flags = p["tcp_flags"]
+        seq = p["tcp_seq"].astype(np.int64)
+        syn = made & tcp_flags_are(p, TCP_SYN, TCP_SYN | TCP_ACK)
+        with_ack = made & tcp_flags_are(p, TCP_ACK, TCP_ACK)
+        without_ack = made & tcp_flags_are(p, 0, TCP_ACK)
+        # RFC 793 segment length: payload, plus one for each of SYN and FIN
+        seg_len = payload_len(p) + ((flags & TCP_SYN) != 0) + ((flags & TCP_FIN) != 0)
+        synack = tcp_flags_are(p, TCP_SYN | TCP_ACK, TCP_SYN | TCP_ACK | TCP_RST)
+        rst = tcp_flags_are(p, TCP_RST, TCP_RST)
+        rst_ack = tcp_flags_are(p, TCP_RST | TCP_ACK, TCP_RST | TCP_ACK)
+        hit = (answers(p, syn, synack, reverse=True, field="tcp_ack", value=seq[syn] + 1)
+               | answers(p, syn, rst, reverse=False, field="tcp_seq", value=seq[syn] + 1)
+               | answers(p, with_ack, rst, reverse=True, field="tcp_seq", value=p["tcp_ack"][with_ack])
+               | answers(p, without_ack, rst_ack, reverse=True, field="tcp_ack",
+                         value=seq[without_ack] + seg_len[without_ack])
+               | icmp_errors_quoting(p, made, exact=True)
+               | dup_acks(p, made, ctx.followed.hop == 0))
+        return ctx.spread(hit) & ~made
+
+
+def dup_acks(p, copies: np.ndarray, first: np.ndarray, within_s: float = DUP_ACK_WITHIN_S) -> np.ndarray:
+    """Pure ACKs answering a copy at once (module docstring, (d)): on the copy's 5-tuple
+    reversed, and at the ACK's `first` observation (its sender's switch) the nearest earlier
+    packet of the copy's direction is a copy, at most `within_s` before."""
+    import pandas as pd
+
+    n = len(p)
+    out = np.zeros(n, dtype=bool)
+    c = np.flatnonzero(copies & (p["proto"] == 6))
+    if c.shape[0] == 0:
+        return out
+    ends = ["src_hi", "src_lo", "dst_hi", "dst_lo", "sport", "dport"]
+    rev = ["dst_hi", "dst_lo", "src_hi", "src_lo", "dport", "sport"]
+    convs = pd.DataFrame({k: p[k][c] for k in ends}).drop_duplicates().reset_index(drop=True)
+    convs["conv"] = np.arange(len(convs))
+    tcp = np.flatnonzero(p["proto"] == 6)
+    rows = pd.DataFrame({k: p[k][tcp] for k in ends})
+    rows["row"] = tcp
+    # the rows of each copy's connection at every capture point: its direction (+1) and back (-1)
+    fwd = rows.merge(convs, on=ends, how="inner").assign(dir=1)
+    back = rows.merge(convs.rename(columns=dict(zip(ends, rev))), on=ends, how="inner").assign(dir=-1)
+    both = pd.concat([fwd, back], ignore_index=True)[["row", "conv", "dir"]]
+    r = both["row"].to_numpy()
+    both["point"], both["ts"] = p["point"][r], p["ts_ns"][r]
+    both = both.sort_values(["conv", "point", "ts", "row"], kind="stable")
+    r, d = both["row"].to_numpy(), both["dir"].to_numpy()
+    group = both["conv"].to_numpy().astype(np.int64) * (1 << 16) + both["point"].to_numpy().astype(np.int64)
+    pos = np.arange(r.shape[0])
+    # position of the nearest earlier row of the copy's direction (any group), then kept if in the same group
+    last_fwd = np.maximum.accumulate(np.where(d == 1, pos, -1))
+    prev = np.maximum(last_fwd, 0)
+    ok = (d == -1) & (last_fwd >= 0) & (group[prev] == group)
+    ts = both["ts"].to_numpy()
+    ok &= copies[r[prev]] & (ts - ts[prev] <= round(within_s * 1e9))
+    pure = tcp_flags_are(p, TCP_ACK, TCP_ACK | TCP_SYN | TCP_FIN | TCP_RST) & (payload_len(p) == 0)
+    ok &= pure[r] & first[r]
+    out[r[ok]] = True
+    return out
 
 
 def injected_packets(p, log: "AttackLog") -> np.ndarray:

@@ -14,7 +14,9 @@
   shaped like any other;
 - truth (effect `wormhole`, label source "wormhole-detour"): a packet to or from a victim seen at
   the attacker's switch inside [start, stop), in a window where the plan has the detour: it was
-  carried over the attacker's detour. Its other observations carry the same effect."""
+  carried over the attacker's detour. Its other observations carry the same effect;
+- provoked: nothing (the default hook). A detoured packet still arrives, and its answer is the
+  ordinary conversation, detoured itself when it crosses the attacker's switch."""
 
 from __future__ import annotations
 
@@ -46,6 +48,7 @@ class Wormhole(AttackFamily):
     effect = "wormhole"
     truth_rule = ("a packet to or from the victim seen at the attacker's switch inside [start, stop) in a "
                   "window with the planned detour (carried over the detour)")
+    provoked_rule = "nothing (a detoured packet is delivered; its answer is judged by the detour rule)"
     detours_traffic = True
 
     def attackers(self, spec: SpecBase, draw: ScheduleDraw) -> list[str]:

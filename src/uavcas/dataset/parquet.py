@@ -6,7 +6,7 @@ duration_s float64; axis columns as Scenario.axes() gives them (n_uav, n_bs, tx_
 noise_dbm float64; attacks, payload, pathloss, modulation, mission string); sequences are list
 columns: seq_time_s list<float64>, seq_size list<int32>, seq_flags list<int16>, seq_dir list<int8>
 (+1 forward, -1 backward), seq_effect list<string> (one of vocabulary.EFFECTS per packet); the
-47 features of the dataset's standard float64 (`schema.feature_columns`); attack_packets and
+47 features of the dataset's standard float64 (`schema.feature_columns`); attack_packets, provoked_packets and
 attack_packets_<family> int64, attack_fraction float64; label_<family> bool; label, label_source string;
 the context columns (`schema.CONTEXT_FEATURES`, all or none) float64. A window-host shard
 (episodes, `uavcas.labels.episodes`) has its own columns instead: `episode_arrow_schema`. Any column may hold nulls

@@ -106,7 +106,7 @@ def _benign_mean_iat(n_uav: int, tx_dbm: int, mission: str, pathloss: str) -> fl
 def _packet_table(seqs, src_ips: list[int], src_ports: list[int], dst_ip: int, dst_port: int):
     """The packets of the flows `seqs` as a uavcas.flows packet table (TCP over IPv4, one capture
     point), so the synthetic features come from the real extractor."""
-    from uavcas.flows.packets import COLUMNS, PacketTable
+    from uavcas.flows.packets import COLUMNS, QUOTE_COLUMNS, PacketTable, empty_columns
 
     n = np.array([len(s[0]) for s in seqs], dtype=np.int64)
     fid = np.repeat(np.arange(len(seqs)), n)
@@ -116,6 +116,7 @@ def _packet_table(seqs, src_ips: list[int], src_ports: list[int], dst_ip: int, d
     mapped = np.uint64(0xFFFF00000000)  # IPv4-mapped, as the decoder stores IPv4
     size = np.concatenate([s[1] for s in seqs]).astype(np.uint32)
     total = int(n.sum())
+    empty = empty_columns()
     cols = {
         "ts_ns": np.round(np.concatenate([s[0] for s in seqs]).astype(np.float64) * 1e9).astype(np.int64),
         "frame_len": size,
@@ -139,6 +140,8 @@ def _packet_table(seqs, src_ips: list[int], src_ports: list[int], dst_ip: int, d
         "frame_index": np.arange(total, dtype=np.int64),
         "point": np.zeros(total, np.int16),
     }
+    # no ICMP errors: nothing quoted
+    cols.update({c: np.zeros(total, empty[c].dtype) for c in QUOTE_COLUMNS})
     assert tuple(cols) == COLUMNS
     return PacketTable(cols, ("s-synthetic",))
 

@@ -13,6 +13,14 @@ borrows bytes from the next record. What cannot be decoded is dropped AND counte
 - `dropped_non_ip`: other non-IP frames (ARP, LLDP, ...), as nfstream and tshark's `ip` filter.
 IPv6 TCP at snap length 68 (Ethernet 14 + IPv6 40 + 14 bytes of TCP) keeps ports and flags.
 
+ICMP errors (IPv4 types 3/4/5/11/12, ICMPv6 1-4) quote the packet that caused them (RFC 792: its
+IP header and the first 8 bytes of its transport header; RFC 4443: as much as fits). The quote's
+identity is kept in the `q_*` columns (protocol, low address words, ports, IP id, TTL, TCP seq),
+so the ground truth can tie an error to the very packet it answers (`uavcas.attacks`: provoked
+packets); they are 0 for every other packet and for an error whose quote (IP header + 8 bytes)
+was not captured. A quoted IPv6 packet's extension headers are not walked: its `q_proto` is then
+the first extension header and its ports stay 0.
+
 IP fragments: the first fragment carries the transport header; later fragments are marked
 (`frag` 2) and get their datagram's ports in `uavcas.flows.fragments`.
 """
@@ -38,6 +46,9 @@ IPV6_EXT_HEADERS = (0, 43, 60)  # hop-by-hop, routing, destination options (leng
 IPV6_FRAGMENT = 44
 TCP_MIN_CAPTURED, UDP_MIN_CAPTURED = 14, 4  # bytes of L4 header needed: TCP through its flags, UDP ports
 FRAG_NONE, FRAG_FIRST, FRAG_LATER = 0, 1, 2
+ICMP4_ERRORS = (3, 4, 5, 11, 12)  # unreachable, source quench, redirect, time exceeded, parameter problem
+ICMP6_ERRORS = (1, 2, 3, 4)  # unreachable, packet too big, time exceeded, parameter problem
+ICMP_HEADER = 8  # type, code, checksum, 4 bytes of unused / MTU / pointer: the quote follows
 
 
 @dataclass(frozen=True)
@@ -85,6 +96,60 @@ def _null_ethertype(g: _Gather, off: np.ndarray) -> np.ndarray:
     v4 = np.isin(fam, AF_INET) | (fam == ETH_IPV4) | (low == ETH_IPV4)
     v6 = np.isin(fam, AF_INET6) | (fam == ETH_IPV6) | (low == ETH_IPV6)
     return np.where(v4, ETH_IPV4, np.where(v6, ETH_IPV6, 0))
+
+
+def _icmp_quotes(g: _Gather, l4: np.ndarray, end: np.ndarray, proto: np.ndarray, v4: np.ndarray,
+                 icmp: np.ndarray) -> dict[str, np.ndarray]:
+    """The `q_*` columns: the identity of the packet an ICMP error quotes (module docstring).
+
+    Only the low 64-bit address words are kept: IPv4 addresses whole (stored IPv4-mapped, as the
+    table's own), IPv6 their interface half, which with the ports, IP id, seq and the error's own
+    destination (the quoted source) tells one packet from another without two more columns.
+    """
+    m = l4.shape[0]
+    out = {"q_proto": np.zeros(m, dtype=np.uint8), "q_src_lo": np.zeros(m, dtype=np.uint64),
+           "q_dst_lo": np.zeros(m, dtype=np.uint64), "q_sport": np.zeros(m, dtype=np.uint16),
+           "q_dport": np.zeros(m, dtype=np.uint16), "q_ip_id": np.zeros(m, dtype=np.uint32),
+           "q_ttl": np.zeros(m, dtype=np.uint8), "q_tcp_seq": np.zeros(m, dtype=np.uint32)}
+    if not icmp.any():
+        return out
+    typ = g.u8(l4).astype(np.int64)
+    err = icmp & np.where(v4, (proto == 1) & np.isin(typ, ICMP4_ERRORS), (proto == 58) & np.isin(typ, ICMP6_ERRORS))
+    q = l4 + ICMP_HEADER
+    b0 = g.u8(q)
+    ihl = (b0 & 0x0F).astype(np.int64) * 4
+    # a quote is used only when its IP header and the 8 transport bytes after it were captured
+    q4 = err & (b0 >> 4 == 4) & (ihl >= 20) & (q + ihl + 8 <= end)
+    q6 = err & (b0 >> 4 == 6) & (q + 40 + 8 <= end)
+    ql4 = np.zeros(m, dtype=np.int64)
+    qproto = np.zeros(m, dtype=np.int64)
+    first = np.zeros(m, dtype=bool)  # the quoted packet carries its transport header
+    if q4.any():
+        p = q[q4]
+        qproto[q4] = g.u8(p + 9)
+        out["q_ttl"][q4] = g.u8(p + 8)
+        out["q_ip_id"][q4] = g.be(p + 4, 2)
+        out["q_src_lo"][q4] = g.be(p + 12, 4).astype(np.uint64) | IPV4_MAPPED
+        out["q_dst_lo"][q4] = g.be(p + 16, 4).astype(np.uint64) | IPV4_MAPPED
+        first[q4] = (g.be(p + 6, 2).astype(np.int64) & 0x1FFF) == 0
+        ql4[q4] = p + ihl[q4]
+    if q6.any():
+        p = q[q6]
+        qproto[q6] = g.u8(p + 6)
+        out["q_ttl"][q6] = g.u8(p + 7)
+        out["q_src_lo"][q6] = g.be(p + 16, 8)
+        out["q_dst_lo"][q6] = g.be(p + 32, 8)
+        first[q6] = True
+        ql4[q6] = p + 40
+    out["q_proto"] = qproto.astype(np.uint8)
+    ports = first & ((qproto == 6) | (qproto == 17))
+    if ports.any():
+        out["q_sport"][ports] = g.be(ql4[ports], 2)
+        out["q_dport"][ports] = g.be(ql4[ports] + 2, 2)
+    tcp = first & (qproto == 6)
+    if tcp.any():
+        out["q_tcp_seq"][tcp] = g.be(ql4[tcp] + 4, 4)
+    return out
 
 
 def decode(raw: RawCapture) -> tuple[dict[str, np.ndarray], DecodeStats]:
@@ -219,6 +284,7 @@ def decode(raw: RawCapture) -> tuple[dict[str, np.ndarray], DecodeStats]:
         flags[tcp] = g.u8(q + 13).astype(np.uint16) | ((b12 & 1) << 8)  # NS bit as 0x100
         l4_hdr[tcp] = (b12 >> 4) * 4
     l4_hdr[udp | icmp] = 8
+    quote = _icmp_quotes(g, l4, end, proto, v4, icmp & (captured_l4 >= ICMP_HEADER))
     frag = np.where(frag_off > 0, FRAG_LATER, np.where(more, FRAG_FIRST, FRAG_NONE)).astype(np.uint8)
 
     ok = ~cut
@@ -243,6 +309,7 @@ def decode(raw: RawCapture) -> tuple[dict[str, np.ndarray], DecodeStats]:
         "ip_hdr_len": (l4 - l3).astype(np.uint16),
         "l4_hdr_len": l4_hdr,
         "frame_index": idx.astype(np.int64) + raw.first_record,
+        **quote,
         "frag": frag,
     }
     if cut.any():

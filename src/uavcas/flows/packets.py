@@ -11,7 +11,9 @@ Columns (all numpy arrays of equal length):
   (IP total length from the header: bytes on the wire above the link layer, whatever the snap
   length), ip_hdr_len/l4_hdr_len uint16 (parsed header bytes, incl. options / extension headers;
   l4 0 for later fragments), frame_index int64 (record number in its file), point int16 (index
-  into `points`).
+  into `points`); for ICMP errors the packet they quote (`QUOTE_COLUMNS`, 0 for other packets,
+  `uavcas.flows.decode`): q_proto uint8, q_src_lo/q_dst_lo uint64 (the low address words),
+  q_sport/q_dport uint16, q_ip_id uint32, q_ttl uint8, q_tcp_seq uint32.
 `table["ts_s"]` gives float64 seconds for convenience (derived, rounded to ~0.2 us at today's
 epoch); computations that need exact time use `ts_ns`.
 
@@ -37,7 +39,9 @@ COLUMNS: tuple[str, ...] = (
     "ts_ns", "frame_len", "cap_len", "ip_version", "src_hi", "src_lo", "dst_hi", "dst_lo",
     "sport", "dport", "proto", "tcp_flags", "ttl", "ip_id", "tcp_seq", "tcp_ack", "ip_len", "ip_hdr_len",
     "l4_hdr_len", "frame_index", "point",
+    "q_proto", "q_src_lo", "q_dst_lo", "q_sport", "q_dport", "q_ip_id", "q_ttl", "q_tcp_seq",
 )  # fmt: skip
+QUOTE_COLUMNS: tuple[str, ...] = COLUMNS[COLUMNS.index("q_proto"):]
 ETHERNET_HEADER = 14
 
 
@@ -141,7 +145,9 @@ def empty_columns() -> dict[str, np.ndarray]:
               "src_hi": np.uint64, "src_lo": np.uint64, "dst_hi": np.uint64, "dst_lo": np.uint64,
               "sport": np.uint16, "dport": np.uint16, "proto": np.uint8, "tcp_flags": np.uint16, "ttl": np.uint8,
               "ip_id": np.uint32, "tcp_seq": np.uint32, "tcp_ack": np.uint32, "ip_len": np.uint32, "ip_hdr_len": np.uint16,
-              "l4_hdr_len": np.uint16, "frame_index": np.int64, "point": np.int16}  # fmt: skip
+              "l4_hdr_len": np.uint16, "frame_index": np.int64, "point": np.int16,
+              "q_proto": np.uint8, "q_src_lo": np.uint64, "q_dst_lo": np.uint64, "q_sport": np.uint16,
+              "q_dport": np.uint16, "q_ip_id": np.uint32, "q_ttl": np.uint8, "q_tcp_seq": np.uint32}  # fmt: skip
     return {c: np.zeros(0, dtype=dtypes[c]) for c in COLUMNS}
 
 

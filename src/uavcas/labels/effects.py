@@ -6,11 +6,19 @@ not at single observations: the packet follower (`uavcas.flows.follow`) gives ev
 of one transmitted packet the same `pid`, and an effect found on one observation holds for all of
 them, so a flow shows the same truth whichever switch it was captured at.
 
-A row's effect is the first that applies in `vocabulary.EFFECT_PRECEDENCE`: a family's effect,
-else `channel_loss` when the follower found the transmission lost on a shaped link (it left a
-switch towards the next one of the forwarding in force and never arrived there), else `benign`.
-The family whose rule gave a row its effect is kept too (`PacketTruth.family`), for per-family
-counts and labels.
+Each family also says which packets exist only because of the packets its rule marked
+(`AttackFamily.provoked`: the victim's SYN-ACK to a flood SYN, the RST answering it, an ICMP
+error quoting an attack packet, answers to an injected copy), matched packet to packet; they get
+the effect `provoked`, with the provoking family.
+
+A row's effect is the first that applies in `vocabulary.EFFECT_PRECEDENCE`: a family's effect
+(made, moved, dropped), else `provoked`, else `channel_loss` when the follower found the
+transmission lost on a shaped link (it left a switch towards the next one of the forwarding in
+force and never arrived there), else `benign`. So a provoked packet that a blackhole drops shows
+the blackhole, and one lost on the channel stays provoked. The family whose rule gave a row its
+effect is kept too (`PacketTruth.family`: for a provoked row the provoking family), for
+per-family counts and labels. Where two families provoke one row, the first in canonical order
+(`vocabulary.FAMILIES`) keeps it, as for two families with one effect.
 """
 
 from __future__ import annotations
@@ -32,6 +40,9 @@ if TYPE_CHECKING:
 
 BENIGN = EFFECTS.index("benign")
 CHANNEL_LOSS = EFFECTS.index("channel_loss")
+PROVOKED = EFFECTS.index("provoked")
+# rank of each effect code in EFFECT_PRECEDENCE (lower wins)
+_RANK = np.array([EFFECT_PRECEDENCE.index(e) for e in EFFECTS], dtype=np.int64)
 
 
 @dataclass
@@ -124,7 +135,7 @@ class PacketTruth:
     """Per packet-table row: its effect (index into EFFECTS) and the family that caused it."""
 
     effect: np.ndarray  # int8
-    family: np.ndarray  # int8, index into FAMILIES; -1 for benign and channel_loss
+    family: np.ndarray  # int8, index into FAMILIES (provoked: the provoking one); -1 for benign and channel_loss
 
     @property
     def is_attack(self) -> np.ndarray:
@@ -146,10 +157,24 @@ def packet_truth(ctx: TruthContext) -> PacketTruth:
         if windows:
             claims.append((EFFECT_PRECEDENCE.index(f.effect), FAMILIES.index(f.name), f))
     # lowest precedence first, so a stronger claim overwrites a weaker one
+    made: dict[str, np.ndarray] = {}
     for _, k, f in sorted(claims, key=lambda c: (c[0], c[1]), reverse=True):
-        mask = np.asarray(f.effects(ctx, ctx.log.of_family(f.name)), dtype=bool)
-        if mask.shape != (ctx.n,):
-            raise ValueError(f"{f.name}: effect rule returned {mask.shape}, expected ({ctx.n},)")
+        mask = _checked(f.name, "effect", f.effects(ctx, ctx.log.of_family(f.name)), ctx.n)
+        made[f.name] = mask
         effect[mask] = EFFECTS.index(f.effect)
         fam[mask] = k
+    # then what those packets provoked, on rows with no stronger effect (benign, channel_loss, or
+    # provoked by a later family: the lowest family index is applied last and keeps the row)
+    for _, k, f in sorted(claims, key=lambda c: c[1], reverse=True):
+        mask = _checked(f.name, "provoked", f.provoked(ctx, ctx.log.of_family(f.name), made[f.name]), ctx.n)
+        take = mask & (_RANK[effect] >= EFFECT_PRECEDENCE.index("provoked"))
+        effect[take] = PROVOKED
+        fam[take] = k
     return PacketTruth(effect, fam)
+
+
+def _checked(name: str, rule: str, mask: np.ndarray, n: int) -> np.ndarray:
+    mask = np.asarray(mask, dtype=bool)
+    if mask.shape != (n,):
+        raise ValueError(f"{name}: {rule} rule returned {mask.shape}, expected ({n},)")
+    return mask

@@ -2,13 +2,16 @@
 
 Columns added to the flow frame, whatever the mode:
 - `seq_effect`: one effect per packet of the flow, aligned with the other `seq_*` columns;
-- `attack_packets`: packets with an attack effect (not benign, not channel_loss),
-  `attack_fraction` = attack_packets / packets exactly, and `attack_packets_<family>` per family.
+- `attack_packets`: packets with an attack effect (not benign, not channel_loss: made, moved,
+  dropped or provoked), `attack_fraction` = attack_packets / packets exactly,
+  `provoked_packets`: those of them with the effect `provoked`, and `attack_packets_<family>`
+  per family (a provoked packet counts for the family that provoked it).
 
 Modes:
-- `ours` (default): a flow carries family F when at least one of its packets has an effect caused
-  by an attack of F (each family's rule: `AttackFamily.effects` in `uavcas.attacks.<family>`);
-  a victim's flow none of whose packets was affected is Benign. With `min_attack_fraction` X > 0
+- `ours` (default): a flow carries family F when at least one of its packets has F's made, moved,
+  dropped or provoked effect (each family's rules: `AttackFamily.effects` and
+  `AttackFamily.provoked` in `uavcas.attacks.<family>`); a victim's flow none of whose packets
+  was affected or provoked is Benign. With `min_attack_fraction` X > 0
   a flow with attack packets but attack_fraction < X is neither a clean attack flow nor a benign
   one: it is left out of the dataset (and counted). label_source names the rules that fired.
 - `paper` (the authors' IP membership): a flow gets a family when its source or destination IP is
@@ -56,24 +59,28 @@ def rule_text(mode: str, min_attack_fraction: float = 0.0) -> str:
     if mode == "paper":
         return ("paper: a flow carries family F when its source or destination IP is one of the "
                 "attacker or victim IPs of an attack of F, over the whole run")
-    parts = [f"{f.name}: {f.truth_rule}" for f in families()]
+    parts = [f"{f.name}: {f.truth_rule}; provoked: {f.provoked_rule}" for f in families()]
     pure = (f"; flows with 0 < attack_fraction < {min_attack_fraction:g} are left out"
             if min_attack_fraction > 0 else "")
-    return ("ours: a flow carries family F when at least one of its packets has an effect caused by "
-            f"an attack of F{pure}. Effects per packet: " + " | ".join(parts))
+    return ("ours: a flow carries family F when at least one of its packets has F's made, moved, dropped or "
+            f"provoked effect{pure}. Effects per packet (precedence {' > '.join(EFFECT_PRECEDENCE)}): "
+            + " | ".join(parts))
 
 
 def truth_columns(fl: Flows, truth: PacketTruth) -> pd.DataFrame:
-    """seq_effect, attack_packets, attack_fraction and attack_packets_<family>, one row per flow."""
+    """seq_effect, attack_packets, attack_fraction, provoked_packets and attack_packets_<family>,
+    one row per flow."""
     n = fl.n_flows
     rows = fl.order
     fam = truth.family[rows].astype(np.int64)
     g = fl.flow
     counts = np.bincount(g, minlength=n).astype(np.int64)
     attack = np.bincount(g, weights=(fam >= 0).astype(np.float64), minlength=n).astype(np.int64)
+    provoked = (truth.effect[rows] == EFFECTS.index("provoked")).astype(np.float64)
     out: dict[str, object] = {
         "attack_packets": attack,
         "attack_fraction": np.where(counts > 0, attack / np.maximum(counts, 1), 0.0),
+        "provoked_packets": np.bincount(g, weights=provoked, minlength=n).astype(np.int64),
     }
     for k, f in enumerate(FAMILIES):
         out[ATTACK_PACKET_COLUMNS[k]] = np.bincount(g, weights=(fam == k).astype(np.float64),
@@ -88,7 +95,7 @@ def truth_columns(fl: Flows, truth: PacketTruth) -> pd.DataFrame:
 def constructed_truth(frame: pd.DataFrame) -> pd.DataFrame:
     """The truth columns of generated flows whose labels hold by construction (`label_<family>`
     set): every packet of an attack flow has the effect of its strongest family
-    (vocabulary.EFFECT_PRECEDENCE), every packet of another flow is benign."""
+    (vocabulary.EFFECT_PRECEDENCE), every packet of another flow is benign; none is provoked."""
     n = len(frame)
     packets = frame["packets"].to_numpy(dtype=np.int64)
     code = np.zeros(n, dtype=np.int64)  # index into EFFECTS
@@ -97,7 +104,8 @@ def constructed_truth(frame: pd.DataFrame) -> pd.DataFrame:
         hit = frame[f"label_{f}"].to_numpy(dtype=bool)
         code[hit], fam[hit] = EFFECTS.index(family(f).effect), k
     attack = np.where(fam >= 0, packets, 0)
-    out = {"attack_packets": attack, "attack_fraction": np.where(fam >= 0, 1.0, 0.0)}
+    out = {"attack_packets": attack, "attack_fraction": np.where(fam >= 0, 1.0, 0.0),
+           "provoked_packets": np.zeros(n, dtype=np.int64)}
     for k, col in enumerate(ATTACK_PACKET_COLUMNS):
         out[col] = np.where(fam == k, packets, 0)
     starts = np.concatenate([[0], np.cumsum(packets)]).astype(np.int32)
