@@ -8,7 +8,7 @@ import pytest
 from synth_run import IPS, make_plan
 
 from uavcas.flows import FlowConfig, assemble, flow_frame
-from uavcas.flows.packets import COLUMNS, PacketTable, address_to_words
+from uavcas.flows.packets import PacketTable, address_to_words, table_from_rows
 from uavcas.labels.effects import PacketTruth
 from uavcas.labels.episodes import host_window_frame
 from uavcas.schema import EFFECTS, FAMILIES, episode_feature_columns
@@ -16,27 +16,20 @@ from uavcas.schema import EFFECTS, FAMILIES, episode_feature_columns
 T0 = 1_700_000_000.0
 POINTS = ("s-uav0", "s-uav1", "s-uav3", "s-bs0")
 SYN, ACK, PSH = 0x02, 0x10, 0x08
-_DTYPES = {"ts_ns": np.int64, "ip_len": np.uint32, "frame_len": np.uint32, "cap_len": np.uint32, "ip_version": np.uint8,
-           "src_hi": np.uint64, "src_lo": np.uint64, "dst_hi": np.uint64, "dst_lo": np.uint64, "sport": np.uint16,
-           "dport": np.uint16, "proto": np.uint8, "tcp_flags": np.uint16, "ttl": np.uint8, "ip_id": np.uint32,
-           "tcp_seq": np.uint32, "tcp_ack": np.uint32, "ip_hdr_len": np.uint16, "l4_hdr_len": np.uint16,
-           "frame_index": np.int64, "point": np.int16}  # fmt: skip
 
 
 def _table(obs: list[dict]) -> PacketTable:
-    cols = {c: [] for c in COLUMNS}
+    rows = []
     for k, o in enumerate(obs):
         shi, slo = address_to_words(IPS[o["src"]])
         dhi, dlo = address_to_words(IPS[o["dst"]])
         length = 54 + o.get("payload", 0)
-        vals = {"ts_ns": round(T0) * 10**9 + round(o["t"] * 1e9), "frame_len": length, "cap_len": length,
-                "ip_version": 4, "ip_len": length - 14, "src_hi": shi, "src_lo": slo, "dst_hi": dhi, "dst_lo": dlo,
-                "sport": o["sport"], "dport": o["dport"], "proto": 6, "tcp_flags": o["flags"], "ttl": 64,
-                "ip_id": k, "tcp_seq": 100, "tcp_ack": 0, "ip_hdr_len": 20, "l4_hdr_len": 20, "frame_index": k,
-                "point": POINTS.index(o["at"])}  # fmt: skip
-        for c in COLUMNS:
-            cols[c].append(vals[c])
-    return PacketTable({c: np.array(v, dtype=_DTYPES[c]) for c, v in cols.items()}, POINTS)
+        rows.append({"ts_ns": round(T0) * 10**9 + round(o["t"] * 1e9), "frame_len": length, "cap_len": length,
+                     "ip_version": 4, "ip_len": length - 14, "src_hi": shi, "src_lo": slo, "dst_hi": dhi,
+                     "dst_lo": dlo, "sport": o["sport"], "dport": o["dport"], "proto": 6, "tcp_flags": o["flags"],
+                     "ttl": 64, "ip_id": k, "tcp_seq": 100, "ip_hdr_len": 20, "l4_hdr_len": 20, "frame_index": k,
+                     "point": POINTS.index(o["at"])})  # fmt: skip
+    return table_from_rows(rows, POINTS)
 
 
 def _case():

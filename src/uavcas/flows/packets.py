@@ -151,6 +151,17 @@ def empty_columns() -> dict[str, np.ndarray]:
     return {c: np.zeros(0, dtype=dtypes[c]) for c in COLUMNS}
 
 
+def table_from_rows(rows: Sequence[dict], points: Sequence[str]) -> "PacketTable":
+    """A packet table from one dict per packet (column -> value); a column a row leaves out is 0.
+    For tests and generated traffic: captures are read with `read_packets`."""
+    empty = empty_columns()
+    unknown = {k for r in rows for k in r} - set(COLUMNS)
+    if unknown:
+        raise ValueError(f"unknown packet columns {sorted(unknown)}")
+    cols = {c: np.array([r.get(c, 0) for r in rows], dtype=empty[c].dtype) for c in COLUMNS}
+    return PacketTable(cols, tuple(points))
+
+
 def iter_packet_blocks(
     path: str | Path, point: int, stats: CaptureStats, truncations: list[Truncation],
     allow_truncated: bool = False, chunk_bytes: int = CHUNK_BYTES,

@@ -29,7 +29,8 @@ Rules (`host_window_frame`):
   as is `flows`' summaries on such rows. `uavcas.load_dataset` then sets NaN and inf to 0, as for
   flows. Packet features are always finite.
 - Truth and labels: `attack_packets` = the episode's packets with an attack effect
-  (`PacketTruth.family >= 0`), per family `attack_packets_<family>`; `label_<family>` when one of
+  (`PacketTruth.family >= 0`: made, moved, dropped or provoked), `provoked_packets` those of them
+  an attack provoked, per family `attack_packets_<family>`; `label_<family>` when one of
   its packets has an effect of that family; `label` = `schema.class_name` of those families,
   `label_source` the families' label sources as in `labels.label`.
 """
@@ -54,7 +55,7 @@ from uavcas.schema import (
     FAMILIES,
     class_name,
 )
-from uavcas.vocabulary import ATTACK_PACKET_COLUMNS
+from uavcas.vocabulary import ATTACK_PACKET_COLUMNS, EFFECTS
 
 from .effects import PacketTruth
 from .label import SOURCES
@@ -211,7 +212,9 @@ def host_window_frame(
     # truth and labels
     fam = truth.family[row].astype(np.int64)
     attack = _count(g, n, fam >= 0)
-    truth_cols: dict[str, np.ndarray] = {"attack_packets": attack, "attack_fraction": attack / total}
+    provoked = _count(g, n, truth.effect[row] == EFFECTS.index("provoked"))
+    truth_cols: dict[str, np.ndarray] = {"attack_packets": attack, "attack_fraction": attack / total,
+                                         "provoked_packets": provoked}
     bits = np.zeros(n, dtype=np.int64)
     for k, f in enumerate(FAMILIES):
         truth_cols[ATTACK_PACKET_COLUMNS[k]] = _count(g, n, fam == k)
