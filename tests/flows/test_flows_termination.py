@@ -125,8 +125,11 @@ def test_cic_flow_timeout_keeps_the_orientation_and_counts_the_first_packet_forw
     assert df.packets.tolist() == [2, 3]
     later = df.iloc[1]
     # FlowGenerator: new BasicFlow(packet, flow.getSrc(), ...): A stays the source, B's packet at
-    # 121 s is counted forward (firstPacket), its 122 s packet backward
-    assert (later.src_ip, later["Total Fwd Packets"], later["Total Backward Packets"]) == (B, 2, 1)
+    # 121 s is counted forward (firstPacket), its 122 s packet backward; the row's identity is
+    # CICFlowMeter's (Source IP/Port = the kept source A:1), not the first packet's sender
+    assert (later.src_ip, later.src_port, later.dst_ip, later.dst_port) == (A, 1, B, 2)
+    assert (later["Total Fwd Packets"], later["Total Backward Packets"]) == (2, 1)
+    assert list(later.seq_dir) == [1, -1, 1]
 
 
 def test_cic_all_47_features_of_a_syn_ack_first_flow_by_hand(tmp_path):

@@ -145,7 +145,8 @@ class Flows:
     Per flow: `starts` (offset of its first packet in `order`; `starts[-1] == len(order)` closes),
     `point` (capture point index), `close_ns` (time of the packet that closed it under the
     termination policy, -1 while open: after close_ns + the policy's grace nothing joins it),
-    `key` (dense code of the flow's key; a key's later flows have higher flow numbers).
+    `key` (dense code of the flow's key; a key's later flows have higher flow numbers), `turned`
+    (`termination.Cuts.turned`; None: no flow is).
     """
 
     order: np.ndarray
@@ -156,10 +157,17 @@ class Flows:
     config: FlowConfig
     close_ns: np.ndarray | None = None
     key: np.ndarray | None = None
+    turned: np.ndarray | None = None
 
     @property
     def n_flows(self) -> int:
         return int(self.starts.shape[0] - 1)
+
+    @property
+    def first_sent_forward(self) -> np.ndarray:
+        """Per flow: did the forward endpoint (the flow's src) send its first packet?"""
+        sent = self.fwd[self.starts[:-1]]
+        return sent if self.turned is None else sent != self.turned
 
     @property
     def first(self) -> np.ndarray:
@@ -265,6 +273,7 @@ def assemble(p: PacketTable, cfg: FlowConfig = FlowConfig()) -> Flows:
     kept, flow = np.unique(flow, return_inverse=True) if flow.shape[0] else (np.zeros(0, dtype=np.int64), flow)
     flow = flow.astype(np.int64)
     close_ns = cut.close_ns[kept]
+    turned = cut.turned[kept] if cut.turned is not None else None
     # Numbering (8): by first packet (time, point, record number); packets stay in time order.
     starts = _segments(flow) if flow.shape[0] else np.zeros(1, dtype=np.int64)
     first = order[starts[:-1]]
@@ -275,9 +284,10 @@ def assemble(p: PacketTable, cfg: FlowConfig = FlowConfig()) -> Flows:
     resort = np.argsort(flow, kind="stable")
     order, flow, fwd = order[resort], flow[resort], fwd[resort]
     close_ns = close_ns[rank]
+    turned = turned[rank] if turned is not None else None
     starts = _segments(flow) if flow.shape[0] else np.zeros(1, dtype=np.int64)
     first = order[starts[:-1]]
-    return Flows(order, flow, fwd, starts, p["point"][first].astype(np.int64), cfg, close_ns, code[first])
+    return Flows(order, flow, fwd, starts, p["point"][first].astype(np.int64), cfg, close_ns, code[first], turned)
 
 
 def select_flows(fl: Flows, keep: np.ndarray, max_packets: int | None = None, min_packets: int = 1) -> Flows:
@@ -292,4 +302,5 @@ def select_flows(fl: Flows, keep: np.ndarray, max_packets: int | None = None, mi
     starts = np.concatenate(([0], np.cumsum(length))).astype(np.int64)
     close_ns = fl.close_ns[ids] if fl.close_ns is not None else None
     key = fl.key[ids] if fl.key is not None else None
-    return Flows(fl.order[pos], flow, fl.fwd[pos], starts, fl.point[ids], fl.config, close_ns, key)
+    turned = fl.turned[ids] if fl.turned is not None else None
+    return Flows(fl.order[pos], flow, fl.fwd[pos], starts, fl.point[ids], fl.config, close_ns, key, turned)

@@ -278,7 +278,7 @@ class Observed:
     def of(p: PacketTable, fl: Flows, t: Transmissions, rtt_ms: np.ndarray, window_s: float) -> "Observed":
         w_ns = int(round(window_s * _NS))
         first = fl.first
-        fwd_first = fl.fwd[fl.starts[:-1]]  # the initiator sent the first packet unless it went backward
+        fwd_first = fl.first_sent_forward  # the initiator (the flow's src) sent the first packet unless it went backward
         return Observed(
             ini=np.where(fwd_first, t.addr_src[first], t.addr_dst[first]),
             res=np.where(fwd_first, t.addr_dst[first], t.addr_src[first]),

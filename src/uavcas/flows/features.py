@@ -53,9 +53,10 @@ def flow_frame(p: PacketTable, fl: Flows, sequences: bool = True, standard: str 
     first_ns = ts[starts[:-1]] if n else np.zeros(0, dtype=np.int64)
     last_ns = ts[starts[1:] - 1] if n else np.zeros(0, dtype=np.int64)
     # Identity: the forward endpoint is the first packet's source, or its destination when the
-    # first packet travels backward (a SYN-ACK whose SYN was not captured).
+    # first packet travels backward (a SYN-ACK whose SYN was not captured) or, under `cic`, when a
+    # flow continued after the flow timeout keeps the old orientation (`Flows.turned`).
     first = o[starts[:-1]] if n else np.zeros(0, dtype=np.int64)
-    first_fwd = fwd[starts[:-1]] if n else np.zeros(0, dtype=bool)
+    first_fwd = fl.first_sent_forward if n else np.zeros(0, dtype=bool)
     s_hi = np.where(first_fwd, p["src_hi"][first], p["dst_hi"][first])
     s_lo = np.where(first_fwd, p["src_lo"][first], p["dst_lo"][first])
     d_hi = np.where(first_fwd, p["dst_hi"][first], p["src_hi"][first])

@@ -101,12 +101,15 @@ class KeyPackets:
 class Cuts:
     """Where flows start (`starts`, closed by n), which packets belong to a flow (`keep`: False for a
     packet CICFlowMeter drops), the forward direction of every packet (`fwd`) and, per flow, when it
-    closed (`close_ns`, -1 while open)."""
+    closed (`close_ns`, -1 while open) and whether its forward endpoint is its first packet's
+    DESTINATION although that packet counts forward (`turned`: a `cic` flow continued after the
+    flow timeout whose first packet came from the old flow's destination; None: never)."""
 
     starts: np.ndarray
     keep: np.ndarray
     fwd: np.ndarray
     close_ns: np.ndarray
+    turned: np.ndarray | None = None
 
 
 def synack_turned(is_a: np.ndarray, flags: np.ndarray, proto: np.ndarray) -> np.ndarray:
@@ -246,9 +249,11 @@ def cic_cuts(kp: KeyPackets, idle_ns: int | None, active_ns: int | None) -> Cuts
     fwd = [True] * n
     starts: list[int] = []
     close: list[int] = []
+    turned: list[bool] = []
     for lo, hi in zip(kp.key_starts[:-1].tolist(), kp.key_starts[1:].tolist()):
         first, src_a, fwd_fins, closed = lo, is_a[lo], 0, False
         starts.append(lo)
+        turned.append(False)
         for k in range(lo + 1, hi):
             f = flags[k]
             timed_out = (active_us is not None and ts[k] - ts[first] > active_us) or \
@@ -261,6 +266,9 @@ def cic_cuts(kp: KeyPackets, idle_ns: int | None, active_ns: int | None) -> Cuts
                 first, fwd_fins, closed = k, 0, False
                 src_a = src_a if timed_out and not closed else is_a[k]
                 fwd[k] = True  # firstPacket() counts the flow's first packet as forward
+                # ... while the flow's source (its CSV identity) stays the old one (BasicFlow's
+                # constructor sets src/dst after firstPacket)
+                turned.append(is_a[k] != src_a)
                 continue
             is_fwd = is_a[k] == src_a
             fwd[k] = is_fwd
@@ -276,7 +284,7 @@ def cic_cuts(kp: KeyPackets, idle_ns: int | None, active_ns: int | None) -> Cuts
         close.append(kp_ts[hi - 1] if closed else -1)
     fwd_arr = np.asarray(fwd, dtype=bool)
     return Cuts(np.append(np.asarray(starts, dtype=np.int64), n), np.asarray(keep, dtype=bool), fwd_arr,
-                np.asarray(close, dtype=np.int64))
+                np.asarray(close, dtype=np.int64), np.asarray(turned, dtype=bool))
 
 
 def timeout_cuts(kp: KeyPackets, idle_ns: int | None, active_ns: int | None) -> Cuts:
