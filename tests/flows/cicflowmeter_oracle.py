@@ -30,7 +30,6 @@ from __future__ import annotations
 
 import ipaddress
 import math
-import struct
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -129,57 +128,17 @@ class PacketInfo:
 
 
 def _records(path: Path):
-    """(linktype, [(timestamp_us, frame bytes)]) of a pcap or pcapng capture, read with dpkt's
-    header classes but with integer timestamps (dpkt's iterators give a float, too coarse for
-    whole microseconds). Sub-microsecond resolutions are truncated, as libpcap does when jnetpcap
+    """(linktype, [(timestamp_us, frame bytes)]) of a pcap or pcapng capture, read with scapy's
+    reader, whose record times are exact decimals (a float is too coarse for whole microseconds
+    at today's epoch). Sub-microsecond resolutions are truncated, as libpcap does when jnetpcap
     opens a capture at its default (microsecond) precision."""
-    with open(path, "rb") as f:
-        magic = f.read(4)
-        f.seek(0)
-        if magic == b"\x0a\x0d\x0d\x0a":
-            return _pcapng_records(f)
-        return _pcap_records(f)
+    from scapy.utils import PcapReader
 
-
-def _pcap_records(f):
-    head = f.read(24)
-    fh = dpkt.pcap.FileHdr(head)
-    if fh.magic in (dpkt.pcap.PMUDPCT_MAGIC, dpkt.pcap.PMUDPCT_MAGIC_NANO):  # little-endian file
-        fh, ph = dpkt.pcap.LEFileHdr(head), dpkt.pcap.LEPktHdr
-    else:
-        ph = dpkt.pcap.PktHdr
-    nano = fh.magic in (dpkt.pcap.TCPDUMP_MAGIC_NANO, dpkt.pcap.PMUDPCT_MAGIC_NANO)
-    out = []
-    while True:
-        buf = f.read(16)
-        if len(buf) < 16:
-            break
-        hdr = ph(buf)
-        sub_us = hdr.tv_usec // 1000 if nano else hdr.tv_usec
-        out.append((hdr.tv_sec * 1_000_000 + sub_us, f.read(hdr.caplen)))
-    return fh.linktype, out
-
-
-def _pcapng_records(f):
-    # dpkt's Reader reads up to the first interface description block and knows only that one
-    # interface (enough for the single-interface captures compared here)
-    reader = dpkt.pcapng.Reader(f)
-    le = reader._Reader__le  # noqa: SLF001 (the byte order dpkt found)
-    units = int(reader._divisor)  # if_tsresol: timestamp units per second
-    offset_us = reader._tsoffset * 1_000_000
-    epb_cls = dpkt.pcapng.EnhancedPacketBlockLE if le else dpkt.pcapng.EnhancedPacketBlock
-    out = []
-    while True:
-        buf = f.read(8)
-        if len(buf) < 8:
-            break
-        blk_type, blk_len = struct.unpack("<II" if le else ">II", buf)
-        buf += f.read(blk_len - 8)
-        if blk_type == dpkt.pcapng.PCAPNG_BT_EPB:
-            epb = epb_cls(buf)
-            ticks = (epb.ts_high << 32) | epb.ts_low
-            out.append((offset_us + ticks * 1_000_000 // units, epb.pkt_data))
-    return reader.datalink(), out
+    with PcapReader(str(path)) as reader:
+        out = [(int(pkt.time * 1_000_000), bytes(pkt)) for pkt in reader]
+        # pcapng: the link type of the (single) interface described in the file
+        linktype = reader.linktype if hasattr(reader, "linktype") else reader.interfaces[0][0]
+        return linktype, out
 
 
 def _network_layer(linktype: int, frame: bytes):
