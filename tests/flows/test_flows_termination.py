@@ -82,6 +82,18 @@ def test_rst_closes_and_a_new_syn_after_the_close_starts_a_new_flow(tmp_path):
     assert f.packets.tolist() == [7] and f.src_ip.tolist() == [C]
 
 
+def test_a_syn_inside_an_established_connection_stays_in_it(tmp_path):
+    # a copy of the opening SYN with another sequence number (a replayer's rewrite) injected while
+    # the connection is live: the stack answers it with a challenge ACK; one connection, one flow
+    s = http_session(0.0, A, B)
+    inj = tcp(0.035, A, B, 40000, 80, "S", seq=4242)
+    assert flows(tmp_path, s + [inj]).packets.tolist() == [len(s) + 1]
+    # before the handshake completes it is a new attempt (SYN, SYN-ACK, then a new SYN)
+    half = [tcp(0, C, B, 2000, 80, "S", seq=1), tcp(0.001, B, C, 80, 2000, "SA", seq=9, ack=2),
+            tcp(0.5, C, B, 2000, 80, "S", seq=77)]
+    assert flows(tmp_path, half, name="h.pcap").packets.tolist() == [2, 1]
+
+
 def test_syn_ack_first_is_turned_to_the_syn_sender(tmp_path):
     pk = http_session(0.0, A, B)[1:]
     r = flows(tmp_path, pk).iloc[0]

@@ -13,10 +13,13 @@ Three named policies (`FlowConfig.termination`; the dataset card records the one
   Case Study", WTMC 2021). A new SYN without ACK after the close starts a new flow (port reuse),
   and so does any packet after the grace period.
 - While open: the idle timeout (a gap since the flow's previous packet) and the active timeout
-  (since its first packet) start a new flow, and so does a SYN without ACK that does not repeat
-  the flow's opening SYN (same sender and sequence number): hping3 floods and restarted clients
-  reuse 5-tuples. Within the grace period the idle timeout does not apply: a closed connection is
-  silent by design, and what still comes (retransmissions) comes after exponential back-off.
+  (since its first packet) start a new flow. Before the handshake completes (no packet with ACK
+  and without SYN yet), so does a SYN without ACK that does not repeat the flow's opening SYN
+  (same sender and sequence number): hping3 floods and restarted clients reuse 5-tuples. Once
+  established, a SYN belongs to the connection (its stack answers it with a challenge ACK, RFC
+  5961): a SYN injected into a live connection stays in that connection's flow. Within the grace
+  period the idle timeout does not apply: a closed connection is silent by design, and what still
+  comes (retransmissions) comes after exponential back-off.
 - Non-TCP keys: the timeouts only.
 - Grace period: 60 s, Linux's TIME_WAIT (`TCP_TIMEWAIT_LEN`), the time the closing host itself
   keeps the 5-tuple bound to the old connection and treats its segments as that connection's
@@ -156,10 +159,11 @@ def _reaches(ack: int, end: int) -> bool:
 class _Connection:
     """The connection policy's state for the current flow of one TCP key."""
 
-    __slots__ = ("first", "closed_at", "fin_end", "fin_acked", "last_fin")
+    __slots__ = ("first", "closed_at", "fin_end", "fin_acked", "last_fin", "established")
 
     def __init__(self, first: int) -> None:
         self.first, self.closed_at, self.last_fin = first, -1, -1
+        self.established = False  # a packet with ACK and without SYN was seen: past the handshake
         self.fin_end: list[int | None] = [None, None]  # per direction (0: b, 1: a): the sequence after its FIN
         self.fin_acked = [False, False]
 
@@ -170,6 +174,8 @@ class _Connection:
         if f & TCP_RST:
             self.closed_at = t
             return
+        if f & TCP_ACK and not f & TCP_SYN:
+            self.established = True
         other = self.fin_end[1 - d]
         if f & TCP_ACK and other is not None and _reaches(ack, other):
             self.fin_acked[1 - d] = True
@@ -200,7 +206,7 @@ def _connection_key(ts, is_a, flags, seq, ack, payload, lo, hi, idle_ns, active_
                 and (flags[first] & (TCP_SYN | TCP_ACK)) == TCP_SYN
             new = ((idle_ns is not None and ts[k] - ts[k - 1] >= idle_ns)
                    or (active_ns is not None and ts[k] - ts[first] > active_ns)
-                   or (pure_syn and not again))
+                   or (pure_syn and not again and not c.established))
         if new:
             close.append(c.closed_at)
             starts.append(k)
