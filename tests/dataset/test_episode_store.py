@@ -87,3 +87,14 @@ def test_export_writes_host_pairs(synth_run_dir, episode_ds, tmp_path):
     # episodes have no sequences: refused in one line, nothing written
     r = _run("export", episode_ds[0], "--out", tmp_path / "xe")
     assert r.exit_code == 2 and "--view hostpair" in r.output and not (tmp_path / "xe").exists()
+
+
+def test_report_of_an_episode_dataset(episode_ds, tmp_path):
+    from uavcas.report.dataset_report import SHOWN_EPISODE_FEATURES, write_report
+
+    ds, _ = episode_ds
+    index = write_report(ds, tmp_path / "report")
+    page = index.read_text()
+    assert "Host-window features per class" in page and "<th>rows</th>" in page
+    drawn = {p.stem for p in (tmp_path / "report").glob("feature_*.png")}
+    assert drawn and drawn <= {f"feature_{f}" for f in SHOWN_EPISODE_FEATURES}

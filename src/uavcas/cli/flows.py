@@ -199,6 +199,7 @@ def extract_cmd(
 ) -> None:
     """Extract one run into DATASET_DIR (its shard is replaced if it was extracted before)."""
     from uavcas.dataset.store import extract_run
+    from uavcas.schema import EPISODE_VIEW
 
     try:
         info = extract_run(run_dir, out, view=view, labels=labels, min_packets=min_packets, termination=termination,
@@ -212,7 +213,8 @@ def extract_cmd(
         err_console.print(f"[yellow]warning:[/] run {info.run_id} is incomplete (exit status "
                           f"{info.run_exit_status}); its shard is marked so", highlight=False)
     counts = ", ".join(f"{k} {v}" for k, v in sorted(info.class_counts.items()))
-    console.print(f"run [bold]{info.run_id}[/]: {info.n_flows} flows from {info.n_packets} packets ({counts}) -> {out}", highlight=False)
+    unit = "host-window rows" if info.view == EPISODE_VIEW else "flows"
+    console.print(f"run [bold]{info.run_id}[/]: {info.n_flows} {unit} from {info.n_packets} packets ({counts}) -> {out}", highlight=False)
     if info.impure_dropped:
         console.print(f"{info.impure_dropped} flow(s) left out: attack_fraction below {min_attack_fraction:g}")
 
@@ -278,7 +280,8 @@ def info_cmd(dataset_dir: Path = typer.Argument(..., help="Dataset directory."))
     except _errors() as exc:
         raise fail(str(exc)) from None
     total = max(int(card.get("n_flows", 0)), 1)
-    table = Table(title=f"{dataset_dir}: {card.get('n_flows', 0)} flows, {card.get('n_runs', 0)} runs")
+    unit = "host-window rows" if card.get("unit") == "host-window" else "flows"
+    table = Table(title=f"{dataset_dir}: {card.get('n_flows', 0)} {unit}, {card.get('n_runs', 0)} runs")
     table.add_column("class")
     table.add_column("flows", justify="right")
     table.add_column("share", justify="right")

@@ -25,16 +25,18 @@ _DPI = 100
 
 # Features shown per class: time structure, volume and size, the ones the paper's figures use.
 SHOWN_FEATURES = ("Flow IAT Mean", "Flow Packets/s", "Flow Duration", "Packet Length Mean", "Total Fwd Packets", "SYN Flag Count")
+# the same for a dataset of host-window rows (`--view window-host`: `uavcas.labels.episodes`)
+SHOWN_EPISODE_FEATURES = ("packets_per_s", "bytes_per_s", "peers", "syn_in", "synack_out", "flows_in")
 
 
 class ReportError(ValueError):
     pass
 
 
-def _feature_figure(df: pd.DataFrame, out: Path) -> list[Path]:
+def _feature_figure(df: pd.DataFrame, out: Path, shown: tuple[str, ...]) -> list[Path]:
     classes = [c for c in CLASSES if c in set(df["label"])]
     paths = []
-    for feat in SHOWN_FEATURES:
+    for feat in shown:
         if feat not in df.columns:
             continue
         fig, ax = plt.subplots(figsize=(7, 3.6))
@@ -83,18 +85,19 @@ def write_report(dataset_dir: str | Path, out_dir: str | Path) -> Path:
     flows_path = dataset_dir / "flows.parquet"
     if not flows_path.exists():
         raise ReportError(f"{dataset_dir}: no flows.parquet")
-    cols = ["run_id", "label", *AXIS_COLUMNS, *SHOWN_FEATURES]
-    df = read_flows(flows_path, columns=cols)
+    episodes = card.get("unit") == "host-window"
+    shown, unit = (SHOWN_EPISODE_FEATURES, "rows") if episodes else (SHOWN_FEATURES, "flows")
+    df = read_flows(flows_path, columns=["run_id", "label", *AXIS_COLUMNS, *shown])
     out.mkdir(parents=True, exist_ok=True)
 
     sections = [f"<h2>Dataset card</h2><pre>{html.escape(json.dumps({k: v for k, v in card.items() if k != 'runs'}, indent=1))}</pre>"]
     counts = df["label"].value_counts()
-    sections.append("<h2>Classes</h2>" + _table([(c, int(counts.get(c, 0))) for c in CLASSES if counts.get(c, 0)], ("class", "flows")))
+    sections.append("<h2>Classes</h2>" + _table([(c, int(counts.get(c, 0))) for c in CLASSES if counts.get(c, 0)], ("class", unit)))
     axis_html = []
     for ax in AXIS_COLUMNS:
-        vc = df.groupby(ax, observed=True).agg(flows=("label", "size"), runs=("run_id", "nunique")).reset_index()
+        vc = df.groupby(ax, observed=True).agg(n=("label", "size"), runs=("run_id", "nunique")).reset_index()
         if len(vc) > 1 or ax in ("attacks", "mission", "pathloss", "n_uav", "tx_dbm"):
-            axis_html.append(f"<h3>{html.escape(ax)}</h3>" + _table([tuple(r) for r in vc.itertuples(index=False)], (ax, "flows", "runs")))
+            axis_html.append(f"<h3>{html.escape(ax)}</h3>" + _table([tuple(r) for r in vc.itertuples(index=False)], (ax, unit, "runs")))
     sections.append("<h2>Configuration axes</h2>" + "".join(axis_html))
 
     example = None
@@ -114,8 +117,9 @@ def write_report(dataset_dir: str | Path, out_dir: str | Path) -> Path:
     from .fidelity import fidelity_section
 
     sections.append(fidelity_section(dataset_dir, out, card))
-    feat_figs = _feature_figure(df, out)
-    sections.append("<h2>Flow features per class</h2>" + "".join(_img(p, out) for p in feat_figs))
+    feat_figs = _feature_figure(df, out, shown)
+    title = "Host-window features per class" if episodes else "Flow features per class"
+    sections.append(f"<h2>{title}</h2>" + "".join(_img(p, out) for p in feat_figs))
     links = "".join(f'<li><a href="{html.escape(str(p.relative_to(out)))}">{html.escape(p.name)}</a></li>' for p in sorted(out.rglob("*.png")))
     sections.append(f"<h2>Figures</h2><ul>{links}</ul>")
     page = (
