@@ -12,7 +12,7 @@ cd "$here"
 
 APT_PACKAGES=(
   iproute2 nftables iptables ethtool iputils-ping procps psmisc
-  tcpdump tshark hping3 nginx-light curl iperf3
+  tcpdump tshark hping3 nginx-light curl iperf3 ffmpeg
   qemu-system-x86 busybox-static cpio kmod util-linux
 )
 
