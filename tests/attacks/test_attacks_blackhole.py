@@ -50,3 +50,21 @@ def test_effect_is_a_drop_at_the_victims_switch_inside_the_window(truth_ctx):
     answered = dataclasses.replace(w, start_unix=T0 + 32.0, stop_unix=T0 + 33.0)
     q = truth_ctx.packets.to_pandas()[family("blackhole").effects(truth_ctx, [answered])]
     assert len(q) and (q.dst_ip == IPS["uav3"]).all()
+
+
+def test_udp_datagrams_of_the_victim_are_dropped_like_tcp():
+    """The rule is about IP packets, not TCP: MAVLink datagrams to and from the blackholed UAV."""
+    from hand_truth import context, pkt, rows_of, window
+
+    from uavcas.labels.effects import packet_truth
+
+    cmd = pkt(42.0, "bs0", "uav3", 14550, 14555, proto=17, ip_id=0, payload=41)  # reaches s-uav3, no further
+    telemetry = pkt(42.5, "uav3", "bs0", 14555, 14550, proto=17, ip_id=0, payload=40, at=["uav3"])
+    before = pkt(35.0, "uav3", "bs0", 14555, 14550, proto=17, ip_id=0, payload=40)
+    other = pkt(42.2, "bs0", "uav0", 14550, 14555, proto=17, ip_id=0, payload=41)
+    ctx = context([cmd, telemetry, before, other], [window("blackhole", "uav2", "uav3", 40.0, 50.0)])
+    truth = packet_truth(ctx)
+    for p in (cmd, telemetry):
+        assert set(truth.effect_names(rows_of(ctx, p))) == {"blackhole"}
+    for p in (before, other):
+        assert set(truth.effect_names(rows_of(ctx, p))) == {"benign"}

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 
+import numpy as np
 import pytest
 from synth_run import IPS
 
@@ -138,3 +139,58 @@ def test_dup_ack_needs_the_copy_to_be_the_nearest_earlier_packet_at_its_capture_
     ctx = context([p["copy_live"], missed, p["dup_ack"]], [window("replay", "uav2", "uav3", 10.0, 20.0)],
                   [injection(p["copy_live"])])
     assert set(packet_truth(ctx).effect_names(rows_of(ctx, p["dup_ack"]))) == {"benign"}
+
+
+def test_udp_copies_match_on_ports_and_the_nearest_transmission():
+    """A MAVLink stream (unconnected UDP: IP id 0) replayed with the TTL left as it was (ttl_dec 0):
+    the copies and the originals around them share addresses, ports, IP id and TTL; each record
+    marks its own copy only, and a record of another port pair marks nothing of this stream."""
+    from hand_truth import injection, table
+
+    stream = [pkt_udp(12.0 + 0.1 * k) for k in range(10)]  # uav3 -> bs0:14550 at 10 Hz
+    copies = [pkt_udp(12.25, at=["uav2", "bs0"]), pkt_udp(12.35, at=["uav2", "bs0"])]  # 200 ms + jitter later
+    video = pkt_udp(12.45, dport=5600, at=["uav2", "bs0"])  # a copy of the video stream, same IP id and TTL
+    t = table(stream + copies + [video])
+    log = AttackLog((), tuple(injection(c) for c in copies))
+    hit = injected_packets(t, log)
+    # each record marks the copy's observation nearest its time: the first, at the replayer's switch
+    first = [_rows(t, c) & (t["point"] == t.points.index("s-uav2")) for c in copies]
+    assert hit.sum() == 2 and all((hit & f).sum() == 1 for f in first)
+    # a record of port 5600 finds the video copy, not the MAVLink ones; one without ports (an older
+    # log) still finds its copy by time
+    other = dataclasses.replace(injection(copies[0]), dst_port=5600)
+    got = injected_packets(t, AttackLog((), (other,)))
+    assert got.sum() == 1 and (got & _rows(t, video)).sum() == 1
+    unported = dataclasses.replace(injection(copies[1]), src_port=None, dst_port=None)
+    got = injected_packets(t, AttackLog((), (unported,)))
+    assert got.sum() == 1 and (got & first[1]).sum() == 1
+
+
+def test_udp_copy_effect_covers_its_transmission():
+    """With the paper's TTL decrement the copy is its own transmission: both its observations are
+    `replay`, the stream's datagrams stay benign."""
+    from hand_truth import context, injection, rows_of, window
+
+    from uavcas.labels.effects import packet_truth
+
+    stream = [pkt_udp(12.0 + 0.1 * k) for k in range(10)]
+    copy = pkt_udp(12.25, ttl=59, at=["uav2", "bs0"])
+    ctx = context(stream + [copy], [window("replay", "uav2", "uav3", 10.0, 20.0)], [injection(copy)])
+    truth = packet_truth(ctx)
+    assert set(truth.effect_names(rows_of(ctx, copy))) == {"replay"}
+    assert rows_of(ctx, copy).sum() == 2
+    for o in stream:
+        assert set(truth.effect_names(rows_of(ctx, o))) == {"benign"}
+
+
+def _rows(t, p):
+    from hand_truth import HOP_S, T0
+
+    near = np.abs(t["ts_s"] - (T0 + p["t"])) < 0.5e-3 + len(p["at"]) * HOP_S
+    return near & (t["dport"] == p["dport"]) & (t["ttl"] == p["ttl"]) & (t["proto"] == p["proto"])
+
+
+def pkt_udp(t, dport=14550, ttl=64, at=None):
+    from hand_truth import pkt
+
+    return pkt(t, "uav3", "bs0", 14555, dport, proto=17, ip_id=0, ttl=ttl, payload=40, at=at)

@@ -39,3 +39,29 @@ def test_planner_detours_the_victim_through_the_attacker_while_scheduled():
         overrides = [(o.victim, o.attacker, o.hops[:2]) for o in w.wormholes]
         assert overrides == ([(a.victims[0], a.attackers[0], [a.victims[0], a.attackers[0]])] if active else [])
         assert any(lk.detour for lk in w.links) == active
+
+
+def test_udp_datagrams_detoured_through_the_attacker_are_wormhole():
+    """The rule is about IP packets, not TCP: a MAVLink datagram of the victim detoured through the
+    attacker's switch in a planned window, and one after the detour, on the direct link."""
+    import sys
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "labels"))
+    from hand_truth import pkt, rows_of, table, window
+    from synth_run import T0, make_plan
+
+    from uavcas.flows.follow import Timeline, follow
+    from uavcas.labels import TruthContext
+    from uavcas.labels.attacklog import AttackLog
+    from uavcas.labels.effects import packet_truth
+
+    wplan = make_plan(wormhole=True)
+    detoured = pkt(1.0, "uav0", "bs0", 14555, 14550, proto=17, ip_id=0, payload=40, at=["uav0", "uav2", "bs0"])
+    direct = pkt(6.0, "uav0", "bs0", 14555, 14550, proto=17, ip_id=0, payload=40)
+    t = table([detoured, direct])
+    log = AttackLog(windows=(window("wormhole", "uav2", "uav0", 0.5, 3.0),))
+    ctx = TruthContext(t, log, follow(t, Timeline.from_plan(wplan, T0)), wplan, T0)
+    truth = packet_truth(ctx)
+    assert set(truth.effect_names(rows_of(ctx, detoured))) == {"wormhole"} and rows_of(ctx, detoured).sum() == 3
+    assert set(truth.effect_names(rows_of(ctx, direct))) == {"benign"}

@@ -26,16 +26,19 @@ QUOTE_ZERO = {c: 0 for c in QUOTE_COLUMNS}  # TCP only: no ICMP error quotes a p
 
 
 def table(obs: list[dict], ips: dict[str, str] = IPS) -> PacketTable:
-    """obs: t (s from T0), at (switch), src, dst (hosts), payload bytes and TCP header fields."""
+    """obs: t (s from T0), at (switch), src, dst (hosts), payload bytes and TCP header fields (or
+    proto 17: a UDP datagram, no flags or seq)."""
     cols = {c: [] for c in COLUMNS}
     for k, o in enumerate(obs):
         shi, slo = address_to_words(ips[o["src"]])
         dhi, dlo = address_to_words(ips[o["dst"]])
-        length = 54 + o.get("payload", 0)
+        udp = o.get("proto", 6) == 17
+        length = (42 if udp else 54) + o.get("payload", 0)
         vals = {"ts_ns": round(T0) * 10**9 + round(o["t"] * 1e9), "frame_len": length, "cap_len": length, "ip_version": 4,
                 "ip_len": length - 14, "src_hi": shi, "src_lo": slo, "dst_hi": dhi, "dst_lo": dlo,
-                "sport": o["sport"], "dport": o["dport"], "proto": 6, "tcp_flags": o["flags"], "ttl": o.get("ttl", 64),
-                "ip_id": o["id"], "tcp_seq": o["seq"], "tcp_ack": o.get("ack", 0), "ip_hdr_len": 20, "l4_hdr_len": 20, "frame_index": k,
+                "sport": o["sport"], "dport": o["dport"], "proto": o.get("proto", 6), "tcp_flags": o.get("flags", 0),
+                "ttl": o.get("ttl", 64), "ip_id": o["id"], "tcp_seq": o.get("seq", 0), "tcp_ack": o.get("ack", 0),
+                "ip_hdr_len": 20, "l4_hdr_len": 8 if udp else 20, "frame_index": k,
                 "point": POINTS.index("s-" + o["at"]), **QUOTE_ZERO}
         for c in COLUMNS:
             cols[c].append(vals[c])
@@ -226,3 +229,39 @@ def test_flood_lost_before_leaving_the_attackers_switch():
     assert lost["ctx_src_flow_share"] == pytest.approx(4 / n_window) and lost["ctx_pair_flow_share"] == pytest.approx(4 / n_window)
     twice = ctx(obs + flood + [o for k in range(4, 8) for o in syn(k, ["x"])])
     assert flow(twice, 50001)["ctx_src_flow_share"] == pytest.approx(8 / len(twice))
+
+
+def mavlink(t, path, k, lost_after=None, ip_id=None) -> list[dict]:
+    """Datagram k of a 10 Hz MAVLink stream a -> b (UDP 14555 -> 14550, 40 bytes): seen along
+    `path`, up to switch `lost_after` when it is lost on the next hop."""
+    stop = path.index(lost_after) + 1 if lost_after else len(path)
+    return send(t + 0.1 * k, path[:stop], "a", "b", sport=14555, dport=14550, proto=17, payload=40,
+                id=k + 1 if ip_id is None else ip_id)
+
+
+def test_udp_stream_gets_path_length_delay_and_loss_as_tcp():
+    """Transmission-based context (path length, delay, loss) is protocol-agnostic: a UDP stream
+    through a relay, one datagram lost on the relay's hop to b, and the ground station's 1 Hz
+    heartbeats back (b must send for its switch to be known: a host that never sends has no home,
+    and what is sent to it counts as reached)."""
+    obs = [o for k in range(20) for o in mavlink(0.5, ["a", "r", "b"], k, lost_after="r" if k == 7 else None)]
+    obs += [o for k in range(2) for o in send(0.55 + k, ["b", "r", "a"], "b", "a", sport=14550, dport=14555,
+                                                proto=17, payload=21, id=900 + k)]
+    c = ctx(obs)
+    assert len(c) == 1  # one flow: the 5-tuple of the stream, both ways
+    f = c.iloc[0]
+    assert f["ctx_path_len_mean"] == pytest.approx((19 * 3 + 2 + 2 * 3) / 22)
+    assert f["ctx_delay_ms"] == pytest.approx((19 * 2 + 1 + 2 * 2) / 22)
+    assert f["ctx_lost_frac"] == pytest.approx(1 / 22) and f["ctx_pair_lost_frac"] == pytest.approx(1 / 22)
+    assert f["ctx_rtt_ms"] == -1  # no handshake: round trip is TCP's
+    tcp_only = ["ctx_neardup_frac", "ctx_retx_frac", "ctx_seq_regress_frac"]
+    assert (f[tcp_only] == 0).all()
+
+
+def test_udp_stream_with_ip_id_0_pairs_its_identical_datagrams_per_switch():
+    """An unconnected UDP socket sends IP id 0 (DF set): the stream's datagrams share every header
+    field a switch keeps; the k-th observation at each switch is the k-th datagram."""
+    obs = [o for k in range(20) for o in mavlink(0.5, ["a", "r", "b"], k, ip_id=0)]
+    t = transmissions(table(obs))
+    assert len(t.n_points) == 20 and (t.n_points == 3).all() and t.reached.all()
+    assert t.delay_ms == pytest.approx(np.full(20, 2.0))

@@ -70,7 +70,9 @@ def window(family: str, attacker: str, victim: str, start_s: float, stop_s: floa
 def injection(p: dict, aid: str = "replay-0") -> Injection:
     """The inject record of the injected packet `p` (logged as it leaves the replayer)."""
     return Injection(attack_id=aid, t_unix=T0 + p["t"], src_ip=IPS[p["src"]], dst_ip=IPS[p["dst"]], protocol=p["proto"],
-                     ip_id=p["ip_id"], ttl=p["ttl"], seq=p["seq"] if p["proto"] == 6 else None)
+                     ip_id=p["ip_id"], ttl=p["ttl"], seq=p["seq"] if p["proto"] == 6 else None,
+                     src_port=p["sport"] if p["proto"] in (6, 17) else None,
+                     dst_port=p["dport"] if p["proto"] in (6, 17) else None)
 
 
 def context(packets: list[dict], windows: list[AttackWindow], injections: list[Injection] = ()) -> TruthContext:

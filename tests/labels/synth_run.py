@@ -218,3 +218,56 @@ def add_wormhole(run_dir: Path) -> Path:
              AttackStop(attack_id="wormhole-0", family="wormhole", t_unix=T0 + WORMHOLE_WINDOW[1])]
     (run_dir / "attacks.jsonl").write_text(attack_log_text(recs))
     return run_dir
+
+
+# MAVLink (uavcas.mavlink_capture): real MAVLink 2 frames packed by pymavlink, in UDP datagrams.
+MAV_UAV_PORT, MAV_GCS_PORT = 14555, 14550  # the vehicle's and the ground station's (MAVLink's default)
+MAV_LAT, MAV_LON = 473977420, 85455940  # degE7
+MAV_BLACKHOLED_T = 43.0  # bs0's COMMAND_LONG to uav3 inside the blackhole window
+
+
+def _mav(sysid: int, compid: int):
+    from pymavlink.dialects.v20 import ardupilotmega as mavlink2
+
+    return mavlink2.MAVLink(None, srcSystem=sysid, srcComponent=compid)
+
+
+def mavlink_datagrams() -> list[tuple[float, str, str, int, int, bytes]]:
+    """(t, src, dst, sport, dport, payload) of the synthetic MAVLink traffic: uav0 (sysid 1) to the
+    ground station bs0 (sysid 255) and back, and one command to the blackholed uav3."""
+    uav, gcs = _mav(1, 1), _mav(255, 190)
+    hb = uav.heartbeat_encode(2, 3, 81, 0, 4).pack(uav)
+    pos = uav.global_position_int_encode(3000, MAV_LAT, MAV_LON, 584000, 50000, 120, -50, 7, 9000).pack(uav)
+    cmd = gcs.command_long_encode(1, 1, 400, 0, 1, 0, 0, 0, 0, 0, 0).pack(gcs)
+    bad = bytearray(pos)
+    bad[-1] ^= 0xFF  # the CRC's high byte: the frame is whole, its checksum wrong
+    to_gcs, to_uav = (MAV_UAV_PORT, MAV_GCS_PORT), (MAV_GCS_PORT, MAV_UAV_PORT)
+    return [
+        (3.0, "uav0", "bs0", *to_gcs, hb),
+        (3.1, "uav0", "bs0", *to_gcs, pos),
+        (3.2, "bs0", "uav0", *to_uav, cmd),
+        (3.3, "uav0", "bs0", *to_gcs, hb + pos),  # two messages in one datagram
+        (3.4, "uav0", "bs0", *to_gcs, bytes(bad)),
+        (3.5, "uav0", "bs0", *to_gcs, b"not a mavlink frame"),
+        (3.6, "uav0", "bs0", 40002, 5600, b"\x80\x60" + bytes(30)),  # RTP video: another port, not decoded
+        (MAV_BLACKHOLED_T, "bs0", "uav3", *to_uav, cmd),
+    ]
+
+
+def add_mavlink(run_dir: Path) -> Path:
+    """Add `mavlink_datagrams` to a copy of build_run's captures, each seen at its sender's switch
+    and HOP_S later at its receiver's (every capture point of the run sees both ends here)."""
+    from scapy.layers.inet import UDP
+    from scapy.utils import rdpcap
+
+    new = []
+    for k, (t, a, b, sport, dport, payload) in enumerate(mavlink_datagrams()):
+        p = Ether(src=MACS[a], dst=MACS[b]) / IP(src=IPS[a], dst=IPS[b], ttl=64, id=8000 + k) \
+            / UDP(sport=sport, dport=dport) / Raw(payload)
+        p.time = T0 + t
+        new.append(p)
+    for node in ("bs0", "uav0", "uav3"):
+        path = run_dir / "pcap" / f"s-{node}.pcap"
+        pkts = list(rdpcap(str(path))) + _seen_at(new, node)
+        wrpcap(str(path), sorted(pkts, key=lambda p: float(p.time)))
+    return run_dir

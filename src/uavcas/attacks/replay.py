@@ -9,9 +9,10 @@
   victim's traffic wherever the attacker is. At stop the mirror is removed and the process ended
   before `stop` is logged; its `inject` records land in the attack log;
 - truth (effect `replay`, label source "replay-injections"): a packet that matches an `inject`
-  record of the attack on (src_ip, dst_ip, ip_id, ttl, and seq for TCP) captured within
-  MATCH_TOLERANCE_S of the record's t_unix: an injected copy (packet-exact; the originals it
-  copied stay benign);
+  record of the attack on (src_ip, dst_ip, protocol, ip_id, ttl, the ports where recorded, and
+  seq for TCP) captured within MATCH_TOLERANCE_S of the record's t_unix: an injected copy
+  (packet-exact; the originals it copied stay benign). A record without seq (UDP) marks the one
+  matching transmission nearest its time (`injected_packets`);
 - provoked (effect `provoked` with this family): the answers to an injected copy, matched to it
   packet to packet (`attacks.answers`), after it and within ANSWER_WITHIN_S:
   (a) a copy of a SYN (ACK clear): the SYN-ACK on its 5-tuple reversed with ack = its seq + 1,
@@ -107,8 +108,8 @@ class Replay(AttackFamily):
     usage = "replay=<buf>,<ms>,<pps>,<ttl>,<mode>"
     label_source = "replay-injections"
     effect = "replay"
-    truth_rule = ("a packet matching an inject record (addresses, IP id, TTL, TCP seq) within "
-                  f"{MATCH_TOLERANCE_S:g} s of it (an injected copy)")
+    truth_rule = ("a packet matching an inject record (addresses, protocol, ports, IP id, TTL, TCP seq) within "
+                  f"{MATCH_TOLERANCE_S:g} s of it (an injected copy; without a seq, as UDP, the nearest one)")
     provoked_rule = ("answers to an injected copy on its 5-tuple reversed: the SYN-ACK with ack = its seq + 1 (a "
                      "copied SYN, and the RST on the copy's own 5-tuple with seq = its seq + 1); the RST with seq = its ack (copy with ACK) or ack = its seq + length (+1 SYN/FIN); "
                      "ICMP errors quoting it (IP id and TTL included); each within "
@@ -265,7 +266,15 @@ def dup_acks(p, copies: np.ndarray, first: np.ndarray, within_s: float = DUP_ACK
 
 
 def injected_packets(p, log: "AttackLog") -> np.ndarray:
-    """Mask of packets that match an inject record (see the module docstring)."""
+    """Mask of packets that match an inject record (see the module docstring).
+
+    The key: addresses, protocol, IP id and TTL, the ports where the record has them (TCP, UDP),
+    and the TCP sequence number. A TCP record marks every observation of its key within
+    MATCH_TOLERANCE_S (the rewritten seq makes the key the copy's alone). A record without a
+    sequence number (UDP: MAVLink on 14550, RTP video on 5600) marks only the matching observation
+    nearest its time (the rest of that transmission follows through `TruthContext.spread`): an
+    unconnected UDP socket sends IP id 0 with DF, so with the TTL left as it was (ttl_dec 0) the
+    original and the other copies of one stream carry the very same key within the tolerance."""
     import pandas as pd
 
     from uavcas.flows.packets import address_to_words
@@ -280,13 +289,17 @@ def injected_packets(p, log: "AttackLog") -> np.ndarray:
             "dst": [d[1] for _, d in words],
             "src_hi": [s[0] for s, _ in words],
             "dst_hi": [d[0] for _, d in words],
+            "proto": [i.protocol for i in log.injections],
             "ip_id": [i.ip_id for i in log.injections],
             "ttl": [i.ttl for i in log.injections],
             "seqk": [-1 if (i.seq is None or i.protocol != 6) else i.seq for i in log.injections],
+            "rec_sport": [-1 if i.src_port is None else i.src_port for i in log.injections],
+            "rec_dport": [-1 if i.dst_port is None else i.dst_port for i in log.injections],
             "t_inj": [i.t_unix for i in log.injections],
         }
-    ).astype({"src": np.uint64, "dst": np.uint64, "src_hi": np.uint64, "dst_hi": np.uint64,
-              "ip_id": np.int64, "ttl": np.int64, "seqk": np.int64})
+    ).astype({"src": np.uint64, "dst": np.uint64, "src_hi": np.uint64, "dst_hi": np.uint64, "proto": np.int64,
+              "ip_id": np.int64, "ttl": np.int64, "seqk": np.int64, "rec_sport": np.int64, "rec_dport": np.int64})
+    inj["rec"] = np.arange(len(inj))
     cand = np.flatnonzero(np.isin(p["src_lo"], inj["src"].to_numpy()))
     pk = pd.DataFrame(
         {
@@ -295,13 +308,21 @@ def injected_packets(p, log: "AttackLog") -> np.ndarray:
             "dst": p["dst_lo"][cand],
             "src_hi": p["src_hi"][cand],
             "dst_hi": p["dst_hi"][cand],
+            "proto": p["proto"][cand].astype(np.int64),
             "ip_id": p["ip_id"][cand].astype(np.int64),
             "ttl": p["ttl"][cand].astype(np.int64),
             "seqk": np.where(p["proto"][cand] == 6, p["tcp_seq"][cand].astype(np.int64), -1),
+            "sport": p["sport"][cand].astype(np.int64),
+            "dport": p["dport"][cand].astype(np.int64),
             "ts": p["ts_s"][cand],
         }
     )
-    m = pk.merge(inj, on=["src", "dst", "src_hi", "dst_hi", "ip_id", "ttl", "seqk"], how="inner")
-    hit = m.loc[(m["ts"] - m["t_inj"]).abs() <= MATCH_TOLERANCE_S, "row"].to_numpy()
-    mask[hit] = True
+    m = pk.merge(inj, on=["src", "dst", "src_hi", "dst_hi", "proto", "ip_id", "ttl", "seqk"], how="inner")
+    m["dt"] = (m["ts"] - m["t_inj"]).abs()
+    ports = ((m["rec_sport"] < 0) | (m["sport"] == m["rec_sport"])) & ((m["rec_dport"] < 0) | (m["dport"] == m["rec_dport"]))
+    m = m[ports & (m["dt"] <= MATCH_TOLERANCE_S)]
+    exact = m["seqk"] >= 0
+    nearest = m[~exact].sort_values(["rec", "dt", "ts"], kind="stable").drop_duplicates("rec", keep="first")
+    mask[m.loc[exact, "row"].to_numpy()] = True
+    mask[nearest["row"].to_numpy()] = True
     return mask

@@ -18,6 +18,7 @@ from . import channel as _channel
 from . import dataset as _dataset
 from . import emulate as _emulate
 from . import flows as _flows
+from . import mavlink as _mavlink
 from . import plan as _plan
 from . import report as _report
 from . import run as _run
@@ -32,7 +33,7 @@ app = typer.Typer(
 )
 
 for _module in (_plan, _campaign, _dataset, _flows, _emulate, _analyze, _bench, _report, _run, _calibrate,
-                _channel, _audit):
+                _channel, _audit, _mavlink):
     _module.register(app)
 
 

@@ -152,11 +152,13 @@ def _icmp_quotes(g: _Gather, l4: np.ndarray, end: np.ndarray, proto: np.ndarray,
     return out
 
 
-def decode(raw: RawCapture) -> tuple[dict[str, np.ndarray], DecodeStats]:
-    """Decode all records of `raw`; returns per-IP-packet columns (see PacketTable) and stats."""
-    g = _Gather(raw.buf)
+def link_layer(raw: RawCapture, g: "_Gather | None" = None) -> tuple[np.ndarray, np.ndarray, int]:
+    """Per record of `raw`: the Ethernet type of its network layer (0: not IP, or a DLT_NULL
+    family no table knows), the buffer offset of its network-layer header, and the number of
+    DLT_NULL/LOOP records whose family field was unknown. Shared by `decode` and the readers
+    that need a packet's bytes above the link layer (`uavcas.flows.mavlink`)."""
+    g = g if g is not None else _Gather(raw.buf)
     off = raw.data_off
-    end = off + raw.cap_len.astype(np.int64)
     lt = raw.linktype
     n = off.shape[0]
     ethertype = np.zeros(n, dtype=np.int64)
@@ -189,6 +191,17 @@ def decode(raw: RawCapture) -> tuple[dict[str, np.ndarray], DecodeStats]:
     if raw_ip.any():
         ver = g.u8(off[raw_ip]) >> 4
         ethertype[raw_ip] = np.where(ver == 4, ETH_IPV4, np.where(ver == 6, ETH_IPV6, 0))
+    return ethertype, l3, null_unknown
+
+
+def decode(raw: RawCapture) -> tuple[dict[str, np.ndarray], DecodeStats]:
+    """Decode all records of `raw`; returns per-IP-packet columns (see PacketTable) and stats."""
+    g = _Gather(raw.buf)
+    off = raw.data_off
+    end = off + raw.cap_len.astype(np.int64)
+    lt = raw.linktype
+    n = off.shape[0]
+    ethertype, l3, null_unknown = link_layer(raw, g)
     unsupported = tuple(sorted(set(np.unique(lt).tolist()) - set(SUPPORTED_LINKTYPES)))
 
     b0 = g.u8(l3)  # version and IHL share the first byte: gather it once

@@ -42,6 +42,10 @@ class Injection:
     ip_id: int
     ttl: int
     seq: int | None
+    # the copy's transport ports (TCP/UDP), None when the record has none: for UDP, which has no
+    # sequence number, they are what tells two streams of one host pair apart
+    src_port: int | None = None
+    dst_port: int | None = None
 
 
 @dataclass(frozen=True)
@@ -70,7 +74,8 @@ def read_attack_log(path: Path, plan: Plan | None = None, t0_unix: float | None 
         elif isinstance(rec, Inject):
             injections.append(
                 Injection(attack_id=rec.attack_id, t_unix=rec.t_unix, src_ip=rec.src_ip, dst_ip=rec.dst_ip,
-                          protocol=rec.protocol, ip_id=rec.ip_id, ttl=rec.ttl, seq=rec.seq)
+                          protocol=rec.protocol, ip_id=rec.ip_id, ttl=rec.ttl, seq=rec.seq,
+                          src_port=rec.src_port, dst_port=rec.dst_port)
             )
     windows: list[AttackWindow] = []
     for aid, rec in starts.items():

@@ -209,3 +209,22 @@ def test_replayer_buffers_victim_traffic_paces_and_never_replays_itself():
 def test_telemetry_frames_look_like_mavlink2():
     f = telemetry.frame(5, 3, 33, 28)
     assert f[0] == 0xFD and f[1] == 28 and f[4] == 5 and f[5] == 3 and len(f) == 10 + 28 + 2
+
+
+def test_replayer_buffers_and_replays_a_udp_stream_with_ip_id_0_and_the_ttl_kept():
+    """MAVLink from an unconnected socket: IP id 0 on every datagram. With ttl_dec 0 only the bytes
+    tell our copy (coming back through the mirror) from the stream's next datagram."""
+    def mav(seq: int) -> bytes:
+        return bytes(Ether() / IP(src="10.9.0.3", dst="10.9.1.1", ttl=64, id=0)
+                     / UDP(sport=14555, dport=14550) / (bytes([0xFD, 9, 0, 0, seq, 1, 1, 0, 0, 0]) + bytes(11)))
+
+    r = replayer.Replayer("10.9.0.3", "10.9.0.5", buffer_pkts=5, delay_ms=0, rate_pps=100, ttl_dec=0,
+                          seq_mode="inc")
+    assert r.observe(0.0, mav(0))
+    out, rec = r.next_injection(0.0)
+    assert (rec["protocol"], rec["src_port"], rec["dst_port"], rec["ip_id"], rec["ttl"], rec["seq"]) == (
+        17, 14555, 14550, 0, 64, None)
+    assert Ether(out)[UDP].payload.load == Ether(mav(0))[UDP].payload.load  # the datagram as it was
+    assert not r.observe(0.01, out)  # our copy, back through the mirror
+    assert r.observe(0.1, mav(1))  # the stream's next datagram: same header fields, other bytes
+    assert r.stats["own_ignored"] == 1 and r.stats["buffered"] == 2

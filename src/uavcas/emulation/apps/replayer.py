@@ -1,5 +1,8 @@
 """Replay attacker: observe the victim's traffic, re-send buffered packets later, log each one.
 
+Every IPv4 packet of the victim is a candidate, whatever its protocol: TCP, and the UDP streams
+(MAVLink on 14550, RTP video on 5600); the inject record carries the ports of TCP and UDP copies.
+
 Runs inside the attacker's namespace (`python -m uavcas.emulation.apps.replayer ...`, the
 venv's python). The fabric mirrors the victim's host port to the attacker's host port
 (`uavcas.attacks.replay.mirror_on`), so the attacker's `eth0` receives a copy of every IPv4 frame the victim
@@ -7,8 +10,10 @@ sends or receives, wherever the two are. What the authors' code got wrong, and w
 
 * it sniffed only its own port: we read the mirror, i.e. the victim's real traffic;
 * it re-sniffed its own injections: we (a) ignore frames we sent (AF_PACKET `PACKET_OUTGOING`),
-  (b) ignore any frame whose (src, dst, proto, ports, IP id, seq, ttl) matches a packet we
-  injected (our injections to the victim come back through the mirror), and (c) only buffer
+  (b) ignore any frame whose (src, dst, proto, ports, IP id, seq, ttl, digest of the bytes above
+  the IP header) matches a packet we injected (our injections to the victim come back through
+  the mirror; the digest keeps a UDP stream sent with IP id 0, MAVLink or RTP video, from looking
+  like our copy of one of its datagrams when the TTL is left as it was), and (c) only buffer
   frames whose TTL is not one we produce by decrementing, so a replay of a replay is impossible;
 * it overwrote seq with 0, 1, 2: seq = original + k (`inc`, k = 1, 2, ... per injection),
   uniformly random (`rand`), or unchanged (`zero`, the original sequence number).
@@ -34,6 +39,7 @@ import socket
 import struct
 import sys
 import time
+import zlib
 from dataclasses import dataclass
 
 from uavcas.events import Inject
@@ -55,6 +61,7 @@ class Seen:
     ip_id: int
     ttl: int
     seq: int | None
+    digest: int = 0  # CRC-32 of the IP payload (transport header and data, up to the IP length)
 
 
 def parse(frame: bytes) -> Seen | None:
@@ -73,7 +80,8 @@ def parse(frame: bytes) -> Seen | None:
         sport, dport = struct.unpack_from("!HH", frame, l4)
         if proto == 6 and len(frame) >= l4 + 8:
             seq = struct.unpack_from("!I", frame, l4 + 4)[0]
-    return Seen(src, dst, proto, sport, dport, ip_id, ttl, seq)
+    ip_end = 14 + struct.unpack_from("!H", frame, 16)[0]  # Ethernet padding is no part of the packet
+    return Seen(src, dst, proto, sport, dport, ip_id, ttl, seq, zlib.crc32(frame[l4:ip_end]))
 
 
 def new_seq(orig: int, k: int, mode: str, rng: random.Random) -> int:

@@ -1,0 +1,84 @@
+"""`uavcas mavlink RUN_DIR`: every MAVLink message in a run's captures, with its packet's truth."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import typer
+from rich.table import Table
+
+from .common import atomic_path, console, err_console, fail
+
+TABLE_ROWS = 50  # the terminal table shows this many messages; --out has them all
+OUT_SUFFIXES = (".parquet", ".csv")
+
+
+def mavlink_cmd(
+    run_dir: Path = typer.Argument(..., help="Run directory (plan.json, run.json, attacks.jsonl, pcap/)."),
+    out: Path = typer.Option(None, "--out", help="Write the whole table: FILE.parquet or FILE.csv (by suffix)."),
+    port: int = typer.Option(14550, "--port", help="UDP port of the MAVLink datagrams (source or destination)."),
+    point: str = typer.Option(None, "--point", help="Keep one capture point (e.g. s-uav0). Without it a packet "
+                                                    "seen at k switches lists its messages k times, once per point."),
+    dialect: str = typer.Option("ardupilotmega", "--dialect", help="pymavlink dialect (pymavlink.dialects.v20)."),
+    allow_truncated: bool = typer.Option(False, "--allow-truncated", help="Keep the packets before a truncation."),
+) -> None:
+    """Decode every MAVLink message of a run's captures: one row per message and capture point, with
+    time, addresses, header, fields (JSON and position columns in the message's units), CRC check
+    and the packet's effect and family from the ground truth."""
+    from uavcas.atomic import check_target
+    from uavcas.mavlink_capture import mavlink_table, problems
+
+    if out is not None and out.suffix.lower() not in OUT_SUFFIXES:
+        raise fail(f"--out: {out} must end in .parquet or .csv")
+    try:
+        if out is not None:
+            check_target(out)
+        df = mavlink_table(run_dir, port=port, point=point, dialect=dialect, allow_truncated=allow_truncated)
+        if out is not None:
+            with atomic_path(out) as tmp:
+                if out.suffix.lower() == ".parquet":
+                    import pyarrow as pa
+                    import pyarrow.parquet as pq
+
+                    pq.write_table(pa.Table.from_pandas(df, preserve_index=False), tmp, compression="zstd")
+                else:
+                    df.to_csv(tmp, index=False)
+    except (ValueError, OSError) as exc:  # RunDirError, LabelError, CaptureError, MavlinkError: one line
+        raise fail(str(exc).splitlines()[0] if str(exc) else type(exc).__name__) from None
+    for line in problems(df):
+        err_console.print(f"[yellow]warning:[/] {line}", highlight=False, soft_wrap=True)
+    if out is not None:
+        err_console.print(f"wrote {len(df)} MAVLink rows to {out}", highlight=False)
+        return
+    _print(df, point)
+
+
+def _print(df, point: str | None) -> None:
+    import pandas as pd
+    from rich.console import Console
+
+    where = f"at {point}" if point else "over all capture points (one row per observation)"
+    table = Table(title=f"{len(df)} MAVLink rows {where}")
+    for c in ("ts_s", "point", "src", "dst", "sysid", "compid", "seq", "msg_name", "crc_ok", "effect"):
+        table.add_column(c, justify="right" if c in ("sysid", "compid", "seq") else "left")
+    na = lambda v: "-" if pd.isna(v) else str(v)  # noqa: E731  (None, NaN and pd.NA alike)
+    for r in df.head(TABLE_ROWS).itertuples(index=False):
+        table.add_row(f"{r.ts_s:.6f}", str(r.point), f"{r.src_ip}:{r.src_port}", f"{r.dst_ip}:{r.dst_port}",
+                      na(r.sysid), na(r.compid), na(r.seq), na(r.msg_name), na(r.crc_ok), str(r.effect))
+    if len(df) > TABLE_ROWS:
+        table.caption = f"first {TABLE_ROWS} of {len(df)} rows; use --out FILE.parquet for all"
+    wide = Console(width=max(console.width, 140))  # addresses must not be cut
+    wide.print(table)
+    counts = Table(title="messages per name")
+    counts.add_column("msg_name")
+    counts.add_column("rows", justify="right")
+    counts.add_column("crc_ok", justify="right")
+    names = df["msg_name"].fillna("(no MAVLink frame)")
+    ok = df["crc_ok"].fillna(False).astype(bool)
+    for name, n in names.value_counts().sort_index().items():
+        counts.add_row(str(name), str(int(n)), str(int(ok[names == name].sum())))
+    wide.print(counts)
+
+
+def register(app: typer.Typer) -> None:
+    app.command("mavlink")(mavlink_cmd)
