@@ -102,7 +102,8 @@ class Track:
         k = self._segment(t_s)
         v = self._velocity(k)
         a = self.positions_m[k]
-        dt = min(max(t_s - self.times_s[k], 0.0), self.times_s[k + 1] - self.times_s[k]) if v != (0.0, 0.0, 0.0) else 0.0
+        # inside segment k (clamped: before the first start the track is at its first position)
+        dt = max(t_s - self.times_s[k], 0.0) if k + 1 < len(self.times_s) else 0.0
         heading = 0.0
         for j in range(k, -1, -1):  # at rest: the heading of the last move
             vj = self._velocity(j)

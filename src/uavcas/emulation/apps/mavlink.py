@@ -312,10 +312,10 @@ def run_uav(spec: UavSpec) -> dict:
     now = time.time()
     heartbeat = _Periodic(1.0, now)
     streams = {sid: _Periodic(0.0, now) for sid in STREAM_MESSAGES}  # ArduCopter default: 0 Hz
-    mission: dict = {"count": None, "items": {}, "from_": None, "asked": None, "tries": 0}
+    mission: dict = {"count": None, "items": {}, "from_": None, "asked": None, "seq": None, "tries": 0}
     speed_mps: float | None = None
     while not stop.flag and (now := time.time()) < deadline:
-        for data, addr in _recv_all(sock, _wait(now, deadline, heartbeat, streams, mission)):
+        for data, addr in _recv_all(sock, _wait(now, deadline, heartbeat, streams, mission, spec.retry.timeout_s)):
             for msg in gcs.parse(data):
                 typ = msg.get_type()
                 received[typ] += 1
@@ -333,7 +333,9 @@ def run_uav(spec: UavSpec) -> dict:
                                    asked=None, tries=0)
                     log("mission_count", count=msg.count)
                     _ask_next(gcs, m, mission, spec, log)
-                elif typ == "MISSION_ITEM_INT" and msg.target_system == spec.sysid and mission["count"]:
+                elif (typ == "MISSION_ITEM_INT" and msg.target_system == spec.sysid and mission["count"]
+                      and mission["asked"] is not None and msg.seq == mission["seq"]):
+                    # only the item asked for: a duplicate (both ends retried) must not ask again
                     mission["items"][msg.seq] = (msg.x / 1e7, msg.y / 1e7, msg.z)
                     _ask_next(gcs, m, mission, spec, log)
                 elif typ == "COMMAND_LONG" and msg.target_system == spec.sysid:
@@ -370,10 +372,11 @@ def run_uav(spec: UavSpec) -> dict:
     return summary
 
 
-def _wait(now, deadline, heartbeat, streams, mission) -> float:
+def _wait(now, deadline, heartbeat, streams, mission, timeout_s: float) -> float:
+    """Seconds until the UAV's next own action: a message due, a mission retry, the deadline."""
     nxt = [deadline, heartbeat.next] + [p.next for p in streams.values() if p.period is not None]
     if mission["asked"] is not None:
-        nxt.append(mission["asked"])
+        nxt.append(mission["asked"] + timeout_s)
     return max(0.0, min(nxt) - now)
 
 
@@ -389,7 +392,7 @@ def _ask_next(gcs: _Peer, m, mission: dict, spec: UavSpec, log, resend: bool = F
     if not resend:
         mission["tries"] = 0
     gcs.send(m.MAVLink_mission_request_int_message(sysid, compid, missing[0], m.MAV_MISSION_TYPE_MISSION))
-    mission["asked"] = time.time()
+    mission["asked"], mission["seq"] = time.time(), missing[0]
 
 
 def _telemetry(m, typ: str, spec: UavSpec, p, t: float):
