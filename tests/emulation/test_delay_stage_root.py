@@ -91,7 +91,7 @@ def test_a_real_run_is_audited(tmp_path):
     p = _plan(delay_ms=2.0)
     p = p.model_copy(update={"windows": [p.windows[0], p.windows[0].model_copy(update={"index": 1, "t_s": 5.0})],
                              "window_s": 5.0})
-    art = realize(p, tmp_path / "r", RunOptions(telemetry=True, n_images=4))
+    art = realize(p, tmp_path / "r", RunOptions(n_images=4))
     assert art.exit_status == 0, art.exit_reason
     rd = RunDir(art.out_dir)
     info = rd.read_info()

@@ -287,11 +287,9 @@ def test_kill_9_then_uavcas_clean_leaves_nothing(tmp_path):
     assert r.returncode == 2 and "never finished" in r.stderr and not (tmp_path / "ds").exists()
 
 
-def test_benign_run_http_and_optional_telemetry(tmp_path):
-    from uavcas.emulation.runner import RunOptions
-
+def test_benign_run_http(tmp_path):
     p = make_plan(nodes(2), [link("uav0", "bs0"), link("uav1", "uav0")], [], n_windows=2, window_s=3.0)
-    art = realize(p, tmp_path / "r", RunOptions(telemetry=True))
+    art = realize(p, tmp_path / "r")
     assert art.exit_status == 0, art.exit_reason
     assert (art.out_dir / "attacks.jsonl").read_text() == ""
     info = art.run_info
@@ -299,8 +297,7 @@ def test_benign_run_http_and_optional_telemetry(tmp_path):
     assert all(c["ok"] >= 3 and c["failed"] == 0 for c in info.http_clients)
     pk = rc.read_pcap(art.out_dir / "pcap" / "s-bs0.pcap")
     for u in ("uav0", "uav1"):
-        n = sum(1 for x in pk if x.proto == 17 and x.dport == 14550 and x.src == p.node(u).ip)
-        assert 50 <= n <= 62, (u, n)  # 10 Hz for 6 s
+        assert not any(x.proto == 17 and x.dport == 14550 for x in pk)  # a plan without scenario: image only
         assert rc.http_transfers(pk, p.node(u).ip)[1] > 50
 
 

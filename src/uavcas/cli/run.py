@@ -24,7 +24,6 @@ def run_cmd(
     windows: int = typer.Option(12, "--windows", min=1, help="Number of windows."),
     window_s: float = typer.Option(5.0, "--window-s", min=0.5, help="Window length in seconds."),
     profile: str = typer.Option(None, "--profile", help="Channel/mobility profile name or JSON path."),
-    telemetry: bool = typer.Option(False, "--telemetry", help="Add a 10 Hz MAVLink-like UDP stream per UAV."),
     prefix: str = typer.Option(None, "--prefix", help="Namespace prefix (default: random)."),
     think_s: float = typer.Option(0.5, "--think-s", min=0.0, help="Mean pause between a BS's image fetches."),
     audit: bool = typer.Option(True, "--audit/--no-audit",
@@ -52,7 +51,7 @@ def run_cmd(
 
     from uavcas.emulation.runner import RunOptions, realize
 
-    opts = RunOptions(prefix=prefix, telemetry=telemetry, think_mean_s=think_s, audit=audit)
+    opts = RunOptions(prefix=prefix, think_mean_s=think_s, audit=audit)
     console.print(f"[bold]{p.config}[/] seed={seed}: {len(p.nodes)} nodes, {len(p.windows)} windows x "
                   f"{p.window_s:g} s, shaper {feats.shaper} -> {out}", highlight=False)
     for a in p.attacks:

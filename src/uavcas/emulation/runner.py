@@ -1,9 +1,11 @@
 """`realize(plan, out_dir) -> RunArtifacts`: play a Plan in real time on real Linux stacks.
 
 Order of a run (t0 = wall-clock time of plan t = 0, written to run.json):
-  namespaces + fabric + shaper (Emulation) -> one tcpdump per switch -> nginx on every UAV ->
+  namespaces + fabric + shaper (Emulation) -> one tcpdump per switch -> nginx on every UAV (payload
+  image/mixed) ->
   attack processes prepared (idle: replayers, floods behind their gates) -> window 0 applied ->
-  t0 -> BS clients -> the schedule: window k at t0 + k * window_s, each attack's start/stop at
+  t0 -> benign clients (MAVLink ground stations then autopilots for telemetry/mixed, BS curl loops
+  for image/mixed: `apps.traffic`) -> the schedule: window k at t0 + k * window_s, each attack's start/stop at
   t0 + start_s/stop_s (and a family's calibration times) -> end at t0 + duration -> attacks,
   clients and servers stopped -> captures stopped (SIGINT: flushed, drop counters read) ->
   namespaces removed.
@@ -55,7 +57,6 @@ PREPARE_MARGIN_S = 0.05  # preparing the next window stops this long before the 
 @dataclass(frozen=True)
 class RunOptions:
     prefix: str | None = None  # namespace prefix (default: a fresh random one)
-    telemetry: bool = False  # MAVLink-like UDP stream per UAV (off: the paper's traffic is HTTP)
     think_mean_s: float = 0.5  # mean pause between a BS's image fetches
     n_images: int = 24
     keep_logs: bool = True  # copy tool logs (curl results, stderr) to OUT/logs
@@ -195,8 +196,7 @@ def _play(st: _State, opt: RunOptions, notify: Callable[[Progress], None]) -> No
     t = time.time()
     st.captures = capture.start_all(emu, [n.name for n in plan.nodes], RunDir(st.out).pcap_dir, work / "logs",
                                     dur + 120)
-    st.traffic = BenignTraffic(emu, plan, work, dur, telemetry_on=opt.telemetry, think_mean_s=opt.think_mean_s,
-                               n_images=opt.n_images)
+    st.traffic = BenignTraffic(emu, plan, work, dur, think_mean_s=opt.think_mean_s, n_images=opt.n_images)
     st.traffic.start_servers()
     st.executor = AttackExecutor(emu, plan, work, dur, on_event=lambda r: notify(AttackLogged(record=r)))
     st.executor.prepare()

@@ -7,6 +7,7 @@ consumed by the emulator (`uavcas.emulation`), the labeller and the reports. Its
 
 from __future__ import annotations
 
+import re
 from typing import Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, model_validator
@@ -15,7 +16,7 @@ from uavcas.attacks import AttackSpec, family
 from uavcas.scenario.codec import Scenario, ScenarioError
 from uavcas.vocabulary import FAMILIES, Family
 
-SCHEMA_VERSION = 1
+SCHEMA_VERSION = 2  # 2: Plan.site and Node.sysid (defaults fill both in plans of version 1)
 
 NodeKind = Literal["uav", "bs"]
 LinkKind = Literal["air", "backhaul"]
@@ -23,6 +24,15 @@ LinkKind = Literal["air", "backhaul"]
 
 class _Frozen(BaseModel):
     model_config = ConfigDict(frozen=True, extra="forbid")
+
+
+_STANDARD_NAME = re.compile(r"^(uav|bs)(\d+)$")
+
+
+def mavlink_sysid(kind: str, k: int) -> int:
+    """UAV k -> MAVLink system id k + 1 (autopilots count from 1); BS k -> 255 - k (255 is the
+    customary ground-station id: ArduPilot's SYSID_MYGCS default, MAVProxy's source system)."""
+    return k + 1 if kind == "uav" else 255 - k
 
 
 class Node(_Frozen):
@@ -33,6 +43,37 @@ class Node(_Frozen):
     index: int  # position in Plan.nodes; switch i belongs to node i
     ip: str  # IPv4 inside the emulation's private /16
     mac: str  # locally administered, derived from the index (static ARP/FDB need it up front)
+    # MAVLink system id of the node's autopilot (UAV) or ground station (BS): `mavlink_sysid`.
+    # None only for hand-made nodes whose name is not "uav<k>"/"bs<k>".
+    sysid: int | None = Field(default=None, ge=1, le=255)
+
+    @model_validator(mode="before")
+    @classmethod
+    def _sysid_from_name(cls, data: Any) -> Any:
+        # plan.json of schema 1 and hand-made nodes: the id follows from the standard name
+        if isinstance(data, dict) and data.get("sysid") is None and isinstance(data.get("name"), str):
+            m = _STANDARD_NAME.match(data["name"])
+            if m and m.group(1) == data.get("kind"):
+                data = {**data, "sysid": mavlink_sysid(m.group(1), int(m.group(2)))}
+        return data
+
+
+class Site(_Frozen):
+    """Where the plan's area lies on Earth: its origin (x = y = 0, z = 0) is this point, x east,
+    y north, z up (metres above the site's ground). Coordinates on WGS-84.
+
+    Default: the AERPAW Lake Wheeler LW1 tower (Raleigh, NC), lat/lon as the MPACT-Lab
+    processing of the Maeng et al. LTE flights uses them (lat_BS/lon_BS of their
+    data_gen/LTE_dataset script, uav-spectrum-sensing-insights); the same point is recovered
+    to 3 mm from the published lat_s/lon_s/dist_2D_new_s columns of the data in
+    ../shared/data/aerpaw. alt_m is 0: those data give altitudes above take-off only, no ground
+    elevation, so the altitude MAVLink reports as AMSL equals the height above the site.
+    """
+
+    name: str = "AERPAW LW1"
+    lat_deg: float = Field(default=35.727451, ge=-90.0, le=90.0)
+    lon_deg: float = Field(default=-78.695974, ge=-180.0, le=180.0)
+    alt_m: float = 0.0  # ground altitude of the origin above the WGS-84 ellipsoid (see above)
 
 
 class Link(_Frozen):
@@ -130,6 +171,7 @@ class Plan(_Frozen):
     profile: str  # channel/mobility profile name the plan was made with
     profile_sha256: str | None = None  # SHA-256 of the profile's JSON (None: plans made before it was recorded)
     area_m: tuple[float, float, float, float]  # x_max, y_max, z_min, z_max
+    site: Site = Field(default_factory=Site)  # the area's origin on Earth (MAVLink positions)
     nodes: list[Node]
     windows: list[Window]
     attacks: list[Attack]

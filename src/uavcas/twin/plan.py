@@ -26,7 +26,7 @@ from uavcas.mobility import Area, make_mission
 from uavcas.scenario import Scenario
 from uavcas.topology.routing import Topology, nearest_neighbour_topology, route, with_wormholes
 
-from .model import Attack, Link, Node, Plan, Route, Window, WormholeOverride
+from .model import Attack, Link, Node, Plan, Route, Window, WormholeOverride, mavlink_sysid
 from .profile import TwinProfile, load_profile, profile_sha256
 from .schedule import schedule_attacks
 
@@ -45,12 +45,17 @@ def node_mac(index: int) -> str:
 
 
 def _nodes(scenario: Scenario) -> list[Node]:
+    if scenario.payload != "image" and scenario.n_uav + scenario.n_bs > 255:
+        raise ValueError(f"{scenario.n_uav} UAVs + {scenario.n_bs} BSs exceed the 255 MAVLink system ids "
+                         f"a {scenario.payload!r} payload needs")
     nodes = []
     for k in range(scenario.n_uav):
-        nodes.append(Node(name=f"uav{k}", kind="uav", index=k, ip=node_ip("uav", k), mac=node_mac(k)))
+        nodes.append(Node(name=f"uav{k}", kind="uav", index=k, ip=node_ip("uav", k), mac=node_mac(k),
+                          sysid=mavlink_sysid("uav", k)))
     for k in range(scenario.n_bs):
         i = scenario.n_uav + k
-        nodes.append(Node(name=f"bs{k}", kind="bs", index=i, ip=node_ip("bs", k), mac=node_mac(i)))
+        nodes.append(Node(name=f"bs{k}", kind="bs", index=i, ip=node_ip("bs", k), mac=node_mac(i),
+                          sysid=mavlink_sysid("bs", k)))
     return nodes
 
 

@@ -15,7 +15,7 @@ import pytest
 from scapy.layers.inet import IP, TCP, UDP
 from scapy.layers.l2 import Ether
 
-from uavcas.emulation.apps import capture, client, flood, images, nginx, replayer, telemetry
+from uavcas.emulation.apps import capture, client, flood, images, nginx, replayer
 
 
 def test_images_are_seeded_jpeg_sized(tmp_path):
@@ -204,11 +204,6 @@ def test_replayer_buffers_victim_traffic_paces_and_never_replays_itself():
     assert r.stats["own_ignored"] == 2
     _, rec2 = r.next_injection(0.36)
     assert rec2["seq"] == 1001 + 2  # k counts injections
-
-
-def test_telemetry_frames_look_like_mavlink2():
-    f = telemetry.frame(5, 3, 33, 28)
-    assert f[0] == 0xFD and f[1] == 28 and f[4] == 5 and f[5] == 3 and len(f) == 10 + 28 + 2
 
 
 def test_replayer_buffers_and_replays_a_udp_stream_with_ip_id_0_and_the_ttl_kept():

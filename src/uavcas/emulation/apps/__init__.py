@@ -4,11 +4,12 @@
 * `images`    seeded JPEG-like payloads (tens to hundreds of KB) served by every UAV;
 * `nginx`     one nginx per UAV (no systemd: own conf, `daemon off`, paths under the run dir);
 * `client`    one curl loop per UAV on its base station (UAV i is fetched by BS i mod n_bs);
-* `telemetry` optional MAVLink-like 10 Hz UDP stream UAV -> BS (off by default);
+* `mavlink`   MAVLink v2 (pymavlink): an autopilot per UAV, a ground station per BS on UDP 14550
+              (payload telemetry or mixed): streams, mission upload, per-window commands;
 * `flood`     hping3 SYN flood with closed-loop rate calibration and an exact SYN counter;
 * `replayer`  scapy replay process fed by a port mirror (run inside the attacker namespace);
 * `capture`   one tcpdump per switch, with its drop counters;
-* `traffic`   the benign traffic of a run (servers before t0, clients at t0, summary at the end);
+* `traffic`   the benign traffic of a run by the scenario's payload (servers before t0, clients at t0);
 * `procs`     a supervised process: started in its own session, stopped by PID with a signal;
 * `versions`  versions of the external tools, for run.json.
 """

@@ -1,7 +1,16 @@
-"""Benign traffic of a run: nginx on every UAV, curl loops on the BSs, optional telemetry.
+"""Benign traffic of a run, by the scenario's payload axis (`plan.scenario.payload`):
+
+* `image`     nginx on every UAV, a curl loop per UAV on its BS (apps/client.py), unchanged;
+* `telemetry` MAVLink v2 alone (apps/mavlink.py): an autopilot endpoint per UAV, a ground
+              station per BS on UDP 14550, no HTTP;
+* `mixed`     both; its video part (apps/video.py, another change) is not wired yet: `video_on`
+              is False, the hook where it goes.
+A hand-made plan without a scenario gets `image`.
 
 `BenignTraffic.start_servers()` runs before t0 (servers must be listening when the clock
-starts); `start_clients(t0)` right at t0 (a client skips the windows its UAV is disconnected); `stop()` at the end, returning a per-client summary.
+starts); `start_clients(t0)` right at t0 (an HTTP client skips the windows its UAV is
+disconnected; a MAVLink UAV keeps sending into the void, as a radio would); `stop()` at the end,
+returning a per-HTTP-client summary (the MAVLink endpoints log to logs/mavlink-<node>.jsonl).
 """
 
 from __future__ import annotations
@@ -13,10 +22,12 @@ from pathlib import Path
 
 from uavcas.emulation import kernel
 
-from . import client, images, nginx, telemetry
+from . import client, images, mavlink, nginx
 from .procs import Proc, spawn, wait_for
 
 SERVER_READY_S = 15.0
+MAVLINK_READY_S = 120.0  # loading Python + pymavlink in every namespace at once takes seconds
+MAVLINK_GRACE_S = 10.0  # the endpoints' own deadline is the run's end; `timeout` kills them this much later
 
 
 @dataclass
@@ -34,23 +45,33 @@ class ClientSummary:
 
 
 class BenignTraffic:
-    def __init__(self, emu, plan, work_dir: Path, duration_s: float, *, telemetry_on: bool = False,
-                 think_mean_s: float = client.THINK_MEAN_S, n_images: int = images.DEFAULT_COUNT) -> None:
+    def __init__(self, emu, plan, work_dir: Path, duration_s: float, *,
+                 think_mean_s: float = client.THINK_MEAN_S, n_images: int = images.DEFAULT_COUNT,
+                 stream_rates: mavlink.StreamRates = mavlink.StreamRates()) -> None:
         self.emu, self.plan = emu, plan
         self.work, self.log_dir = work_dir, work_dir / "logs"
         self.duration_s = duration_s
-        self.telemetry_on, self.think_mean_s, self.n_images = telemetry_on, think_mean_s, n_images
+        self.think_mean_s, self.n_images, self.stream_rates = think_mean_s, n_images, stream_rates
+        self.payload = plan.scenario.payload if plan.scenario is not None else "image"
+        self.http_on = self.payload in ("image", "mixed")
+        self.mavlink_on = self.payload in ("telemetry", "mixed")
+        self.video_on = False  # `mixed`'s video (uavcas.emulation.apps.video) is not wired yet
         self.uavs = [n for n in plan.nodes if n.kind == "uav"]
         self.bss = [n for n in plan.nodes if n.kind == "bs"]
         self.servers: list[Proc] = []
         self.clients: list[tuple[client.ClientSpec, Proc]] = []
-        self.others: list[Proc] = []
+        self.mavlink_procs: list[Proc] = []
+        self.t0_path = work_dir / "mavlink" / "t0"
         self.images: list[images.Image] = []
 
     def _start(self, node: str):
         return lambda argv, t, **kw: self.emu.popen(node, argv, t, **kw)
 
     def start_servers(self) -> None:
+        if self.mavlink_on:
+            self._start_mavlink()
+        if not self.http_on:
+            return
         root = self.work / "images"
         self.images = images.generate(root, self.plan.seed, self.n_images)
         sites = []
@@ -60,12 +81,6 @@ class BenignTraffic:
             self.servers.append(spawn(self._start(n.name), f"nginx-{n.name}", nginx.argv(site), self.log_dir,
                                       self.duration_s + 120))
             sites.append(site)
-        if self.telemetry_on:
-            for b in self.bss:
-                argv = [sys.executable, "-m", "uavcas.emulation.apps.telemetry", "sink",
-                        "--seconds", str(self.duration_s + 10)]
-                self.others.append(spawn(self._start(b.name), f"telemetry-sink-{b.name}", argv, self.log_dir,
-                                         self.duration_s + 20))
 
         def ready() -> bool:
             return all(nginx.listening(kernel.in_netns(self.emu.ns(s.node)), s) for s in sites)
@@ -76,6 +91,12 @@ class BenignTraffic:
             raise RuntimeError(f"nginx did not start: {why}")
 
     def start_clients(self, t0_unix: float) -> None:
+        if self.mavlink_on:
+            mavlink.write_t0(self.t0_path, t0_unix)  # the endpoints, loaded before t0, start now
+        if self.http_on:
+            self._start_http(t0_unix)
+
+    def _start_http(self, t0_unix: float) -> None:
         names = [img.name for img in self.images]
         offline: dict[str, list[int]] = {}
         for w in self.plan.windows:
@@ -92,18 +113,48 @@ class BenignTraffic:
             proc = spawn(self._start(bs), f"client-{bs}-{uav}", ["bash", str(script)], self.log_dir,
                          self.duration_s + client.MAX_TIME_S + 5)
             self.clients.append((spec, proc))
-        if self.telemetry_on:
-            for i, u in enumerate(self.uavs):
-                bs = self.bss[i % len(self.bss)]
-                argv = [sys.executable, "-m", "uavcas.emulation.apps.telemetry", "send", "--dst", bs.ip,
-                        "--sysid", str(i + 1), "--seconds", str(self.duration_s)]
-                self.others.append(spawn(self._start(u.name), f"telemetry-{u.name}", argv, self.log_dir,
-                                         self.duration_s + 10))
+
+    def _start_mavlink(self) -> None:
+        """A ground station per BS and an autopilot per UAV, loaded and bound before t0; each waits
+        for t0 (`t0_path`, written by start_clients) and then runs the plan's windows."""
+        pairs = client.assignments([u.name for u in self.uavs], [b.name for b in self.bss])
+        spec_dir = self.work / "mavlink"
+        spec_dir.mkdir(parents=True, exist_ok=True)
+        self.t0_path.unlink(missing_ok=True)
+        run = [sys.executable, "-m", "uavcas.emulation.apps.mavlink"]
+        timeout_s = mavlink.T0_WAIT_S + self.duration_s + MAVLINK_GRACE_S
+        for b in self.bss:
+            if b.sysid is None:
+                raise ValueError(f"{b.name} has no MAVLink system id in the plan")
+            served = [mavlink.gcs_target(self.plan, uav) for bs, uav in pairs if bs == b.name]
+            spec = mavlink.GcsSpec(name=b.name, sysid=b.sysid, rates=self.stream_rates, uavs=served,
+                                   t0_path=self.t0_path, window_s=self.plan.window_s,
+                                   n_windows=len(self.plan.windows), duration_s=self.duration_s,
+                                   log_path=self.log_dir / f"mavlink-{b.name}.jsonl")
+            path = spec_dir / f"{b.name}.json"
+            path.write_text(spec.model_dump_json())
+            self.mavlink_procs.append(spawn(self._start(b.name), f"mavlink-{b.name}", run + ["gcs", str(path)],
+                                            self.log_dir, timeout_s))
+        for bs, uav in pairs:
+            spec = mavlink.uav_spec(self.plan, uav, self.plan.node(bs).ip, None, self.duration_s,
+                                    self.log_dir / f"mavlink-{uav}.jsonl", t0_path=self.t0_path)
+            path = spec_dir / f"{uav}.json"
+            path.write_text(spec.model_dump_json())
+            self.mavlink_procs.append(spawn(self._start(uav), f"mavlink-{uav}", run + ["uav", str(path)],
+                                            self.log_dir, timeout_s))
+
+        def ready() -> bool:  # every endpoint bound and waiting for t0
+            return all(p.stdout().startswith("ready") for p in self.mavlink_procs)
+
+        if not wait_for(ready, MAVLINK_READY_S, 0.05):
+            bad = [p for p in self.mavlink_procs if not p.stdout().startswith("ready")]
+            why = bad[0].stderr().strip()[-300:] or "not ready"
+            raise RuntimeError(f"MAVLink endpoint {bad[0].name} did not start: {why}")
 
     def stop(self) -> list[ClientSummary]:
         for _, p in self.clients:
             p.stop(signal.SIGTERM, grace_s=2.0)
-        for p in self.others + self.servers:
+        for p in self.mavlink_procs + self.servers:
             p.stop(signal.SIGTERM, grace_s=2.0)
         return self.summary()
 
