@@ -24,7 +24,9 @@ FAMILY_CLASS: dict[str, str] = {
 BENIGN = "Benign"
 BENIGN_TOKEN = "benign"  # the scenario's attacks field of a run without attacks
 
-Payload = Literal["image", "telemetry", "mixed"]
+# image: the paper's HTTP image fetches; telemetry: MAVLink v2 alone; video: MAVLink + H.264 over
+# RTP; mixed: MAVLink + video + images (uavcas.emulation.apps.traffic)
+Payload = Literal["image", "telemetry", "video", "mixed"]
 PAYLOADS: tuple[str, ...] = get_args(Payload)
 Pathloss = Literal["logdist", "3gpp", "uma", "rma", "umi", "tworay", "freespace"]
 PATHLOSS_MODELS: tuple[str, ...] = get_args(Pathloss)

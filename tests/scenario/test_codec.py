@@ -40,7 +40,7 @@ def test_replay_and_pairs_round_trip():
         ("dos=1000-020-2-image-logdist-adaptive-random-30-95", "field 'n_uav'"),
         ("dos=1000-0-2-image-logdist-adaptive-random-30-95", "field 'n_uav'"),
         ("ddos=1000-2-2-image-logdist-adaptive-random-30-95", "field 'n_uav'"),
-        ("dos=1000-20-2-video-logdist-adaptive-random-30-95", "field 'payload'"),
+        ("dos=1000-20-2-audio-logdist-adaptive-random-30-95", "field 'payload'"),
         ("dos=1000-20-2-image-cost231-adaptive-random-30-95", "field 'pathloss'"),
         ("dos=1000-20-2-image-logdist-mcs9-random-30-95", "field 'modulation'"),
         ("dos=1000-20-2-image-logdist-adaptive-circle-30-95", "field 'mission'"),

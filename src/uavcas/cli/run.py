@@ -26,6 +26,8 @@ def run_cmd(
     profile: str = typer.Option(None, "--profile", help="Channel/mobility profile name or JSON path."),
     prefix: str = typer.Option(None, "--prefix", help="Namespace prefix (default: random)."),
     think_s: float = typer.Option(0.5, "--think-s", min=0.0, help="Mean pause between a BS's image fetches."),
+    video_kbps: int = typer.Option(None, "--video-kbps", min=1,
+                                   help="H.264 bitrate of each UAV's video in kbit/s (payload video, mixed; default 500)."),
     audit: bool = typer.Option(True, "--audit/--no-audit",
                                help="Audit the run's fidelity at the end (fidelity.json; `uavcas audit` later)."),
 ) -> None:
@@ -51,7 +53,8 @@ def run_cmd(
 
     from uavcas.emulation.runner import RunOptions, realize
 
-    opts = RunOptions(prefix=prefix, think_mean_s=think_s, audit=audit)
+    opts = RunOptions(prefix=prefix, think_mean_s=think_s, audit=audit,
+                      **({"video_kbps": video_kbps} if video_kbps is not None else {}))
     console.print(f"[bold]{p.config}[/] seed={seed}: {len(p.nodes)} nodes, {len(p.windows)} windows x "
                   f"{p.window_s:g} s, shaper {feats.shaper} -> {out}", highlight=False)
     for a in p.attacks:

@@ -39,6 +39,7 @@ from uavcas.versions import package_versions
 
 from .apps import capture
 from .apps.traffic import BenignTraffic
+from .apps.video import BITRATE_KBPS
 from .apps.versions import tool_versions
 from .attacks import AttackExecutor
 from .emulation import Emulation
@@ -59,6 +60,7 @@ class RunOptions:
     prefix: str | None = None  # namespace prefix (default: a fresh random one)
     think_mean_s: float = 0.5  # mean pause between a BS's image fetches
     n_images: int = 24
+    video_kbps: int = BITRATE_KBPS  # H.264 bitrate of each UAV's video (payload video and mixed; apps/video.py)
     keep_logs: bool = True  # copy tool logs (curl results, stderr) to OUT/logs
     urgent: bool = True  # window changes and attack actions at real-time priority (emulation.priority)
     softirq_boost: bool = True  # the kernel's softirq threads at real-time priority during the run
@@ -196,7 +198,8 @@ def _play(st: _State, opt: RunOptions, notify: Callable[[Progress], None]) -> No
     t = time.time()
     st.captures = capture.start_all(emu, [n.name for n in plan.nodes], RunDir(st.out).pcap_dir, work / "logs",
                                     dur + 120)
-    st.traffic = BenignTraffic(emu, plan, work, dur, think_mean_s=opt.think_mean_s, n_images=opt.n_images)
+    st.traffic = BenignTraffic(emu, plan, work, dur, think_mean_s=opt.think_mean_s, n_images=opt.n_images,
+                               video_kbps=opt.video_kbps)
     st.traffic.start_servers()
     st.executor = AttackExecutor(emu, plan, work, dur, on_event=lambda r: notify(AttackLogged(record=r)))
     st.executor.prepare()

@@ -67,7 +67,7 @@ def _rtp(pt: int = 96, nal: int = 0x7C, version: int = 2, cc: int = 0, ext_words
 
 def test_defaults_and_units(tmp_path):
     s = _spec(tmp_path)
-    assert (s.port, s.bitrate_kbps, s.width_px, s.height_px, s.fps) == (5600, 1000, 640, 360, 30)
+    assert (s.port, s.bitrate_kbps, s.width_px, s.height_px, s.fps) == (5600, 500, 640, 360, 30)
     assert s.gop_frames == 30 and s.pkt_size_bytes == 1200 <= video.MAX_PKT_SIZE_BYTES
     assert _spec(tmp_path, fps=25, gop_s=2.0).gop_frames == 50
 

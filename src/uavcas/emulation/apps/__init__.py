@@ -5,7 +5,9 @@
 * `nginx`     one nginx per UAV (no systemd: own conf, `daemon off`, paths under the run dir);
 * `client`    one curl loop per UAV on its base station (UAV i is fetched by BS i mod n_bs);
 * `mavlink`   MAVLink v2 (pymavlink): an autopilot per UAV, a ground station per BS on UDP 14550
-              (payload telemetry or mixed): streams, mission upload, per-window commands;
+              (payload telemetry, video or mixed): streams, mission upload, per-window commands;
+* `video`     H.264 over RTP/UDP per UAV (ffmpeg, seeded test pattern, constant bitrate) to a
+              byte-counting sink on its BS, port 5600 (payload video or mixed);
 * `flood`     hping3 SYN flood with closed-loop rate calibration and an exact SYN counter;
 * `replayer`  scapy replay process fed by a port mirror (run inside the attacker namespace);
 * `capture`   one tcpdump per switch, with its drop counters;

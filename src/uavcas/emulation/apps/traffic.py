@@ -3,13 +3,14 @@
 * `image`     nginx on every UAV, a curl loop per UAV on its BS (apps/client.py), unchanged;
 * `telemetry` MAVLink v2 alone (apps/mavlink.py): an autopilot endpoint per UAV, a ground
               station per BS on UDP 14550, no HTTP;
-* `mixed`     both; its video part (apps/video.py, another change) is not wired yet: `video_on`
-              is False, the hook where it goes.
+* `video`     MAVLink plus video: each UAV streams H.264 over RTP/UDP (ffmpeg, apps/video.py) to
+              its BS's port 5600, where a sink counts it;
+* `mixed`     MAVLink + video + images.
 A hand-made plan without a scenario gets `image`.
 
 `BenignTraffic.start_servers()` runs before t0 (servers must be listening when the clock
 starts); `start_clients(t0)` right at t0 (an HTTP client skips the windows its UAV is
-disconnected; a MAVLink UAV keeps sending into the void, as a radio would); `stop()` at the end,
+disconnected; a MAVLink UAV and its video keep sending into the void, as a radio would); `stop()` at the end,
 returning a per-HTTP-client summary (the MAVLink endpoints log to logs/mavlink-<node>.jsonl).
 """
 
@@ -22,7 +23,7 @@ from pathlib import Path
 
 from uavcas.emulation import kernel
 
-from . import client, images, mavlink, nginx
+from . import client, images, mavlink, nginx, video
 from .procs import Proc, spawn, wait_for
 
 SERVER_READY_S = 15.0
@@ -47,20 +48,23 @@ class ClientSummary:
 class BenignTraffic:
     def __init__(self, emu, plan, work_dir: Path, duration_s: float, *,
                  think_mean_s: float = client.THINK_MEAN_S, n_images: int = images.DEFAULT_COUNT,
-                 stream_rates: mavlink.StreamRates = mavlink.StreamRates()) -> None:
+                 stream_rates: mavlink.StreamRates = mavlink.StreamRates(),
+                 video_kbps: int = video.BITRATE_KBPS) -> None:
         self.emu, self.plan = emu, plan
         self.work, self.log_dir = work_dir, work_dir / "logs"
         self.duration_s = duration_s
         self.think_mean_s, self.n_images, self.stream_rates = think_mean_s, n_images, stream_rates
         self.payload = plan.scenario.payload if plan.scenario is not None else "image"
         self.http_on = self.payload in ("image", "mixed")
-        self.mavlink_on = self.payload in ("telemetry", "mixed")
-        self.video_on = False  # `mixed`'s video (uavcas.emulation.apps.video) is not wired yet
+        self.mavlink_on = self.payload in ("telemetry", "video", "mixed")
+        self.video_on = self.payload in ("video", "mixed")
+        self.video_kbps = video_kbps
         self.uavs = [n for n in plan.nodes if n.kind == "uav"]
         self.bss = [n for n in plan.nodes if n.kind == "bs"]
         self.servers: list[Proc] = []
         self.clients: list[tuple[client.ClientSpec, Proc]] = []
         self.mavlink_procs: list[Proc] = []
+        self.video_procs: list[Proc] = []
         self.t0_path = work_dir / "mavlink" / "t0"
         self.images: list[images.Image] = []
 
@@ -70,6 +74,8 @@ class BenignTraffic:
     def start_servers(self) -> None:
         if self.mavlink_on:
             self._start_mavlink()
+        if self.video_on:
+            self._start_video_sinks()
         if not self.http_on:
             return
         root = self.work / "images"
@@ -95,6 +101,8 @@ class BenignTraffic:
             mavlink.write_t0(self.t0_path, t0_unix)  # the endpoints, loaded before t0, start now
         if self.http_on:
             self._start_http(t0_unix)
+        if self.video_on:
+            self._start_video_senders()
 
     def _start_http(self, t0_unix: float) -> None:
         names = [img.name for img in self.images]
@@ -151,10 +159,37 @@ class BenignTraffic:
             why = bad[0].stderr().strip()[-300:] or "not ready"
             raise RuntimeError(f"MAVLink endpoint {bad[0].name} did not start: {why}")
 
+    def _video_spec(self, bs: str, k: int) -> video.VideoSpec:
+        # one sink per BS receives every stream sent to it; seeds differ per UAV
+        return video.VideoSpec(dst_ip=self.plan.node(bs).ip, log_path=self.log_dir / f"video-{bs}.jsonl",
+                               duration_s=self.duration_s, seed=self.plan.seed * 1000 + k,
+                               bitrate_kbps=self.video_kbps)
+
+    def _start_video_sinks(self) -> None:
+        for b in self.bss:
+            spec = self._video_spec(b.name, 0)
+            self.video_procs.append(spawn(self._start(b.name), f"video-sink-{b.name}", video.sink_argv(spec),
+                                          self.log_dir, self.duration_s + 2 * video.SINK_SLACK_S))
+
+        def ready() -> bool:  # every sink bound before a stream starts
+            return all(video.READY in p.stdout() or not p.alive() for p in self.video_procs)
+
+        if not wait_for(ready, SERVER_READY_S, 0.05) or not all(p.alive() for p in self.video_procs):
+            bad = next((p for p in self.video_procs if not p.alive()), self.video_procs[0])
+            raise RuntimeError(f"video sink {bad.name} did not start: {bad.stderr().strip()[-300:] or 'not ready'}")
+
+    def _start_video_senders(self) -> None:
+        """One ffmpeg per UAV from t0, for the run's duration (its own `-t`), to its BS."""
+        pairs = client.assignments([u.name for u in self.uavs], [b.name for b in self.bss])
+        for k, (bs, uav) in enumerate(pairs):
+            argv = video.sender_argv(self._video_spec(bs, k))
+            self.video_procs.append(spawn(self._start(uav), f"video-{uav}", argv, self.log_dir,
+                                          self.duration_s + video.SINK_SLACK_S))
+
     def stop(self) -> list[ClientSummary]:
         for _, p in self.clients:
             p.stop(signal.SIGTERM, grace_s=2.0)
-        for p in self.mavlink_procs + self.servers:
+        for p in self.video_procs + self.mavlink_procs + self.servers:
             p.stop(signal.SIGTERM, grace_s=2.0)
         return self.summary()
 

@@ -45,8 +45,11 @@ PORT = 5600
 # 640x360 at 30 fps: the "SD" downlink of small UAVs (the full-HD camera records on board).
 WIDTH_PX, HEIGHT_PX, FPS = 640, 360, 30
 # The Kush gauge (pixels x fps x motion factor x 0.07 bit) gives 0.48 Mbit/s for this format at
-# low motion and 0.97 Mbit/s at medium motion (a moving airframe): 1000 kbit/s.
-BITRATE_KBPS = 1000
+# low motion and 0.97 Mbit/s at medium motion: 500 kbit/s, the low-motion figure (a survey UAV's
+# camera moves slowly). The twin's BS links plan 3-4 Mbit/s in the quick scenarios and carry 2-3
+# UAVs each plus their image fetches: with 1000 kbit/s streams beside the images they were full and
+# MAVLink lost 30-60 % of its messages in the queues (a 6-UAV mixed run, seed 14). `uavcas run --video-kbps` sets it.
+BITRATE_KBPS = 500
 GOP_S = 1.0  # one IDR per second: a receiver joining or losing packets recovers within 1 s
 # VBV of half a second: tight enough that every 1 s bin carries about the configured rate (an
 # I frame may not borrow much from the following frames), loose enough for x264 to hold quality.
@@ -62,6 +65,7 @@ NOISE_STRENGTH = 20  # of 100: visible sensor-like grain, not a snow screen
 # 0.10 s) and 20 UAVs share the host with the emulation; the traffic's shape (CBR, GOP, packet
 # sizes) is what matters, not the picture quality.
 X264_PRESET = "ultrafast"
+READY = "ready"  # printed by the sink once bound
 SINK_SLACK_S = 3.0  # the sink outlives the sender by this much (ffmpeg start-up, last packets)
 RCVBUF_BYTES = 1 << 20  # an IDR burst arrives within a millisecond; do not drop it at the BS
 MAX_SEED = 2**31 - 1  # the noise filter's seed is a C int
@@ -295,6 +299,7 @@ def sink(bind: str, port: int, seconds: float, log_path: Path, payload_type: int
     s = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
     s.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, RCVBUF_BYTES)
     s.bind((bind, port))
+    print(READY, flush=True)  # the runner starts the streams once every sink is bound
     log_path.parent.mkdir(parents=True, exist_ok=True)
     end = time.monotonic() + seconds
     first = last = None
