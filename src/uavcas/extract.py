@@ -18,7 +18,7 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pandas as pd
@@ -31,6 +31,9 @@ from uavcas.rundir import RunDir, RunDirError, RunInfo
 from uavcas.labels.episodes import episode_rule_text, host_window_frame
 from uavcas.schema import CONTEXT_FEATURES, DEFAULT_STANDARD, EPISODE_VIEW
 from uavcas.vocabulary import EFFECTS
+
+if TYPE_CHECKING:
+    from uavcas.twin.model import Plan
 
 # the flow views, and the episode view (one row per plan node per plan window, uavcas.labels.episodes)
 EXTRACT_VIEWS: tuple[str, ...] = (*VIEWS, EPISODE_VIEW)
@@ -120,30 +123,19 @@ def extract_detailed(
         raise ValueError("the window-host view labels episodes from packet effects: it takes neither "
                          "--labels paper nor --min-attack-fraction")
     rd = RunDir(Path(run_dir))
-    if not rd.root.is_dir():
-        raise RunDirError(f"{rd.root}: not a directory")
-    plan = rd.read_plan()
+    plan, pcaps, t0 = run_inputs(rd)
     if plan.scenario is None:
         raise RunDirError(f"{rd.plan_json}: config {plan.config!r} is no scenario (no axes to record)")
     info = rd.read_info()
     problem = incomplete_reason(info)
     if problem and not allow_incomplete:
         raise RunDirError(f"{rd.root}: {problem}; extract it anyway with --allow-incomplete (marked incomplete)")
-    pcaps = rd.pcaps()
-    if not pcaps:
-        raise RunDirError(f"{rd.root}: no captures in {rd.pcap_dir}")
-    t0 = rd.read_t0()
-    if t0 is None:
-        raise RunDirError(f"{rd.root}: the run never reached its plan's t = 0 (no t0_unix in run.json or "
-                          f"{rd.owner_path.name}): its packets cannot be placed in the plan")
     cfg = FlowConfig(view="5tuple" if episodes else view, termination=termination,  # type: ignore[arg-type]
                      min_packets=min_packets, window_t0_unix=t0, window_s=plan.window_s)
     ex = extract_flows(pcaps, cfg, points=[p.stem for p in pcaps], allow_truncated=allow_truncated, standard=features)
     # from the captures and flows only: computed before the attack log is even read
     ctx = context_frame(ex.packets, ex.flows) if context else None
-    log = read_attack_log(rd.attacks_jsonl, plan, t0)
-    _, followed = follow_run(rd.root, table=ex.packets)
-    truth = packet_truth(TruthContext(ex.packets, log, followed, plan, t0))
+    log, followed, truth = run_truth(rd, ex.packets, plan, t0)
     if episodes:  # the 5-tuple flows first, then their packets and flows per node and window
         ff = ex.frame.reset_index(drop=True)
         if ctx is not None:
@@ -190,6 +182,28 @@ def extract_detailed(
         ),
     )
     return Extracted(shard, ex.packets, ex.flows, followed, truth)
+
+
+def run_inputs(rd: RunDir) -> tuple["Plan", list[Path], float]:
+    """A run's plan, its captures and its t0, or a RunDirError naming what is missing."""
+    if not rd.root.is_dir():
+        raise RunDirError(f"{rd.root}: not a directory")
+    plan = rd.read_plan()
+    pcaps = rd.pcaps()
+    if not pcaps:
+        raise RunDirError(f"{rd.root}: no captures in {rd.pcap_dir}")
+    t0 = rd.read_t0()
+    if t0 is None:
+        raise RunDirError(f"{rd.root}: the run never reached its plan's t = 0 (no t0_unix in run.json or "
+                          f"{rd.owner_path.name}): its packets cannot be placed in the plan")
+    return plan, pcaps, t0
+
+
+def run_truth(rd: RunDir, packets: PacketTable, plan: "Plan", t0: float):
+    """The attack log, the followed transmissions and every packet's truth (`labels.effects`)."""
+    log = read_attack_log(rd.attacks_jsonl, plan, t0)
+    _, followed = follow_run(rd.root, table=packets)
+    return log, followed, packet_truth(TruthContext(packets, log, followed, plan, t0))
 
 
 def incomplete_reason(info: RunInfo | None) -> str | None:

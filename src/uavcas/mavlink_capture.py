@@ -226,26 +226,14 @@ class RunPackets:
 def run_packets(run_dir: str | Path, allow_truncated: bool = False) -> RunPackets:
     """Read a run's captures and compute each packet's truth the way `uavcas.extract` does (same
     reader, same capture-point names, same follower and rules), so rows and truths line up."""
+    from uavcas.extract import run_inputs, run_truth
     from uavcas.flows import read_packets
-    from uavcas.flows.follow import follow_run
-    from uavcas.labels import TruthContext, packet_truth, read_attack_log
-    from uavcas.rundir import RunDir, RunDirError
+    from uavcas.rundir import RunDir
 
     rd = RunDir(Path(run_dir))
-    if not rd.root.is_dir():
-        raise RunDirError(f"{rd.root}: not a directory")
-    plan = rd.read_plan()
-    pcaps = rd.pcaps()
-    if not pcaps:
-        raise RunDirError(f"{rd.root}: no captures in {rd.pcap_dir}")
-    t0 = rd.read_t0()
-    if t0 is None:
-        raise RunDirError(f"{rd.root}: the run never reached its plan's t = 0 (no t0_unix): its packets' truth "
-                          "cannot be placed in the plan")
+    plan, pcaps, t0 = run_inputs(rd)
     packets = read_packets(pcaps, points=[p.stem for p in pcaps], allow_truncated=allow_truncated)
-    log = read_attack_log(rd.attacks_jsonl, plan, t0)
-    _, followed = follow_run(rd.root, table=packets)
-    truth = packet_truth(TruthContext(packets, log, followed, plan, t0))
+    _, _, truth = run_truth(rd, packets, plan, t0)
     return RunPackets(packets, pcaps, truth.effect, truth.family)
 
 
