@@ -21,12 +21,15 @@ import sys
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
+import numpy as np
+
 from uavcas.emulation import kernel
 
 from . import client, images, mavlink, nginx, video
 from .procs import Proc, spawn, wait_for
 
 SERVER_READY_S = 15.0
+VIDEO_SEED_TAG = 0x51DE0  # the video's stream of the plan's seed (as client.py tags its own)
 MAVLINK_READY_S = 120.0  # loading Python + pymavlink in every namespace at once takes seconds
 MAVLINK_GRACE_S = 10.0  # the endpoints' own deadline is the run's end; `timeout` kills them this much later
 
@@ -160,10 +163,11 @@ class BenignTraffic:
             raise RuntimeError(f"MAVLink endpoint {bad[0].name} did not start: {why}")
 
     def _video_spec(self, bs: str, k: int) -> video.VideoSpec:
-        # one sink per BS receives every stream sent to it; seeds differ per UAV
+        # one sink per BS receives every stream sent to it; each UAV's picture has its own seed,
+        # drawn from the plan's seed into ffmpeg's range (a C int) whatever the plan's seed is
+        seed = int(np.random.SeedSequence([self.plan.seed, k, VIDEO_SEED_TAG]).generate_state(1)[0]) % (video.MAX_SEED + 1)
         return video.VideoSpec(dst_ip=self.plan.node(bs).ip, log_path=self.log_dir / f"video-{bs}.jsonl",
-                               duration_s=self.duration_s, seed=self.plan.seed * 1000 + k,
-                               bitrate_kbps=self.video_kbps)
+                               duration_s=self.duration_s, seed=seed, bitrate_kbps=self.video_kbps)
 
     def _start_video_sinks(self) -> None:
         for b in self.bss:
