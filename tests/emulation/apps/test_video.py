@@ -308,3 +308,15 @@ def test_stream_rate_at_the_sink(tmp_path):
     assert s.stopped_by == "deadline" and s.not_rtp_h264 == 0
     assert 0 < s.max_datagram_bytes <= spec.pkt_size_bytes
     assert spec.duration_s - 1.0 <= s.active_s <= spec.duration_s + 1.0
+
+
+def test_the_runs_video_seeds_fit_ffmpeg_whatever_the_plan_seed(tmp_path):
+    # campaign runs carry seeds up to 2**32 - 1; ffmpeg's noise seed is a C int
+    from uavcas.emulation.apps.traffic import BenignTraffic
+    from uavcas.twin import plan
+
+    p = plan("benign-4-2-video-logdist-adaptive-random-30-95", seed=2**32 - 1, windows=1)
+    t = BenignTraffic(None, p, tmp_path, 5.0)
+    seeds = [t._video_spec("bs0", k).seed for k in range(4)]
+    assert all(0 <= s <= video.MAX_SEED for s in seeds) and len(set(seeds)) == 4
+    assert seeds == [BenignTraffic(None, p, tmp_path, 5.0)._video_spec("bs0", k).seed for k in range(4)]
