@@ -31,6 +31,10 @@ from .procs import Proc, spawn, wait_for
 SERVER_READY_S = 15.0
 VIDEO_SEED_TAG = 0x51DE0  # the video's stream of the plan's seed (as client.py tags its own)
 MAVLINK_READY_S = 120.0  # loading Python + pymavlink in every namespace at once takes seconds
+# The MAVLink endpoints' and the video senders' own deadlines lie this far past the run's end, and
+# `stop()` ends them right after it: when 8 Python endpoints and 6 ffmpeg exited exactly at the end,
+# their exit landed on the last attack stop and delayed it by 90-160 ms (quick blackhole+dos run).
+APP_OVERRUN_S = 3.0
 MAVLINK_GRACE_S = 10.0  # the endpoints' own deadline is the run's end; `timeout` kills them this much later
 
 
@@ -133,21 +137,22 @@ class BenignTraffic:
         spec_dir.mkdir(parents=True, exist_ok=True)
         self.t0_path.unlink(missing_ok=True)
         run = [sys.executable, "-m", "uavcas.emulation.apps.mavlink"]
-        timeout_s = mavlink.T0_WAIT_S + self.duration_s + MAVLINK_GRACE_S
+        app_s = self.duration_s + APP_OVERRUN_S
+        timeout_s = mavlink.T0_WAIT_S + app_s + MAVLINK_GRACE_S
         for b in self.bss:
             if b.sysid is None:
                 raise ValueError(f"{b.name} has no MAVLink system id in the plan")
             served = [mavlink.gcs_target(self.plan, uav) for bs, uav in pairs if bs == b.name]
             spec = mavlink.GcsSpec(name=b.name, sysid=b.sysid, rates=self.stream_rates, uavs=served,
                                    t0_path=self.t0_path, window_s=self.plan.window_s,
-                                   n_windows=len(self.plan.windows), duration_s=self.duration_s,
+                                   n_windows=len(self.plan.windows), duration_s=app_s,
                                    log_path=self.log_dir / f"mavlink-{b.name}.jsonl")
             path = spec_dir / f"{b.name}.json"
             path.write_text(spec.model_dump_json())
             self.mavlink_procs.append(spawn(self._start(b.name), f"mavlink-{b.name}", run + ["gcs", str(path)],
                                             self.log_dir, timeout_s))
         for bs, uav in pairs:
-            spec = mavlink.uav_spec(self.plan, uav, self.plan.node(bs).ip, None, self.duration_s,
+            spec = mavlink.uav_spec(self.plan, uav, self.plan.node(bs).ip, None, app_s,
                                     self.log_dir / f"mavlink-{uav}.jsonl", t0_path=self.t0_path)
             path = spec_dir / f"{uav}.json"
             path.write_text(spec.model_dump_json())
@@ -167,13 +172,13 @@ class BenignTraffic:
         # drawn from the plan's seed into ffmpeg's range (a C int) whatever the plan's seed is
         seed = int(np.random.SeedSequence([self.plan.seed, k, VIDEO_SEED_TAG]).generate_state(1)[0]) % (video.MAX_SEED + 1)
         return video.VideoSpec(dst_ip=self.plan.node(bs).ip, log_path=self.log_dir / f"video-{bs}.jsonl",
-                               duration_s=self.duration_s, seed=seed, bitrate_kbps=self.video_kbps)
+                               duration_s=self.duration_s + APP_OVERRUN_S, seed=seed, bitrate_kbps=self.video_kbps)
 
     def _start_video_sinks(self) -> None:
         for b in self.bss:
             spec = self._video_spec(b.name, 0)
             self.video_procs.append(spawn(self._start(b.name), f"video-sink-{b.name}", video.sink_argv(spec),
-                                          self.log_dir, self.duration_s + 2 * video.SINK_SLACK_S))
+                                          self.log_dir, spec.duration_s + 2 * video.SINK_SLACK_S))
 
         def ready() -> bool:  # every sink bound before a stream starts
             return all(video.READY in p.stdout() or not p.alive() for p in self.video_procs)
@@ -183,18 +188,25 @@ class BenignTraffic:
             raise RuntimeError(f"video sink {bad.name} did not start: {bad.stderr().strip()[-300:] or 'not ready'}")
 
     def _start_video_senders(self) -> None:
-        """One ffmpeg per UAV from t0, for the run's duration (its own `-t`), to its BS."""
+        """One ffmpeg per UAV from t0 to its BS, until `stop()` (its own `-t` lies past the end)."""
         pairs = client.assignments([u.name for u in self.uavs], [b.name for b in self.bss])
         for k, (bs, uav) in enumerate(pairs):
-            argv = video.sender_argv(self._video_spec(bs, k))
-            self.video_procs.append(spawn(self._start(uav), f"video-{uav}", argv, self.log_dir,
-                                          self.duration_s + video.SINK_SLACK_S))
+            spec = self._video_spec(bs, k)
+            self.video_procs.append(spawn(self._start(uav), f"video-{uav}", video.sender_argv(spec), self.log_dir,
+                                          spec.duration_s + video.SINK_SLACK_S))
 
     def stop(self) -> list[ClientSummary]:
-        for _, p in self.clients:
-            p.stop(signal.SIGTERM, grace_s=2.0)
-        for p in self.video_procs + self.mavlink_procs + self.servers:
-            p.stop(signal.SIGTERM, grace_s=2.0)
+        # the clients first (no fetch starts against a stopping server), then the rest; every
+        # process of a group is signalled before any is waited for, so they wind down together
+        for group in ([p for _, p in self.clients], self.video_procs + self.mavlink_procs + self.servers):
+            for p in group:
+                if p.popen.poll() is None:
+                    try:
+                        p.popen.send_signal(signal.SIGTERM)
+                    except ProcessLookupError:
+                        pass
+            for p in group:
+                p.stop(signal.SIGTERM, grace_s=2.0)
         return self.summary()
 
     def summary(self) -> list[ClientSummary]:
