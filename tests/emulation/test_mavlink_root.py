@@ -26,19 +26,21 @@ pytestmark = [pytest.mark.root, pytest.mark.slow]
 CFG = "benign-6-2-{payload}-logdist-adaptive-random-30-95"
 SEED = 14
 VIDEO_KBPS = 400  # the `video` run's bitrate: 3 streams per BS leave the planned paths room
+MIXED_VIDEO_KBPS = 200
 
 
 @pytest.fixture(scope="module")
 def runs(tmp_path_factory) -> dict[str, RunDir]:
+    # One run at a time: two emulations sharing the 2 cores, each with saturated links, push the
+    # saturated hops' delay error past the audit's p99 tolerance (issue 28's weak spot), and the
+    # audit must pass here. The mixed run's video at MIXED_VIDEO_KBPS keeps its queues from
+    # staying full beside the image fetches.
     base = tmp_path_factory.mktemp("uavtraffic")
-    extra = {"mixed": [], "video": ["--video-kbps", str(VIDEO_KBPS)]}
-    procs = {pl: subprocess.Popen([sys.executable, "-m", "uavcas.cli", "run", CFG.format(payload=pl), "--seed", str(SEED),
-                                   "--windows", "4", "--out", str(base / pl), *extra[pl]],
-                                  stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-             for pl in extra}
-    for pl, p in procs.items():
-        out, _ = p.communicate(timeout=240)
-        assert p.returncode == 0, f"{pl}: {out[-2000:]}"
+    extra = {"mixed": ["--video-kbps", str(MIXED_VIDEO_KBPS)], "video": ["--video-kbps", str(VIDEO_KBPS)]}
+    for pl, args in extra.items():
+        r = subprocess.run([sys.executable, "-m", "uavcas.cli", "run", CFG.format(payload=pl), "--seed", str(SEED),
+                            "--windows", "4", "--out", str(base / pl), *args], capture_output=True, text=True, timeout=240)
+        assert r.returncode == 0, f"{pl}: {(r.stdout + r.stderr)[-2000:]}"
     return {pl: RunDir(base / pl) for pl in extra}
 
 
