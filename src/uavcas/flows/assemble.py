@@ -40,6 +40,7 @@ from typing import Literal
 import numpy as np
 import pandas as pd
 
+from .cic import payload_and_header
 from .packets import PacketTable
 from .termination import (
     DEFAULTS, TERMINATIONS, Cuts, KeyPackets, PolicyDefaults, Termination, cic_cuts, connection_cuts, timeout_cuts,
@@ -235,11 +236,11 @@ def _choose_vantage(code: np.ndarray, point: np.ndarray, names: tuple[str, ...])
 
 def _key_packets(p: PacketTable, order: np.ndarray, code: np.ndarray, src_is_a: np.ndarray) -> KeyPackets:
     proto = p["proto"][order]
-    payload = p["ip_len"][order].astype(np.int64) - p["ip_hdr_len"][order] - p["l4_hdr_len"][order]
+    payload, _ = payload_and_header(proto, p["ip_len"][order], p["ip_hdr_len"][order], p["l4_hdr_len"][order])
     return KeyPackets(
         ts=p["ts_ns"][order], is_a=src_is_a[order], flags=p["tcp_flags"][order], proto=proto,
         seq=p["tcp_seq"][order].astype(np.int64), ack=p["tcp_ack"][order].astype(np.int64),
-        payload=np.where(proto == 6, np.maximum(payload, 0), 0), key_starts=_segments(code[order]),
+        payload=payload, key_starts=_segments(code[order]),
     )  # fmt: skip
 
 

@@ -96,7 +96,7 @@ class KeyPackets:
     proto: np.ndarray
     seq: np.ndarray
     ack: np.ndarray
-    payload: np.ndarray  # TCP payload bytes
+    payload: np.ndarray  # transport payload bytes (`flows.cic.payload_and_header`)
     key_starts: np.ndarray  # offsets of each key's first packet, closed by n
 
 
@@ -235,11 +235,15 @@ def connection_cuts(kp: KeyPackets, idle_ns: int | None, active_ns: int | None, 
     starts = np.concatenate([s_simple, np.asarray(starts_l, dtype=np.int64)])
     close = np.concatenate([np.full(s_simple.shape[0], -1, dtype=np.int64), np.asarray(close_l, dtype=np.int64)])
     o = np.argsort(starts, kind="stable")
-    starts, close = np.append(starts[o], n).astype(np.int64), close[o]
+    return _initiator_cuts(kp, np.append(starts[o], n).astype(np.int64), close[o])
+
+
+def _initiator_cuts(kp: KeyPackets, starts: np.ndarray, close: np.ndarray) -> Cuts:
+    """Cuts that keep every packet, each flow oriented to its initiator (`synack_turned`)."""
     flow = np.repeat(np.arange(starts.shape[0] - 1), np.diff(starts))
     f0 = starts[:-1]
     fwd_a = synack_turned(kp.is_a[f0], kp.flags[f0], kp.proto[f0])
-    return Cuts(starts, np.ones(n, dtype=bool), kp.is_a == fwd_a[flow], close)
+    return Cuts(starts, np.ones(kp.ts.shape[0], dtype=bool), kp.is_a == fwd_a[flow], close)
 
 
 def cic_cuts(kp: KeyPackets, idle_ns: int | None, active_ns: int | None) -> Cuts:
@@ -295,9 +299,5 @@ def cic_cuts(kp: KeyPackets, idle_ns: int | None, active_ns: int | None) -> Cuts
 
 def timeout_cuts(kp: KeyPackets, idle_ns: int | None, active_ns: int | None) -> Cuts:
     """The `timeout` policy (and the host-pair views, which run it with no timeout)."""
-    n = kp.ts.shape[0]
     starts = timeout_starts(kp.ts, kp.key_starts, idle_ns, active_ns)
-    flow = np.repeat(np.arange(starts.shape[0] - 1), np.diff(starts))
-    f0 = starts[:-1]
-    fwd_a = synack_turned(kp.is_a[f0], kp.flags[f0], kp.proto[f0])
-    return Cuts(starts, np.ones(n, dtype=bool), kp.is_a == fwd_a[flow], np.full(f0.shape[0], -1, dtype=np.int64))
+    return _initiator_cuts(kp, starts, np.full(starts.shape[0] - 1, -1, dtype=np.int64))
