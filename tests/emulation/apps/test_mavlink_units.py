@@ -1,4 +1,4 @@
-"""The MAVLink endpoints (apps/mavlink.py) talking over UDP on 127.0.0.1, no namespaces.
+"""The MAVLink endpoints (apps/mavlink/) talking over UDP on 127.0.0.1, no namespaces.
 
 A relay between the two records every datagram both ways, so the test checks the bytes on the
 wire: each one is one MAVLink 2 frame that pymavlink parses with a valid CRC.

@@ -1,7 +1,7 @@
 """Benign traffic of a run, by the scenario's payload axis (`plan.scenario.payload`):
 
 * `image`     nginx on every UAV, a curl loop per UAV on its BS (apps/client.py), unchanged;
-* `telemetry` MAVLink v2 alone (apps/mavlink.py): an autopilot endpoint per UAV, a ground
+* `telemetry` MAVLink v2 alone (apps/mavlink/): an autopilot endpoint per UAV, a ground
               station per BS on UDP 14550, no HTTP;
 * `video`     MAVLink plus video: each UAV streams H.264 over RTP/UDP (ffmpeg, apps/video.py) to
               its BS's port 5600, where a sink counts it;

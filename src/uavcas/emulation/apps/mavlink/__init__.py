@@ -1,0 +1,47 @@
+"""MAVLink v2 between every UAV's autopilot and its base station's ground station (pymavlink).
+
+Two endpoint processes, one per node, each a small MAVLink peer over UDP (one message per
+datagram; every byte is packed and parsed by pymavlink's `dialects.v20.common`):
+
+* `uav` (autopilot, in the UAV's namespace): HEARTBEAT at 1 Hz (MAV_TYPE_QUADROTOR,
+  MAV_AUTOPILOT_ARDUPILOTMEGA, Copter custom mode AUTO = 3) to its BS's port 14550, always, also
+  while the plan marks it disconnected (a radio sends into the void). The streams start at
+  ArduCopter's defaults, which are 0 Hz (libraries/GCS_MAVLink/GCS_MAVLink_Parameters.cpp:
+  AP_MAV_DEFAULT_STREAM_RATE_EXT_STAT, _POSITION, _EXTRA1, _EXTRA2 = 0 for
+  APM_BUILD_COPTER_OR_HELI, i.e. MAVn_EXT_STAT/_POSITION/_EXTRA1/_EXTRA2, formerly
+  SRn_*, default 0): a Copter streams what a GCS asks for with REQUEST_DATA_STREAM, per
+  ArduPilot's group: EXTENDED_STATUS = SYS_STATUS + GPS_RAW_INT, POSITION =
+  GLOBAL_POSITION_INT, EXTRA1 = ATTITUDE, EXTRA2 = VFR_HUD. Values come from the plan's track
+  (`uavcas.twin.track`): position, velocity, heading, ground speed; ATTITUDE has yaw = heading
+  and roll = pitch = 0 (the track's velocity is constant within a window: no acceleration to
+  tilt for); GPS_RAW_INT has fix type 3 (3D) and 12 satellites; the battery drains linearly
+  (`BatterySpec`). It accepts a mission (MISSION_COUNT -> MISSION_REQUEST_INT per item ->
+  MISSION_ACK) and acknowledges COMMAND_LONG with COMMAND_ACK (MAV_RESULT_ACCEPTED).
+* `gcs` (ground station, in the BS's namespace, UDP 14550, all its UAVs): from the first
+  datagram of a UAV on, HEARTBEAT (MAV_TYPE_GCS) at 1 Hz to it, REQUEST_DATA_STREAM at
+  `StreamRates` (default: MAVProxy's `streamrate` setting, 4 Hz, with which it asks an
+  ArduPilot vehicle for every stream; heartbeat 1 Hz, its `heartbeat` setting), the mission
+  upload (the UAV's window-start positions as MAV_CMD_NAV_WAYPOINT items, relative altitude),
+  and at every window boundary COMMAND_LONG MAV_CMD_DO_CHANGE_SPEED with the UAV's planned
+  ground speed over the new window.
+
+Retries: mission messages and commands are resent after `RetrySpec.timeout_s` (0.5 s, MAVSDK's
+default MAVLink timeout), at most `mission_retries` / `command_retries` times (the command's
+`confirmation` counts the resends, as the command protocol asks). Times are plan times from the
+run's t0 (time_boot_ms = ms since t0), which an endpoint started before t0 reads from a file
+the runner writes at t0 (`write_t0`). Both ends stop at their deadline or on SIGTERM and
+log JSON lines to `log_path`: one line per mission upload, command and ack as they happen, and a
+final `summary` line with sent/received message counts per type.
+
+Modules: `specs` (the typed specs and what the plan gives them), `link` (what both endpoints
+share: t0, the UDP peer, the log), `autopilot` (the UAV end), `ground` (the GCS end).
+
+Run: python -m uavcas.emulation.apps.mavlink {uav|gcs} SPEC.json
+"""
+
+from .link import T0_WAIT_S, read_log, write_t0
+from .specs import (GCS_PORT, BatterySpec, GcsSpec, GcsTarget, RetrySpec, StreamRates, UavSpec, gcs_target,
+                    uav_spec)
+
+__all__ = ["GCS_PORT", "T0_WAIT_S", "BatterySpec", "GcsSpec", "GcsTarget", "RetrySpec", "StreamRates", "UavSpec",
+           "gcs_target", "read_log", "uav_spec", "write_t0"]

@@ -1,0 +1,153 @@
+"""The MAVLink endpoints' typed specs, and what the plan puts in them."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Literal
+
+from pydantic import BaseModel, ConfigDict, Field
+
+from uavcas.twin.model import Site
+from uavcas.twin.track import Track, local_to_geodetic
+
+GCS_PORT = 14550  # the customary ground-station UDP port (MAVProxy, QGroundControl, Mission Planner)
+COMPONENT_AUTOPILOT = 1  # MAV_COMP_ID_AUTOPILOT1
+COMPONENT_GCS = 190  # MAV_COMP_ID_MISSIONPLANNER, what ground stations use
+COPTER_MODE_AUTO = 3  # ArduCopter custom_mode AUTO: flying the uploaded mission
+GPS_FIX_3D = 3
+GPS_SATELLITES = 12
+
+
+def _mavlink():
+    # imported on use: pymavlink builds its message classes at import (~0.2 s)
+    from pymavlink.dialects.v20 import common
+
+    return common
+
+
+class _Frozen(BaseModel):
+    model_config = ConfigDict(frozen=True, extra="forbid")
+
+
+class StreamRates(_Frozen):
+    """What the GCS requests (Hz, REQUEST_DATA_STREAM's integer rates; ArduPilot allows 0-50).
+
+    Default: MAVProxy's `streamrate` 4 (mavproxy.py MPSettings), which it requests for all
+    streams; heartbeat 1 Hz (MAVProxy `heartbeat`; ArduPilot sends its own at 1 Hz too).
+    """
+
+    heartbeat_rate_hz: float = Field(default=1.0, gt=0, le=50)
+    ext_stat_rate_hz: int = Field(default=4, ge=0, le=50)  # SYS_STATUS, GPS_RAW_INT
+    position_rate_hz: int = Field(default=4, ge=0, le=50)  # GLOBAL_POSITION_INT
+    extra1_rate_hz: int = Field(default=4, ge=0, le=50)  # ATTITUDE
+    extra2_rate_hz: int = Field(default=4, ge=0, le=50)  # VFR_HUD
+
+    def requests(self) -> list[tuple[int, int]]:
+        """(MAV_DATA_STREAM id, rate Hz) pairs the GCS sends."""
+        m = _mavlink()
+        return [(m.MAV_DATA_STREAM_EXTENDED_STATUS, self.ext_stat_rate_hz),
+                (m.MAV_DATA_STREAM_POSITION, self.position_rate_hz),
+                (m.MAV_DATA_STREAM_EXTRA1, self.extra1_rate_hz),
+                (m.MAV_DATA_STREAM_EXTRA2, self.extra2_rate_hz)]
+
+    def expected_hz(self) -> dict[str, float]:
+        """Message type -> rate the UAV sends it at once the request is granted."""
+        return {"HEARTBEAT": self.heartbeat_rate_hz, "SYS_STATUS": self.ext_stat_rate_hz,
+                "GPS_RAW_INT": self.ext_stat_rate_hz, "GLOBAL_POSITION_INT": self.position_rate_hz,
+                "ATTITUDE": self.extra1_rate_hz, "VFR_HUD": self.extra2_rate_hz}
+
+
+# ArduPilot's stream groups of the messages we send (GCS_MAVLink_Parameters.cpp STREAM_*_msgs)
+STREAM_MESSAGES = {2: ("SYS_STATUS", "GPS_RAW_INT"), 6: ("GLOBAL_POSITION_INT",), 10: ("ATTITUDE",),
+                   11: ("VFR_HUD",)}  # MAV_DATA_STREAM_EXTENDED_STATUS, _POSITION, _EXTRA1, _EXTRA2
+
+
+class BatterySpec(_Frozen):
+    """A constant-current discharge: remaining = 1 - current * t / capacity, the voltage linear in
+    the remaining charge from full to empty (a 4S LiPo: 4.2 V to 3.5 V per cell)."""
+
+    capacity_mah: float = Field(default=5000.0, gt=0)
+    current_a: float = Field(default=20.0, ge=0)  # a ~2 kg quadrotor's hover draw: 15 min on 5 Ah
+    full_v: float = 16.8
+    empty_v: float = 14.0
+
+    def at(self, t_s: float) -> tuple[int, int, int]:
+        """(voltage mV, current cA, remaining %) at plan time t."""
+        used = self.current_a * max(t_s, 0.0) / 3600.0 * 1000.0 / self.capacity_mah
+        remaining = min(1.0, max(0.0, 1.0 - used))
+        volts = self.empty_v + (self.full_v - self.empty_v) * remaining
+        return round(volts * 1000), round(self.current_a * 100), round(remaining * 100)
+
+
+class RetrySpec(_Frozen):
+    timeout_s: float = Field(default=0.5, gt=0)  # MAVSDK's default MAVLink transfer timeout
+    mission_retries: int = Field(default=5, ge=0)
+    command_retries: int = Field(default=3, ge=0)
+
+
+class UavSpec(_Frozen):
+    kind: Literal["uav"] = "uav"
+    name: str
+    sysid: int = Field(ge=1, le=255)
+    gcs_ip: str
+    gcs_port: int = GCS_PORT
+    bind_ip: str = "0.0.0.0"
+    site: Site
+    times_s: list[float]  # the plan's track: window starts ...
+    positions_m: list[tuple[float, float, float]]  # ... and the UAV's position at each
+    t0_unix: float | None = None  # plan t = 0; None: read from t0_path once it appears
+    t0_path: Path | None = None
+    duration_s: float
+    battery: BatterySpec = BatterySpec()
+    retry: RetrySpec = RetrySpec()
+    log_path: Path
+
+    def track(self) -> Track:
+        return Track(tuple(self.times_s), tuple(tuple(p) for p in self.positions_m))
+
+
+class GcsTarget(_Frozen):
+    name: str
+    sysid: int = Field(ge=1, le=255)
+    waypoints: list[tuple[float, float, float]]  # lat deg, lon deg, metres above the site
+    speeds_mps: list[float]  # planned ground speed in each window
+
+
+class GcsSpec(_Frozen):
+    kind: Literal["gcs"] = "gcs"
+    name: str
+    sysid: int = Field(ge=1, le=255)
+    bind_ip: str = "0.0.0.0"
+    port: int = GCS_PORT
+    rates: StreamRates = StreamRates()
+    retry: RetrySpec = RetrySpec()
+    uavs: list[GcsTarget]
+    t0_unix: float | None = None  # as UavSpec
+    t0_path: Path | None = None
+    window_s: float = Field(gt=0)
+    n_windows: int = Field(ge=1)
+    duration_s: float
+    log_path: Path
+
+
+def gcs_target(plan, uav: str) -> GcsTarget:
+    """What a GCS knows of a UAV it serves: its waypoints and per-window speeds, from the plan."""
+    node = plan.node(uav)
+    if node.sysid is None:
+        raise ValueError(f"{uav} has no MAVLink system id in the plan")
+    track = Track.of(plan, uav)
+    wps = [local_to_geodetic(plan.site, *p) for p in track.positions_m]
+    return GcsTarget(name=uav, sysid=node.sysid,
+                     waypoints=[(lat, lon, alt - plan.site.alt_m) for lat, lon, alt in wps],
+                     speeds_mps=[track.speed_in_window_mps(k) for k in range(len(plan.windows))])
+
+
+def uav_spec(plan, uav: str, gcs_ip: str, t0_unix: float | None, duration_s: float, log_path: Path,
+             **kw) -> UavSpec:
+    node = plan.node(uav)
+    if node.sysid is None:
+        raise ValueError(f"{uav} has no MAVLink system id in the plan")
+    track = Track.of(plan, uav)
+    return UavSpec(name=uav, sysid=node.sysid, gcs_ip=gcs_ip, site=plan.site, times_s=list(track.times_s),
+                   positions_m=list(track.positions_m), t0_unix=t0_unix, duration_s=duration_s,
+                   log_path=log_path, **kw)
