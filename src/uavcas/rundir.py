@@ -138,6 +138,8 @@ class RunInfo(_Strict):
     capture_drops: int | None
     packets_captured: int
     http_clients: list[dict[str, Any]]  # per BS client: uavcas.emulation.apps.client results
+    # MAVLink and video outcomes (apps.traffic.BenignTraffic.streams_summary); None: image payload
+    streams: dict[str, Any] | None = None
     delay_daemon: dict[str, Any] | None
     attack_errors: list[str]
     wind_down_errors: list[str]

@@ -67,6 +67,12 @@ def test_missions_and_commands_are_acknowledged(run):
             assert all(acks.get(k) == "accepted" for k in online if k >= 1), (uav, acks)
             ulog = read_log(run.logs_dir / f"mavlink-{uav}.jsonl")
             assert [e["result"] for e in ulog if e["event"] == "mission_receive"] == ["accepted"]
+            # run.json's streams summary says the same
+            assert uav in info.streams["mavlink"][bs]["uploaded"]
+            assert info.streams["mavlink"][bs]["received_by_uav"][uav]["GLOBAL_POSITION_INT"] > 0
+    assert info.tool_versions["ffmpeg"] and info.versions["pymavlink"]
+    assert set(info.streams["video"]) == {n.name for n in plan.nodes if n.kind == "bs"}
+    assert all(v["rate_kbps"] > 0 for v in info.streams["video"].values()), info.streams["video"]
 
 
 def test_positions_in_the_bs_captures_are_the_plans_track(run):

@@ -169,6 +169,7 @@ class _State:
         self.captures: list[capture.Capture] = []
         self.capture_stats: list[CaptureRecord] = []
         self.clients: list[dict] = []
+        self.streams: dict | None = None
         self.delay_stats: dict | None = None
         self.sampler: WindowSampler | None = None
         self.starter: _Background | None = None  # the clients' start, in the background
@@ -315,7 +316,7 @@ def _wind_down(st: _State, opt: RunOptions) -> None:
     for step in (lambda: st.starter and st.starter.thread.join(60.0),  # no client starts after the stop
                  lambda: st.executor and st.executor.stop_all(),
                  lambda: st.executor and st.executor.collect(),
-                 lambda: st.traffic and setattr(st, "clients", [c.to_dict() for c in st.traffic.stop()]),
+                 lambda: st.traffic and _stop_traffic(st),
                  lambda: setattr(st, "delay_stats", _delay_stats(st.emu)),
                  lambda: setattr(st, "capture_stats", capture.stop_all(st.captures))):
         try:
@@ -341,6 +342,11 @@ def _delay_stats(emu: Emulation) -> dict | None:
     return stats() if stats and getattr(emu.shaper, "daemon", None) else None
 
 
+def _stop_traffic(st: _State) -> None:
+    st.clients = [c.to_dict() for c in st.traffic.stop()]
+    st.streams = st.traffic.streams_summary()
+
+
 def _write_outputs(st: _State) -> None:
     ex = st.executor
     rd = RunDir(st.out)
@@ -359,7 +365,7 @@ def _write_outputs(st: _State) -> None:
         config=st.plan.config, seed=st.plan.seed, windows=len(st.plan.windows), window_s=st.plan.window_s,
         prefix=emu.prefix if emu else None, t0_unix=st.t0, t_end_unix=now, wall_s=round(now - st.wall0, 3),
         exit_status=st.exit_status, exit_reason=st.exit_reason,
-        versions=package_versions("scapy", "dpkt", "pydantic"), tool_versions=tool_versions(),
+        versions=package_versions("scapy", "dpkt", "pydantic", "pymavlink"), tool_versions=tool_versions(),
         kernel=platform.release(),
         kernel_features=emu.features.to_dict() if emu else None, shaper_backend=emu.backend if emu else None,
         timings={**{k: round(v, 4) for k, v in st.timings.items()},
@@ -370,7 +376,7 @@ def _write_outputs(st: _State) -> None:
         capture=st.capture_stats,
         capture_drops=sum(d for d in drops if d) if st.capture_stats else None,
         packets_captured=sum(c.captured or 0 for c in st.capture_stats),
-        http_clients=st.clients, delay_daemon=st.delay_stats,
+        http_clients=st.clients, streams=st.streams, delay_daemon=st.delay_stats,
         attack_errors=ex.errors if ex else [],
         wind_down_errors=st.wind_down_errors,
         profile=st.plan.profile, profile_sha256=st.plan.profile_sha256,

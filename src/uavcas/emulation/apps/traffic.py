@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import signal
 import sys
+from collections import Counter
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
@@ -208,6 +209,32 @@ class BenignTraffic:
             for p in group:
                 p.stop(signal.SIGTERM, grace_s=2.0)
         return self.summary()
+
+    def streams_summary(self) -> dict | None:
+        """What the UDP applications did (run.json `streams`), from their own logs: per ground station
+        the UAVs whose mission it uploaded and its commands' outcomes, per UAV the messages the GCS
+        received by type; per video sink the bitrate each BS received. None for `image`."""
+        if not (self.mavlink_on or self.video_on):
+            return None
+        out: dict = {"mavlink": {}, "video": {}}
+        for b in self.bss if self.mavlink_on else ():
+            path = self.log_dir / f"mavlink-{b.name}.jsonl"
+            lines = mavlink.read_log(path) if path.exists() else []
+            summary = next((e for e in reversed(lines) if e.get("event") == "summary"), None)
+            results = Counter(e.get("result", "?") for e in lines if e.get("event") == "command_result")
+            out["mavlink"][b.name] = {
+                "uploaded": summary["uploaded"] if summary else None,
+                "commands": dict(results),
+                "received_by_uav": summary["received_by_uav"] if summary else None}
+        for b in self.bss if self.video_on else ():
+            path = self.log_dir / f"video-{b.name}.jsonl"
+            try:
+                sink = video.read_sink_log(path)
+                out["video"][b.name] = {"datagrams": sink.datagrams, "rate_kbps": round(sink.rate_kbps, 1),
+                                        "configured_kbps_per_stream": self.video_kbps}
+            except (OSError, ValueError) as e:
+                out["video"][b.name] = {"error": str(e).splitlines()[0]}
+        return out
 
     def summary(self) -> list[ClientSummary]:
         out = []

@@ -17,6 +17,7 @@ QUERIES = {
     "iproute2": (["ip", "-V"], r"iproute2-([\w.]+)|version ([\w.]+)"),
     "nft": (["nft", "--version"], r"v(\S+)"),
     "iptables": (["iptables", "--version"], r"v(\S+)"),
+    "ffmpeg": (["ffmpeg", "-version"], r"ffmpeg version (\S+)"),
 }
 
 
