@@ -28,7 +28,8 @@ app = typer.Typer(
     name="uavcas",
     help="Calibrated UAV-swarm digital twin -> real Linux stacks -> attacks -> labeled IDS dataset.",
     no_args_is_help=True,
-    add_completion=False,
+    # -h as well as --help (click hands help_option_names down to every sub-command's context)
+    context_settings={"help_option_names": ["-h", "--help"]},
     pretty_exceptions_enable=False,
 )
 
@@ -45,7 +46,7 @@ def _version(value: bool) -> None:
 
 @app.callback()
 def _root(
-    version: bool = typer.Option(False, "--version", callback=_version, is_eager=True),
+    version: bool = typer.Option(False, "-V", "--version", callback=_version, is_eager=True, help="Print the version and exit."),
 ) -> None:
     """uavcas command line."""
 

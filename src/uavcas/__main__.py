@@ -1,0 +1,5 @@
+"""python -m uavcas: the `uavcas` command."""
+
+from uavcas.cli import main
+
+main()
