@@ -5,6 +5,7 @@ from __future__ import annotations
 import subprocess
 import sys
 
+import typer.main as typer_main
 from typer.testing import CliRunner
 
 from uavcas import __version__
@@ -35,3 +36,66 @@ def test_dash_h_is_help_on_the_root_and_on_every_sub_command():
 def test_shell_completion_is_offered():
     r = runner.invoke(app, ["--help"])
     assert "--install-completion" in r.output and "--show-completion" in r.output
+
+
+def _one_line_error(r, *needles):
+    assert r.exit_code == 2, r.output
+    assert r.output.startswith("error: ") and r.output.count("\n") == 1, r.output
+    for n in needles:
+        assert n in r.output, (n, r.output)
+
+
+def test_a_bad_choice_a_bound_or_a_missing_argument_is_one_line():
+    _one_line_error(runner.invoke(app, ["extract", "x", "--out", "y", "--view", "bogus"]), "--view", "'bogus'", "window-host")
+    _one_line_error(runner.invoke(app, ["plan", "x", "--window-s", "0.1"]), "--window-s", "0.5")
+    _one_line_error(runner.invoke(app, ["plan"]), "CONFIG")
+    _one_line_error(runner.invoke(app, ["nope"]), "No such command")
+    _one_line_error(runner.invoke(app, ["run", "x", "--out", "y", "--bogus"]), "--bogus")
+    _one_line_error(runner.invoke(app, ["channel", "predict", "--in", "x", "--out", "y"]), "--model", "freespace")
+
+
+def test_choices_are_listed_in_the_help():
+    out = runner.invoke(app, ["extract", "-h"]).output
+    assert "5tuple|hostpair" in out.replace("\n", "").replace(" ", "").replace("│", "")
+    assert "connection|cic|timeout" in runner.invoke(app, ["flows", "-h"]).output.replace(" ", "").replace("\n", "").replace("│", "")
+
+
+def test_the_same_option_has_the_same_bounds_everywhere():
+    cmd = typer_main.get_command(app)
+    seen: dict[str, set] = {}
+
+    def walk(c, path):
+        for p in getattr(c, "params", []):
+            if p.opts and p.opts[0].startswith("--") and p.opts[0] in ("--seed", "--windows", "--window-s", "--profile"):
+                seen.setdefault(p.opts[0], set()).add((p.min, p.max, p.default))
+        for name, sub in getattr(c, "commands", {}).items():
+            walk(sub, f"{path} {name}")
+
+    walk(cmd, "uavcas")
+    assert {"--seed", "--windows", "--window-s", "--profile"} <= set(seen)
+    for opt, kinds in seen.items():
+        assert len(kinds) == 1, (opt, kinds)
+
+
+def test_no_folder_is_created_that_the_user_did_not_name(tmp_path):
+    target = tmp_path / "a" / "b" / "plan.json"
+    _one_line_error(runner.invoke(app, ["plan", "benign-5-2-image-logdist-adaptive-random-30-95", "--windows", "1",
+                                        "--out", str(target)]), "does not exist")
+    assert not (tmp_path / "a").exists()
+    r = runner.invoke(app, ["plan", "benign-5-2-image-logdist-adaptive-random-30-95", "--windows", "1",
+                            "--out", str(tmp_path)])
+    _one_line_error(r, "it is a directory")  # refused before the plan is printed
+    for argv in (["report", str(tmp_path), "--out", str(tmp_path / "x" / "r")],
+                 ["bench", "ids", str(tmp_path), "--out", str(tmp_path / "x" / "b")],
+                 ["campaign", "manifest", "--out", str(tmp_path / "x" / "m.jsonl")],
+                 ["extract", str(tmp_path), "--out", str(tmp_path / "x" / "ds")]):
+        r = runner.invoke(app, argv)
+        assert r.exit_code == 2 and not (tmp_path / "x").exists(), (argv, r.output)
+
+
+def test_output_to_a_pipe_is_not_cut_to_a_terminals_width():
+    r = subprocess.run([sys.executable, "-m", "uavcas", "plan", "benign-20-2-image-logdist-adaptive-random-10-95",
+                        "--windows", "2"], capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0, r.stderr
+    assert "…" not in r.stdout and "..." not in r.stdout
+    assert "disconnected" in r.stdout

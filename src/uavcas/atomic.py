@@ -48,17 +48,23 @@ def check_target(path: str | os.PathLike) -> Path:
     return path
 
 
-def ensure_out_dir(path: str | os.PathLike) -> Path:
-    """Create output directory `path` (and parents) unless it already is a directory."""
+def check_out_dir(path: str | os.PathLike) -> Path:
+    """`path` if it is absent or a directory (a symlink to one included); else UnsafeOutput."""
     path = Path(path)
     try:
         st = os.lstat(path)
     except FileNotFoundError:
-        path.mkdir(parents=True, exist_ok=True)
         return path
     if stat.S_ISDIR(st.st_mode) or (stat.S_ISLNK(st.st_mode) and path.is_dir()):
         return path
     raise UnsafeOutput(f"refusing to use {path} as an output directory: it is {_kind(st.st_mode)}")
+
+
+def ensure_out_dir(path: str | os.PathLike) -> Path:
+    """Create output directory `path` (and parents) unless it already is a directory."""
+    path = check_out_dir(path)
+    path.mkdir(parents=True, exist_ok=True)
+    return path
 
 
 @contextlib.contextmanager

@@ -32,6 +32,13 @@ Pathloss = Literal["logdist", "3gpp", "uma", "rma", "umi", "tworay", "freespace"
 PATHLOSS_MODELS: tuple[str, ...] = get_args(Pathloss)
 Mission = Literal["spiral", "grid", "hover_transit", "random"]
 MISSIONS: tuple[str, ...] = get_args(Mission)
+# How flows are labelled: ours (from each packet's effect, uavcas.labels) or paper (the authors' IP
+# membership of attackers and victims, for comparison)
+LabelMode = Literal["ours", "paper"]
+LABEL_MODES: tuple[str, ...] = get_args(LabelMode)
+# What a campaign does with a run whose fidelity audit failed: keep it flagged, or retry it
+FidelityPolicy = Literal["flag", "retry"]
+FIDELITY_POLICIES: tuple[str, ...] = get_args(FidelityPolicy)
 SeqMode = Literal["inc", "rand", "zero"]  # how a replayer rewrites TCP sequence numbers
 SEQ_MODES: tuple[str, ...] = get_args(SeqMode)
 

@@ -122,7 +122,7 @@ def test_cli_refuses_bad_input_with_one_line(tmp_path):
     r = CliRunner().invoke(app, ["calibrate", "pathloss", "--data", str(tmp_path), "--out", str(tmp_path / "o")])
     assert r.exit_code == 2 and "Maeng" in r.output
     r = CliRunner().invoke(app, ["calibrate", "everything", "--data", str(tmp_path), "--out", str(tmp_path / "o")])
-    assert r.exit_code == 2 and "unknown layer" in r.output
+    assert r.exit_code == 2 and "LAYER: 'everything' is not one of" in r.output and r.output.count("\n") == 1
 
 
 def test_profile_json_roundtrip_of_fitted_pathloss():

@@ -87,13 +87,26 @@ def test_link_chain_columns(tmp_path):
     ([{"d3d_m": 10.0, "d2d_m": 5.0, "h_uav_m": 40.0}], "missing column(s) h_bs_m"),
     ([{"d3d_m": "far", "d2d_m": 5.0, "h_uav_m": 40.0, "h_bs_m": 10.0}], "column d3d_m row 1"),
     ([{"d3d_m": 10.0, "d2d_m": -5.0, "h_uav_m": 40.0, "h_bs_m": 10.0}], "column d2d_m row 1: negative"),
-    ([{"d3d_m": 10.0, "d2d_m": 50.0, "h_uav_m": 40.0, "h_bs_m": 10.0}], "d3d_m is shorter than d2d_m"),
+    ([{"d3d_m": 10.0, "d2d_m": 50.0, "h_uav_m": 40.0, "h_bs_m": 10.0}], "row 1: d2d_m 50 exceeds d3d_m 10 by more than 0.5 m"),
     ([{"d3d_m": 10.0, "d2d_m": 5.0, "h_uav_m": 40.0, "h_bs_m": 10.0, "fc_ghz": 0.0}], "fc_ghz row 1"),
 ])
 def test_bad_input_one_line_exit_2_nothing_written(tmp_path, rows, needle):
     r, out = _run(tmp_path, rows, "logdist")
     assert r.exit_code == 2 and needle in r.output and r.output.count("\n") <= 2
     assert not out.exists()
+
+
+def test_a_rounding_error_in_d2d_is_clamped_and_counted(tmp_path):
+    # positions rounded to the metre give d2d_m a little longer than d3d_m: clamped, counted on stderr
+    rows = [{"d3d_m": 100.0, "d2d_m": 100.3, "h_uav_m": 10.0, "h_bs_m": 10.0},
+            {"d3d_m": 100.0, "d2d_m": 100.0, "h_uav_m": 10.0, "h_bs_m": 10.0},
+            {"d3d_m": 120.0, "d2d_m": 110.0, "h_uav_m": 60.0, "h_bs_m": 10.0}]
+    r, out = _run(tmp_path, rows, "freespace")
+    assert r.exit_code == 0, r.output
+    assert "1 row(s) had d2d_m up to 0.5 m longer than d3d_m" in r.output
+    df = pd.read_csv(out)
+    assert df["d2d_m"].tolist() == [100.0, 100.0, 110.0]
+    assert df["pathloss_db"][0] == pytest.approx(df["pathloss_db"][1])
 
 
 def test_refuses_bad_model_profile_and_special_outputs(tmp_path):
@@ -107,9 +120,9 @@ def test_refuses_bad_model_profile_and_special_outputs(tmp_path):
     link = tmp_path / "out.csv"
     link.symlink_to(target)
     r, _ = _run(tmp_path, rows, "logdist")
-    assert r.exit_code == 2 and "not a regular file" in r.output
+    assert r.exit_code == 2 and "it is a symbolic link" in r.output
     assert link.is_symlink() and target.read_text() == "mine"
     link.unlink()
     os.mkfifo(link)
     r, _ = _run(tmp_path, rows, "logdist")
-    assert r.exit_code == 2 and "not a regular file" in r.output
+    assert r.exit_code == 2 and "it is a FIFO" in r.output

@@ -6,6 +6,12 @@ import errno
 from pathlib import Path
 
 import typer
+import typer.core
+
+try:  # typer >= 0.20 carries its own click; older ones use the click package
+    from typer._click import exceptions as _click_errors
+except ImportError:  # pragma: no cover
+    from click import exceptions as _click_errors  # type: ignore[no-redef]
 
 from uavcas import __version__
 
@@ -24,8 +30,36 @@ from . import report as _report
 from . import run as _run
 from .common import fail
 
+class _OneLineErrors(typer.core.TyperGroup):
+    """The root command: every bad input, click's usage errors included, ends in one line on stderr
+    and a non-zero exit, whoever invokes it (the console script, `python -m uavcas`, a test's
+    CliRunner), instead of click's usage block and typer's framed box."""
+
+    def main(self, *args, standalone_mode: bool = True, **kwargs):
+        from uavcas.atomic import UnsafeOutput
+
+        try:
+            code = super().main(*args, standalone_mode=False, **kwargs)
+        except _click_errors.UsageError as exc:
+            if type(exc).__name__ == "NoArgsIsHelpError":  # bare `uavcas` / `uavcas campaign`: typer printed the help
+                code = 2
+            else:
+                code = fail(_usage_error(exc)).exit_code
+        except typer.Abort:  # end of input at a prompt
+            code = fail("interrupted", 130).exit_code
+        except UnsafeOutput as exc:  # any command's --out onto a symlink, FIFO, device or directory
+            code = fail(str(exc)).exit_code
+        except OSError as e:  # a file or folder named on the command line cannot be read or written
+            code = _os_error(e).exit_code
+        code = code if isinstance(code, int) else 0
+        if not standalone_mode:
+            return code
+        raise SystemExit(code)
+
+
 app = typer.Typer(
     name="uavcas",
+    cls=_OneLineErrors,
     help="Calibrated UAV-swarm digital twin -> real Linux stacks -> attacks -> labeled IDS dataset.",
     no_args_is_help=True,
     # -h as well as --help (click hands help_option_names down to every sub-command's context)
@@ -52,14 +86,19 @@ def _root(
 
 
 def main() -> None:
-    from uavcas.atomic import UnsafeOutput
+    app()
 
-    try:
-        app()
-    except UnsafeOutput as exc:  # any command's --out onto a symlink, FIFO, device or directory
-        raise SystemExit(fail(str(exc)).exit_code) from None
-    except OSError as e:  # a file or folder named on the command line cannot be read or written
-        raise SystemExit(_os_error(e).exit_code) from None
+
+def _usage_error(exc: "_click_errors.UsageError") -> str:
+    """`--view: 'bogus' is not one of ...` from click's exception (the command named for context)."""
+    msg = exc.format_message().replace("Value error, ", "")
+    if (isinstance(exc, _click_errors.BadParameter) and not isinstance(exc, _click_errors.MissingParameter)
+            and exc.param is not None):
+        is_argument = getattr(exc.param, "param_type_name", "") == "argument"
+        hint = (exc.param.metavar or exc.param.name.upper()) if is_argument else "/".join(exc.param.opts)
+        msg = f"{hint}: {exc.message.replace('Value error, ', '')}"
+    cmd = exc.ctx.command_path if exc.ctx is not None else "uavcas"
+    return " ".join(f"{msg} (see {cmd} -h)".split())  # one line, whatever click wrapped
 
 
 _BAD_INPUT_ERRNOS = (errno.EACCES, errno.EPERM, errno.ENOENT, errno.ENOTDIR, errno.EISDIR, errno.EROFS, errno.EEXIST)

@@ -7,12 +7,17 @@ from pathlib import Path
 
 import typer
 
-from .common import atomic_write_text, console, err_console, fail
+from uavcas.analysis.iat import IAT_SOURCES
+from uavcas.flows.assemble import VIEWS
+
+from .common import atomic_write_text, check_output, console, dataset_argument, err_console, fail, one_of, path_fail, seed_option
 
 analyze_app = typer.Typer(help="Measure a dataset: diversity, per-axis diversity, separability.", no_args_is_help=True)
 
 
-VIEW_HELP = "Flow view to use when the dataset holds several (5tuple | hostpair)."
+VIEW_HELP = "Flow view to use when the dataset holds several."
+View = one_of(VIEWS)
+IatSource = one_of((*IAT_SOURCES, "auto"))
 IAT_HELP = ("packet (every IAT, needs per-packet sequences) | flow-mean (one mean IAT per flow) | auto "
             "(packet when every dataset has sequences, else flow-mean); one source for all datasets compared.")
 
@@ -23,7 +28,7 @@ def _load(path: Path, view: str | None = None):
     try:
         return load_any(path, view=view)
     except (FileNotFoundError, ValueError, KeyError, OSError) as e:
-        raise fail(f"{path}: {e}") from None
+        raise path_fail(path, e) from None
 
 
 def _json(path: Path, payload: dict) -> None:
@@ -32,16 +37,16 @@ def _json(path: Path, payload: dict) -> None:
 
 @analyze_app.command("diversity")
 def diversity_cmd(
-    dataset: Path = typer.Argument(..., help="Dataset directory (flows.parquet) or external sample."),
+    dataset: Path = dataset_argument("Dataset directory (flows.parquet) or an external sample."),
     out: Path = typer.Option(..., "--out", help="Output directory."),
     reference: list[Path] = typer.Option([], "--reference", help="Other datasets to tabulate beside it (repeatable)."),
     bins: int = typer.Option(50, "--bins", min=1, help="Log-spaced IAT bins (plus the zero bin)."),
     boot: int = typer.Option(200, "--boot", min=0, help="Bootstrap resamples (flows) for the CIs."),
-    seed: int = typer.Option(0, "--seed"),
-    view: str = typer.Option(None, "--view", help=VIEW_HELP),
+    seed: int = seed_option("Seed of the bootstrap and the samples."),
+    view: View | None = typer.Option(None, "--view", help=VIEW_HELP),
     pairwise: bool = typer.Option(False, "--pairwise", help="Also average over random flow pairs."),
     legacy: bool = typer.Option(True, "--legacy/--no-legacy", help="Also the authors' unbounded legacy metric (packet source only)."),
-    iat_source: str = typer.Option("auto", "--iat-source", help=IAT_HELP),
+    iat_source: IatSource = typer.Option("auto", "--iat-source", help=IAT_HELP),
     baseline_draws: int = typer.Option(50, "--baseline-draws", min=1, help="Benign samples drawn at each class's size for its baseline."),
 ) -> None:
     """Hellinger and JSD (base 2, bounded) of each class's IATs vs Benign, with CIs and a
@@ -51,6 +56,7 @@ def diversity_cmd(
     from uavcas.analysis.diversity import DiversityOptions, diversity_table
     from uavcas.analysis.iat import choose_source
 
+    check_output(out, "dir")
     paths = [dataset, *reference]
     frames = [_load(p, view) for p in paths]
     try:
@@ -79,19 +85,20 @@ def diversity_cmd(
 
 @analyze_app.command("axes")
 def axes_cmd(
-    dataset: Path = typer.Argument(..., help="Dataset directory (flows.parquet)."),
+    dataset: Path = dataset_argument("Dataset directory (flows.parquet)."),
     out: Path = typer.Option(..., "--out", help="Output directory."),
-    bins: int = typer.Option(50, "--bins", min=1),
-    boot: int = typer.Option(200, "--boot", min=0),
-    seed: int = typer.Option(0, "--seed"),
-    view: str = typer.Option(None, "--view", help=VIEW_HELP),
-    iat_source: str = typer.Option("auto", "--iat-source", help=IAT_HELP),
+    bins: int = typer.Option(50, "--bins", min=1, help="Log-spaced IAT bins (plus the zero bin)."),
+    boot: int = typer.Option(200, "--boot", min=0, help="Bootstrap resamples (flows) for the CIs."),
+    seed: int = seed_option("Seed of the bootstrap and the samples."),
+    view: View | None = typer.Option(None, "--view", help=VIEW_HELP),
+    iat_source: IatSource = typer.Option("auto", "--iat-source", help=IAT_HELP),
 ) -> None:
     """Internal diversity per configuration axis on benign flows (extreme values), with a
     size-matched baseline; axes confounded with others in this dataset are flagged."""
     from uavcas.analysis.axes import CONFOUND_TV, axis_diversity
     from uavcas.analysis.iat import choose_source
 
+    check_output(out, "dir")
     df = _load(dataset, view)
     try:
         source = choose_source([df], iat_source)
@@ -112,15 +119,16 @@ def axes_cmd(
 
 @analyze_app.command("separability")
 def separability_cmd(
-    dataset: Path = typer.Argument(..., help="Dataset directory (flows.parquet) or external sample."),
+    dataset: Path = dataset_argument("Dataset directory (flows.parquet) or an external sample."),
     out: Path = typer.Option(..., "--out", help="Output directory."),
     tsne_samples: int = typer.Option(2000, "--tsne-samples", min=5, help="Flows in the t-SNE subsample."),
-    seed: int = typer.Option(0, "--seed"),
-    view: str = typer.Option(None, "--view", help=VIEW_HELP),
+    seed: int = seed_option("Seed of the bootstrap and the samples."),
+    view: View | None = typer.Option(None, "--view", help=VIEW_HELP),
 ) -> None:
     """Per-class mean/std of IAT, packet rate, packet size, duration; t-SNE and distribution figures."""
     from uavcas.analysis.separability import distributions_figure, separability_stats, tsne_embedding, tsne_figure
 
+    check_output(out, "dir")
     df = _load(dataset, view)
     try:
         stats = separability_stats(df)

@@ -12,7 +12,7 @@ from pathlib import Path
 import typer
 from rich.table import Table
 
-from .common import console, fail
+from .common import console, fail, run_dir_argument
 
 
 def fidelity_line(s) -> str:
@@ -26,7 +26,7 @@ def fidelity_line(s) -> str:
 
 
 def audit_cmd(
-    run_dir: Path = typer.Argument(..., help="A run directory (uavcas run --out)."),
+    run_dir: Path = run_dir_argument("A run directory (uavcas run --out)."),
     p50_ms: float = typer.Option(None, "--p50-ms", help="Limit on |median| per-hop delay error (default 0.1)."),
     p90_ms: float = typer.Option(None, "--p90-ms", help="Limit on the p90 per-hop delay error (default 0.2)."),
     p99_ms: float = typer.Option(None, "--p99-ms",

@@ -8,8 +8,12 @@ from pathlib import Path
 
 import typer
 
-from .common import atomic_write_text, err_console, fail
+from uavcas.dataset.read import FORMATS
+from uavcas.flows.assemble import VIEWS
 
+from .common import atomic_write_text, check_output, dataset_argument, err_console, fail, one_of, path_fail
+
+BenchFormat = one_of(("auto", *FORMATS))
 bench_app = typer.Typer(help="Benchmarks on a dataset.", no_args_is_help=True)
 
 
@@ -51,7 +55,7 @@ def _write_leaderboard(out: Path, results, notes: list[str]) -> None:
 
 @bench_app.command("ids")
 def ids_cmd(
-    dataset: Path = typer.Argument(..., help="Dataset directory (flows.parquet), the authors' CSV (*_ts.csv) or a CICIDS2017/UNSW-NB15 sample."),
+    dataset: Path = dataset_argument("Dataset directory (flows.parquet), the authors' CSV (*_ts.csv) or a CICIDS2017/UNSW-NB15 sample."),
     out: Path = typer.Option(..., "--out", help="Output directory (one sub-directory per protocol when several)."),
     protocol: str = typer.Option("multiclass", "--protocol", help="binary | multiclass | ood | cross-condition, comma-separated, or all."),
     models: str = typer.Option("all", "--models", help="Comma-separated: lr,sgd,rf,mlp,lightgbm,cnn1d,lstm,convnet,tinyml,cnn_bilstm (all: these ten), context,context-joint,context-flow,context-only (the context-aware detector and its ablation; need the dataset's ctx_* columns)."),
@@ -64,8 +68,8 @@ def ids_cmd(
     train_cap: int = typer.Option(0, "--train-cap", min=0, help="At most N training (and validation) flows per run and class, seeded (0: all); test flows are never capped."),
     min_class_runs: int = typer.Option(0, "--min-class-runs", min=0, help="Leave out the flows of classes held by fewer than N runs, listed in the notes (0: refuse such a class, naming it)."),
     threads: int = typer.Option(0, "--threads", min=0, help="Threads per model (0: cores available)."),
-    fmt: str = typer.Option("auto", "--format", help="auto | uavcas | uavcas-csv | cicids2017 | unsw-nb15."),
-    view: str = typer.Option(None, "--view", help="Flow view when the dataset holds several (5tuple | hostpair)."),
+    fmt: BenchFormat = typer.Option("auto", "--format", help="What DATASET is (auto: by its files)."),
+    view: one_of(VIEWS) | None = typer.Option(None, "--view", help="Flow view when the dataset holds several."),
 ) -> None:
     """Train and evaluate the baselines; writes results/summary/splits/confusion CSVs, figures,
     results.md per protocol and leaderboard.csv/md."""
@@ -77,6 +81,7 @@ def ids_cmd(
     from uavcas.ids.results import results_frame, write_results
     from uavcas.ids.torch_estimator import DL_MISSING
 
+    check_output(out, "dir")
     protocols = _parse_list(protocol, PROTOCOLS, "--protocol")
     if scaler not in SCALERS:
         raise fail(f"--scaler: unknown {scaler!r} (known: {', '.join(SCALERS)})")
@@ -96,7 +101,7 @@ def ids_cmd(
         df = load_any(dataset, None if fmt == "auto" else fmt, view=view)
         prepared = [prepare(df, p, cfg) for p in protocols]  # refuse bad input before any fit
     except (FileNotFoundError, ValueError, KeyError, OSError) as e:
-        raise fail(f"{dataset}: {e}") from None
+        raise path_fail(dataset, e) from None
     frames, notes = [], []
     for prep in prepared:
         cfg.progress = lambda msg, p=prep.protocol: err_console.print(f"[dim]{p}[/] {msg}", highlight=False)
@@ -120,6 +125,8 @@ def leaderboard_cmd(
 ) -> None:
     """One leaderboard (mean ± std over seeds) from several `bench ids` outputs."""
     import pandas as pd
+
+    check_output(out, "dir")
 
     from uavcas.ids.results import RESULT_COLUMNS
 

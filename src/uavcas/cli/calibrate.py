@@ -7,13 +7,13 @@ from pathlib import Path
 
 import typer
 
-from .common import console, fail
+from .common import check_output, console, fail, one_of
 
 _LAYERS = ("pathloss", "mobility", "link", "fidelity", "all")
 
 
 def calibrate_cmd(
-    layer: str = typer.Argument(..., help="pathloss | mobility | link | fidelity | all"),
+    layer: one_of(_LAYERS) = typer.Argument(..., metavar="LAYER", help="What to calibrate."),
     data: Path = typer.Option(..., "--data", help="Folder with the AERPAW data (shared layout or the original downloads)."),
     out: Path = typer.Option(..., "--out", help="Output folder for JSON, markdown and figures."),
     write_profile: str = typer.Option(None, "--write-profile", help="Save the fitted twin profile (with provenance) under this name, or to a path ending in .json."),
@@ -25,10 +25,11 @@ def calibrate_cmd(
     from uavcas.calibration.pipeline import LAYERS, parse_assignment, run
     from uavcas.twin.profile import ProfileError
 
-    if layer not in _LAYERS:
-        raise fail(f"unknown layer {layer!r}; expected one of {', '.join(_LAYERS)}")
     if not data.is_dir():
         raise fail(f"--data {data}: not a folder")
+    check_output(out, "dir")
+    if write_profile is not None and write_profile.endswith(".json"):
+        check_output(Path(write_profile), "file", "--write-profile")
     layers = LAYERS if layer == "all" else (layer,)
     try:
         assignment = parse_assignment(missions)

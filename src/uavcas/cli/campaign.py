@@ -8,9 +8,15 @@ from pathlib import Path
 import typer
 from rich.table import Table
 
+from uavcas.flows.assemble import VIEWS
+from uavcas.flows.termination import TERMINATIONS
 from uavcas.scenario import PRESETS, manifest, parse_shard, select_shard
+from uavcas.schema import EPISODE_VIEW
+from uavcas.vocabulary import FIDELITY_POLICIES
 
-from .common import TERMINATION_HELP, atomic_write_text, console, fail
+from .common import TERMINATION_HELP, atomic_write_text, check_output, console, fail, one_of, profile_option, seed_option
+
+Preset = one_of(PRESETS)
 
 campaign_app = typer.Typer(help="Campaigns of scenarios: manifests, runs.", no_args_is_help=True)
 
@@ -18,13 +24,12 @@ campaign_app = typer.Typer(help="Campaigns of scenarios: manifests, runs.", no_a
 @campaign_app.command("manifest")
 def manifest_cmd(
     out: Path = typer.Option(..., "--out", help="JSONL file to write (one scenario per line)."),
-    preset: str = typer.Option("paper", "--preset", help=f"One of: {', '.join(PRESETS)}."),
-    seed: int = typer.Option(0, "--seed", help="Seed of the permutation and of the run seeds."),
+    preset: Preset = typer.Option("paper", "--preset", help="The campaign's scenarios."),
+    seed: int = seed_option("Seed of the permutation and of the run seeds."),
     shard: str = typer.Option(None, "--shard", help="K/N: keep the K-th of N slices."),
 ) -> None:
     """Write the campaign's scenarios in seeded-permutation order."""
-    if preset not in PRESETS:
-        raise fail(f"--preset: unknown preset {preset!r} (known: {', '.join(PRESETS)})")
+    check_output(out, "file")
     try:
         sh = parse_shard(shard) if shard is not None else None
     except ValueError as e:
@@ -37,26 +42,27 @@ def manifest_cmd(
 @campaign_app.command("run")
 def run_cmd(
     out: Path = typer.Option(..., "--out", help="Dataset directory (created; re-running resumes it)."),
-    preset: str = typer.Option(None, "--preset", help=f"One of: {', '.join(PRESETS)} (default quick)."),
+    preset: Preset | None = typer.Option(None, "--preset", help="The campaign's scenarios (default quick)."),
     manifest_file: Path = typer.Option(None, "--manifest", help="A manifest JSONL instead of a preset."),
-    seed: int = typer.Option(0, "--seed", help="Campaign seed (with --preset)."),
+    seed: int = seed_option("Campaign seed (with --preset)."),
     shard: str = typer.Option(None, "--shard", help="K/N: run only the K-th of N slices."),
     jobs: int = typer.Option(1, "--jobs", min=1, help="Scenarios emulated at once on this host."),
     scheduler: str = typer.Option(None, "--scheduler", help="Dask scheduler, e.g. tcp://HOST:8786."),
-    profile: str = typer.Option(None, "--profile", help="Twin profile name or JSON path."),
+    profile: str = profile_option(),
     retries: int = typer.Option(2, "--retries", min=0, help="Extra tries for a failed run."),
-    fidelity: str = typer.Option("flag", "--fidelity",
+    fidelity: one_of(FIDELITY_POLICIES) = typer.Option("flag", "--fidelity",
                                  help="A run whose fidelity audit fails: 'flag' (keep it, counted in dataset.json) "
                                       "or 'retry' (try again up to --retries, then keep the last, flagged)."),
     report: bool = typer.Option(True, "--report/--no-report", help="Write DATASET_DIR/report/index.html at the end."),
     min_attack_fraction: float = typer.Option(
         0.0, "--min-attack-fraction", min=0.0, max=1.0,
         help="Leave out flows whose share of attack packets is above 0 but below this (default 0: keep all)."),
-    view: str = typer.Option("5tuple", "--view", help="What each run is extracted to: 5tuple, hostpair, window-hostpair "
+    view: one_of((*VIEWS, EPISODE_VIEW)) = typer.Option("5tuple", "--view", help="What each run is extracted to: 5tuple, hostpair, window-hostpair "
                                                       "(flows) or window-host (one row per node per plan window)."),
-    termination: str = typer.Option(None, "--termination", help=TERMINATION_HELP),
+    termination: one_of(TERMINATIONS) | None = typer.Option(None, "--termination", help=TERMINATION_HELP),
 ) -> None:
     """Plan, emulate, extract and label every scenario; append each run's shard to the dataset."""
+    check_output(out, "dir")
     from uavcas.campaign import CampaignError, Extraction, read_manifest, run_campaign
     from uavcas.schema import CLASSES
 
@@ -74,8 +80,6 @@ def run_cmd(
                 entries = select_shard(entries, sh)
         else:
             preset = preset or "quick"
-            if preset not in PRESETS:
-                raise fail(f"--preset: unknown preset {preset!r} (known: {', '.join(PRESETS)})")
             entries = manifest(preset, seed=seed, shard=sh)
         if profile is not None:
             from uavcas.twin.profile import load_profile

@@ -19,27 +19,21 @@ passed through. OUT.csv is GEOM.csv plus:
 from __future__ import annotations
 
 import io
-import stat
 from pathlib import Path
 
 import typer
 
-from .common import atomic_write_text, console, fail
+from uavcas.vocabulary import PATHLOSS_MODELS
+
+from .common import atomic_write_text, check_output, console, err_console, fail, one_of, profile_option
 
 REQUIRED = ("d3d_m", "d2d_m", "h_uav_m", "h_bs_m")
+# A 2-D distance longer than the 3-D one is impossible, but rounded coordinates give it by a little
+# (positions to the metre: up to ~0.5 m); within this, d2d_m is clamped to d3d_m and the rows counted.
+D2D_TOLERANCE_M = 0.5
 OUTPUT = ("pathloss_db", "snr_db", "mcs", "rate_mbps", "loss")
 
 app = typer.Typer(help="The twin's channel on your own geometry.", no_args_is_help=True)
-
-
-def _check_out(out: Path) -> None:
-    """Refuse an output that is not a regular file we may replace (symlink, FIFO, device, dir)."""
-    try:
-        st = out.lstat()
-    except FileNotFoundError:
-        return
-    if stat.S_ISLNK(st.st_mode) or not stat.S_ISREG(st.st_mode):
-        raise fail(f"--out {out}: exists and is not a regular file (symlink, FIFO, device or folder); not replacing it")
 
 
 def _read_geometry(path: Path):
@@ -72,9 +66,17 @@ def _read_geometry(path: Path):
             raise fail(f"--in {path}: column {c} row {int(neg.idxmax()) + 1}: negative ({df[c][neg.idxmax()]})")
     if "fc_ghz" in df.columns and (df["fc_ghz"] <= 0).any():
         raise fail(f"--in {path}: column fc_ghz row {int((df['fc_ghz'] <= 0).idxmax()) + 1}: must be > 0")
-    short = df["d3d_m"] < df["d2d_m"] - 1e-6
-    if short.any():
-        raise fail(f"--in {path}: row {int(short.idxmax()) + 1}: d3d_m is shorter than d2d_m")
+    excess = df["d2d_m"] - df["d3d_m"]
+    impossible = excess > D2D_TOLERANCE_M
+    if impossible.any():
+        row = int(impossible.idxmax())
+        raise fail(f"--in {path}: row {row + 1}: d2d_m {df['d2d_m'][row]:g} exceeds d3d_m {df['d3d_m'][row]:g} by more "
+                   f"than {D2D_TOLERANCE_M:g} m")
+    clamp = excess > 0
+    if clamp.any():
+        df.loc[clamp, "d2d_m"] = df.loc[clamp, "d3d_m"]
+        err_console.print(f"note: {int(clamp.sum())} row(s) had d2d_m up to {D2D_TOLERANCE_M:g} m longer than d3d_m "
+                          f"(rounding); clamped to d3d_m", highlight=False)
     return df
 
 
@@ -108,20 +110,17 @@ def predict_frame(df, model_name: str, profile, tx_dbm: float, noise_dbm: float)
 
 @app.command("predict")
 def predict_cmd(
-    model: str = typer.Option(..., "--model", help="logdist | 3gpp | uma | rma | umi | tworay | freespace"),
+    model: one_of(PATHLOSS_MODELS) = typer.Option(..., "--model", help="The path-loss model."),
     geom: Path = typer.Option(..., "--in", help="CSV with d3d_m, d2d_m, h_uav_m, h_bs_m (fc_ghz optional)."),
     out: Path = typer.Option(..., "--out", help="Output CSV: the input plus pathloss_db, snr_db, mcs, rate_mbps, loss."),
-    profile: str = typer.Option(None, "--profile", help="Twin profile (default: the calibrated one; 'paper'; a name or JSON path)."),
+    profile: str = profile_option(),
     tx_dbm: float = typer.Option(20.0, "--tx-dbm", help="Transmit power (dBm)."),
     noise_dbm: float = typer.Option(-95.0, "--noise-dbm", help="Noise floor (dBm)."),
 ) -> None:
     """Evaluate a path-loss model and the link chain on your own geometry."""
     from uavcas.twin.profile import ProfileError, load_profile
-    from uavcas.vocabulary import PATHLOSS_MODELS
 
-    if model not in PATHLOSS_MODELS:
-        raise fail(f"--model {model!r}: expected one of {', '.join(PATHLOSS_MODELS)}")
-    _check_out(out)
+    check_output(out, "file")
     try:
         prof = load_profile(profile)
     except ProfileError as e:

@@ -1,6 +1,12 @@
-"""Helpers shared by the sub-commands: one-line errors with a non-zero exit, atomic writes."""
+"""Helpers shared by the sub-commands: one-line errors with a non-zero exit, atomic writes, the
+options and arguments several commands take (one name, one bound, one help each), and the check
+every output gets before any work starts."""
 
 from __future__ import annotations
+
+import os
+from pathlib import Path
+from typing import Any, Literal
 
 import typer
 from rich.console import Console
@@ -8,12 +14,77 @@ from rich.markup import escape
 
 from uavcas.atomic import atomic_path, atomic_write_bytes, atomic_write_text  # noqa: F401
 
-console = Console()
-err_console = Console(stderr=True)
+
+def _console(stderr: bool = False) -> Console:
+    # Piped or redirected output is never cut to a terminal's width: rich would otherwise render
+    # tables at 80 columns and end cells with an ellipsis ("7.22e-..." in a file).
+    c = Console(stderr=stderr)
+    return c if c.is_terminal else Console(stderr=stderr, width=100_000)
+
+
+console = _console()
+err_console = _console(stderr=True)
+
 TERMINATION_HELP = ("How a TCP flow ends: connection (default: one connection one flow; closed on RST or the "
                     "acknowledged last FIN, its trailing packets within 60 s join it), cic (CICFlowMeter exactly: "
                     "first backward FIN or RST closes, duplicate forward FIN dropped, no 1-packet flows; reproduces "
                     "its 'TCP appendix' flows) or timeout (nfstream's: idle/active timeouts only).")
+
+# --- choices, arguments and options shared by several commands ------------------------------------
+MIN_WINDOW_S = 0.5  # a plan is made to be run: the emulation's shortest window (the same for plan and run)
+
+
+def one_of(values) -> Any:
+    """The annotation of an option taking one of these words: typer lists them in the help,
+    completes them, and refuses any other in one line."""
+    return Literal[tuple(values)]
+
+
+def config_argument() -> Any:
+    return typer.Argument(..., metavar="CONFIG",
+                          help="Scenario string, e.g. dos=1000-5-2-image-logdist-adaptive-random-30-95")
+
+
+def dataset_argument(help: str = "Dataset directory (flows.parquet + dataset.json).") -> Any:
+    return typer.Argument(..., metavar="DATASET", help=help)
+
+
+def run_dir_argument(help: str = "Run directory (plan.json, run.json, attacks.jsonl, pcap/).") -> Any:
+    return typer.Argument(..., metavar="RUN_DIR", help=help)
+
+
+def seed_option(help: str = "Seed: the same seed and config give the same result.") -> Any:
+    return typer.Option(0, "--seed", min=0, help=help)
+
+
+def windows_option() -> Any:
+    return typer.Option(12, "--windows", min=1, help="Number of plan windows.")
+
+
+def window_s_option() -> Any:
+    return typer.Option(5.0, "--window-s", min=MIN_WINDOW_S, help="Window length in seconds.")
+
+
+def profile_option() -> Any:
+    return typer.Option(None, "--profile", help="Twin profile (channel and mobility): a name or a JSON path "
+                                                "(default: the calibrated one).")
+
+
+def check_output(path: Path, kind: Literal["file", "dir"], option: str = "--out") -> Path:
+    """Check an output the user named before any work starts (a one-line error, exit 2, if bad).
+
+    A file must be absent or a regular file, a directory absent or a directory (`uavcas.atomic`'s
+    rules); either way its parent folder must exist: uavcas creates no folder the user did not name."""
+    from uavcas.atomic import UnsafeOutput, check_out_dir, check_target
+
+    try:
+        (check_target if kind == "file" else check_out_dir)(path)
+    except UnsafeOutput as e:
+        raise fail(f"{option}: {e}") from None
+    parent = path.parent if str(path.parent) else Path(".")
+    if not os.path.lexists(path) and not parent.is_dir():
+        raise fail(f"{option} {path}: its folder {parent} does not exist (create it first)")
+    return path
 
 
 def fail(message: str, code: int = 2) -> "typer.Exit":
@@ -23,6 +94,12 @@ def fail(message: str, code: int = 2) -> "typer.Exit":
     they are instead of being taken for console markup."""
     err_console.print(f"[bold red]error:[/] {escape(message)}", highlight=False, soft_wrap=True)
     return typer.Exit(code)
+
+
+def path_fail(path: Path, error: Exception) -> "typer.Exit":
+    """A one-line error about an input path, naming it once (the library's message may already)."""
+    msg = str(error).splitlines()[0] if str(error) else type(error).__name__
+    return fail(msg if str(path) in msg else f"{path}: {msg}")
 
 
 def plan_or_fail(config: str, seed: int, windows: int, window_s: float, profile: str | None):

@@ -10,8 +10,9 @@ import typer
 from rich.markup import escape
 from rich.table import Table
 
-from .common import atomic_write_text, console, fail
+from .common import atomic_write_text, check_output, console, fail, one_of
 
+VmAccel = one_of(("auto", "kvm", "tcg"))
 HOST_SAMPLE_S = 2.0  # the host's contention, measured before a VM boots
 TOOLS_SHOWN = ("nginx", "hping3", "tcpdump", "curl", "wget", "iperf3", "nft", "iptables", "ethtool")
 
@@ -22,12 +23,15 @@ def doctor(
     prefix: str = typer.Option(None, "--prefix", help="Prefix for the test emulation (default: random)."),
     vm: bool = typer.Option(False, "--vm", help="Run the self-test with the netem backend in a stock Debian kernel "
                                                 "under QEMU (this checkout over 9p; ~0.5-3 min)."),
-    vm_accel: str = typer.Option("auto", "--vm-accel", help="auto (KVM if it boots, else TCG), kvm or tcg."),
+    vm_accel: VmAccel = typer.Option("auto", "--vm-accel",
+                                                         help="auto (KVM if it boots, else TCG), kvm or tcg."),
 ) -> None:
     """Report kernel features, the chosen shaper and tools; measure a two-hop shaped path."""
     from uavcas.emulation.doctor import run_doctor
     from uavcas.emulation.naming import check_prefix
 
+    if json_out is not None:
+        check_output(json_out, "file", "--json")
     if prefix is not None:
         try:
             check_prefix(prefix)

@@ -9,7 +9,21 @@ from pathlib import Path
 import typer
 from rich.table import Table
 
-from .common import TERMINATION_HELP, atomic_path, console, err_console, fail
+from uavcas.dataset.read import EXPORT_FORMATS
+from uavcas.flows.assemble import VIEWS
+from uavcas.flows.features import STANDARDS
+from uavcas.flows.termination import TERMINATIONS
+from uavcas.schema import EPISODE_VIEW
+from uavcas.vocabulary import LABEL_MODES
+
+from .common import (TERMINATION_HELP, atomic_path, check_output, console, dataset_argument, err_console, fail, one_of,
+                     run_dir_argument)
+
+View = one_of(VIEWS)
+ExtractView = one_of((*VIEWS, EPISODE_VIEW))
+Standard = one_of(STANDARDS)
+Termination = one_of(TERMINATIONS)
+FlowsFormat = one_of(("table", "csv", "parquet"))
 
 TABLE_ROWS = 50  # the human-readable table shows this many flows; csv/parquet have them all
 FEATURES_HELP = "Feature standard: cic (CICFlowMeter's definitions, us) or paper (the authors' 47, s)."
@@ -72,13 +86,13 @@ def _empty_frame(features: str):
 
 def flows_cmd(
     pcaps: list[Path] = typer.Argument(..., help="Capture file(s), pcap or pcapng; several = capture points."),
-    view: str = typer.Option("5tuple", "--view", help="Flow key: 5tuple or hostpair (the authors')."),
-    features: str = typer.Option("cic", "--features", help=FEATURES_HELP),
+    view: View = typer.Option("5tuple", "--view", help="Flow key: 5tuple or hostpair (the authors')."),
+    features: Standard = typer.Option("cic", "--features", help=FEATURES_HELP),
     min_packets: int = typer.Option(None, "--min-packets", help="Drop smaller flows (default 1 for 5tuple, 2 under --termination cic, 10 for hostpair)."),
-    fmt: str = typer.Option("table", "--format", help="table, csv or parquet."),
+    fmt: FlowsFormat = typer.Option("table", "--format", help="table, csv or parquet."),
     out: Path = typer.Option(None, "--out", help="Output file (default: standard output; required for parquet)."),
     allow_truncated: bool = typer.Option(False, "--allow-truncated", help="Keep the packets before a truncation."),
-    termination: str = typer.Option(None, "--termination", help=TERMINATION_HELP),
+    termination: Termination | None = typer.Option(None, "--termination", help=TERMINATION_HELP),
     idle_timeout: float = typer.Option(None, "--idle-timeout", help="Idle timeout in s; 0 = none (default: connection 15, cic none, timeout 120)."),
     active_timeout: float = typer.Option(None, "--active-timeout", help="Active timeout in s; 0 = none (default: connection and cic 120, timeout 1800)."),
     close_grace: float = typer.Option(None, "--close-grace", help="connection: s after a close during which the connection's packets join it (default 60)."),
@@ -86,15 +100,13 @@ def flows_cmd(
     """Flows of one capture (streamed, bounded memory) or of several capture points (de-duplicated)."""
     from uavcas.atomic import check_target
     from uavcas.dataset.parquet import frame_to_arrow
-    from uavcas.flows import STANDARDS, FlowConfig, StreamReport, iter_flow_frames
+    from uavcas.flows import FlowConfig, StreamReport, iter_flow_frames
     from uavcas.schema import feature_columns
 
-    if fmt not in ("table", "csv", "parquet"):
-        raise fail(f"--format: {fmt!r} is not one of table, csv, parquet")
-    if features not in STANDARDS:
-        raise fail(f"--features: {features!r} is not one of {', '.join(STANDARDS)}")
     if fmt == "parquet" and out is None:
         raise fail("--format parquet needs --out FILE")
+    if out is not None:
+        check_output(out, "file")
     report = StreamReport()
     try:
         if out is not None:
@@ -182,14 +194,14 @@ def flows_cmd(
 
 
 def extract_cmd(
-    run_dir: Path = typer.Argument(..., help="Run directory (plan.json, run.json, attacks.jsonl, pcap/)."),
+    run_dir: Path = run_dir_argument(),
     out: Path = typer.Option(..., "--out", help="Dataset directory to add the run's shard to."),
-    view: str = typer.Option("5tuple", "--view", help="Flow key: 5tuple, hostpair or window-hostpair (one flow per host pair per plan window); "
+    view: ExtractView = typer.Option("5tuple", "--view", help="Flow key: 5tuple, hostpair or window-hostpair (one flow per host pair per plan window); "
                                                    "or window-host: episodes, one row per node per plan window (collaborative classes)."),
-    features: str = typer.Option("cic", "--features", help=FEATURES_HELP),
-    labels: str = typer.Option("ours", "--labels", help="ours (from each packet's effect) or paper (IP membership)."),
+    features: Standard = typer.Option("cic", "--features", help=FEATURES_HELP),
+    labels: one_of(LABEL_MODES) = typer.Option("ours", "--labels", help="ours (from each packet's effect) or paper (IP membership)."),
     min_packets: int = typer.Option(None, "--min-packets", help="Drop smaller flows (default by view)."),
-    termination: str = typer.Option(None, "--termination", help=TERMINATION_HELP),
+    termination: Termination | None = typer.Option(None, "--termination", help=TERMINATION_HELP),
     allow_truncated: bool = typer.Option(False, "--allow-truncated", help="Keep the packets before a truncation."),
     min_attack_fraction: float = typer.Option(
         0.0, "--min-attack-fraction", min=0.0, max=1.0,
@@ -197,9 +209,9 @@ def extract_cmd(
     allow_incomplete: bool = typer.Option(False, "--allow-incomplete",
                                           help="Also extract a run that was killed or failed (marked incomplete)."),
 ) -> None:
-    """Extract one run into DATASET_DIR (its shard is replaced if it was extracted before)."""
+    """Extract one run into the dataset directory --out (its shard is replaced if it was extracted before)."""
+    check_output(out, "dir")
     from uavcas.dataset.store import extract_run
-    from uavcas.schema import EPISODE_VIEW
 
     try:
         info = extract_run(run_dir, out, view=view, labels=labels, min_packets=min_packets, termination=termination,
@@ -220,12 +232,12 @@ def extract_cmd(
 
 
 def export_cmd(
-    dataset_dir: Path = typer.Argument(..., help="Dataset directory."),
-    fmt: str = typer.Option("uavcas-csv", "--format", help="uavcas-csv: the authors' UAV-CAS_stat.csv + UAV-CAS_ts.csv."),
+    dataset_dir: Path = dataset_argument(),
+    fmt: one_of(EXPORT_FORMATS) = typer.Option("uavcas-csv", "--format", help="uavcas-csv: the authors' UAV-CAS_stat.csv + UAV-CAS_ts.csv."),
     out: Path = typer.Option(..., "--out", help="Directory to write the two files to."),
     embed_config: bool = typer.Option(False, "--embed-config", help="The _cfg variants: Label = <class>|<config>."),
     include_flags: bool = typer.Option(False, "--include-flags", help="Add the packet_flag list column to the ts file."),
-    view: str = typer.Option(None, "--view", help="The flow view to export when the dataset holds several."),
+    view: View | None = typer.Option(None, "--view", help="The flow view to export when the dataset holds several."),
 ) -> None:
     """Export a dataset in the authors' released layout (one stat and one ts CSV), one row per host
     pair: 5-tuple flows are merged into host pairs from their packet sequences."""
@@ -233,8 +245,7 @@ def export_cmd(
     from uavcas.dataset.read import select_view
     from uavcas.dataset.uavcas_csv import layout_rows, write_layout
 
-    if fmt != "uavcas-csv":
-        raise fail(f"--format: {fmt!r} is not supported (uavcas-csv)")
+    check_output(out, "dir")
     path = dataset_dir / "flows.parquet"
     if not path.is_file():
         raise fail(f"{dataset_dir}: no flows.parquet (not a dataset directory)")
@@ -253,14 +264,13 @@ def export_cmd(
 
 def import_cmd(
     src: Path = typer.Argument(..., help="Directory with UAV-CAS_stat.csv / UAV-CAS_ts.csv (or _cfg variants), or one of them."),
-    fmt: str = typer.Option("uavcas-csv", "--format", help="uavcas-csv: the authors' released layout."),
+    fmt: one_of(EXPORT_FORMATS) = typer.Option("uavcas-csv", "--format", help="uavcas-csv: the authors' released layout."),
     out: Path = typer.Option(..., "--out", help="New dataset directory to create."),
 ) -> None:
     """Import the authors' CSV layout (theirs as released, or ours) into a dataset directory."""
     from uavcas.dataset.store import import_layout
 
-    if fmt != "uavcas-csv":
-        raise fail(f"--format: {fmt!r} is not supported (uavcas-csv)")
+    check_output(out, "dir")
     try:
         card, imp = import_layout(src, out)
     except _errors() as exc:

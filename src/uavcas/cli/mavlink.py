@@ -7,14 +7,14 @@ from pathlib import Path
 import typer
 from rich.table import Table
 
-from .common import atomic_path, console, err_console, fail
+from .common import atomic_path, check_output, console, err_console, fail, run_dir_argument
 
 TABLE_ROWS = 50  # the terminal table shows this many messages; --out has them all
 OUT_SUFFIXES = (".parquet", ".csv")
 
 
 def mavlink_cmd(
-    run_dir: Path = typer.Argument(..., help="Run directory (plan.json, run.json, attacks.jsonl, pcap/)."),
+    run_dir: Path = run_dir_argument(),
     out: Path = typer.Option(None, "--out", help="Write the whole table: FILE.parquet or FILE.csv (by suffix)."),
     port: int = typer.Option(14550, "--port", help="UDP port of the MAVLink datagrams (source or destination)."),
     point: str = typer.Option(None, "--point", help="Keep one capture point (e.g. s-uav0). Without it a packet "
@@ -25,14 +25,13 @@ def mavlink_cmd(
     """Decode every MAVLink message of a run's captures: one row per message and capture point, with
     time, addresses, header, fields (JSON and position columns in the message's units), CRC check
     and the packet's effect and family from the ground truth."""
-    from uavcas.atomic import check_target
     from uavcas.mavlink_capture import mavlink_table, problems
 
     if out is not None and out.suffix.lower() not in OUT_SUFFIXES:
         raise fail(f"--out: {out} must end in .parquet or .csv")
+    if out is not None:
+        check_output(out, "file")
     try:
-        if out is not None:
-            check_target(out)
         df = mavlink_table(run_dir, port=port, point=point, dialect=dialect, allow_truncated=allow_truncated)
         if out is not None:
             with atomic_path(out) as tmp:

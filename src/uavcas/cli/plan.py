@@ -9,19 +9,24 @@ import typer
 from rich.table import Table
 
 
-from .common import atomic_write_text, console, plan_or_fail
+from .common import (atomic_write_text, check_output, config_argument, console, plan_or_fail, profile_option,
+                     seed_option, window_s_option, windows_option)
 
 
 def plan_cmd(
-    config: str = typer.Argument(..., help="Scenario string, e.g. dos=1000-20-2-image-logdist-adaptive-random-30-95"),
-    seed: int = typer.Option(0, "--seed", help="Seed: the same seed and config give the same plan."),
-    windows: int = typer.Option(12, "--windows", min=1, help="Number of windows."),
-    window_s: float = typer.Option(5.0, "--window-s", min=0.1, help="Window length in seconds."),
-    profile: str = typer.Option(None, "--profile", help="Channel/mobility profile name or JSON path."),
+    config: str = config_argument(),
+    seed: int = seed_option("Seed: the same seed and config give the same plan."),
+    windows: int = windows_option(),
+    window_s: float = window_s_option(),
+    profile: str = profile_option(),
     out: Path = typer.Option(None, "--out", help="Write plan.json here."),
     figure: Path = typer.Option(None, "--figure", help="Directory for one topology PNG per window."),
 ) -> None:
     """Plan a scenario: positions, links and their rate/delay/loss per window, attack schedule."""
+    if out is not None:
+        check_output(out, "file")
+    if figure is not None:
+        check_output(figure, "dir", "--figure")
     p = plan_or_fail(config, seed, windows, window_s, profile)
     print_summary(p)
     if out is not None:

@@ -14,16 +14,17 @@ import typer
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
 from .audit import fidelity_line
-from .common import console, fail, plan_or_fail
+from .common import (check_output, config_argument, console, fail, plan_or_fail, profile_option, seed_option,
+                     window_s_option, windows_option)
 
 
 def run_cmd(
-    config: str = typer.Argument(..., help="Scenario string, e.g. dos=1000-5-2-image-logdist-adaptive-random-30-95"),
+    config: str = config_argument(),
     out: Path = typer.Option(..., "--out", help="Run directory: plan.json, pcap/, attacks.jsonl, shaping.jsonl, run.json."),
-    seed: int = typer.Option(0, "--seed", help="Plan seed."),
-    windows: int = typer.Option(12, "--windows", min=1, help="Number of windows."),
-    window_s: float = typer.Option(5.0, "--window-s", min=0.5, help="Window length in seconds."),
-    profile: str = typer.Option(None, "--profile", help="Channel/mobility profile name or JSON path."),
+    seed: int = seed_option("Plan seed."),
+    windows: int = windows_option(),
+    window_s: float = window_s_option(),
+    profile: str = profile_option(),
     prefix: str = typer.Option(None, "--prefix", help="Namespace prefix (default: random)."),
     think_s: float = typer.Option(0.5, "--think-s", min=0.0, help="Mean pause between a BS's image fetches."),
     video_kbps: int = typer.Option(None, "--video-kbps", min=1,
@@ -32,6 +33,7 @@ def run_cmd(
                                help="Audit the run's fidelity at the end (fidelity.json; `uavcas audit` later)."),
 ) -> None:
     """Realise a scenario's plan on real Linux stacks, attack it, capture every switch."""
+    check_output(out, "dir")
     p = plan_or_fail(config, seed, windows, window_s, profile)
     if prefix is not None:
         from uavcas.emulation.naming import check_prefix

@@ -25,7 +25,8 @@ from .external import LOADERS
 from .parquet import read_flows
 from .uavcas_csv import STAT_CFG_FILE, STAT_FILE, TS_CFG_FILE, TS_FILE, read_layout
 
-FORMATS = ("uavcas", "uavcas-csv", "cicids2017", "unsw-nb15")
+FORMATS = ("uavcas", "uavcas-csv", "cicids2017", "unsw-nb15")  # what `read_any` reads
+EXPORT_FORMATS = ("uavcas-csv",)  # what `uavcas export` writes and `uavcas import` reads back
 _BENIGN_NAMES = {"BENIGN": BENIGN, "Benign": BENIGN, "benign": BENIGN, "Normal": BENIGN}
 _LAYOUT_FILES = (STAT_FILE, TS_FILE, STAT_CFG_FILE, TS_CFG_FILE)
 

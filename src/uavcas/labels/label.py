@@ -26,7 +26,6 @@ in the order of SOURCES, or "none").
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Literal
 
 import numpy as np
 import pandas as pd
@@ -35,13 +34,11 @@ import pyarrow as pa
 from uavcas.attacks import families, family
 from uavcas.flows.assemble import Flows
 from uavcas.schema import FAMILIES, class_name
-from uavcas.vocabulary import ATTACK_PACKET_COLUMNS, EFFECT_PRECEDENCE, EFFECTS
+from uavcas.vocabulary import ATTACK_PACKET_COLUMNS, EFFECT_PRECEDENCE, EFFECTS, LABEL_MODES, LabelMode  # noqa: F401
 
 from .attacklog import AttackLog
 from .effects import PacketTruth
 
-LabelMode = Literal["ours", "paper"]
-LABEL_MODES: tuple[str, ...] = ("ours", "paper")
 PAPER_SOURCE = "ip-membership"
 # Order of the parts of a label_source value (fixed: datasets compare across versions).
 SOURCES: tuple[str, ...] = ("flood-packets", "replay-injections", "blackhole-drops", "wormhole-detour", PAPER_SOURCE)
