@@ -173,3 +173,42 @@ def test_same_seed_and_config_give_the_same_plan_json():
     pa = next(w.interferers[0].position for w in a.windows if w.interferers)
     pb = next(w.interferers[0].position for w in b.windows if w.interferers)
     assert pa != pb
+
+
+# truth (hand-built packets: tests/labels/hand_truth.py) -------------------------------------------
+def test_truth_rule_on_hand_built_packets():
+    from hand_truth import IPS, PLAN, T0, pkt, table
+
+    from uavcas.flows.follow import Timeline, follow
+    from uavcas.labels import TruthContext
+    from uavcas.labels.attacklog import AttackLog, AttackWindow
+    from uavcas.labels.effects import packet_truth
+    from uavcas.twin.model import LinkOverride
+
+    def over(src, dst, rate, loss, mcs):
+        return LinkOverride(attack_id="jamming-0", src=src, dst=dst, start_s=5.0, stop_s=10.0, interference_dbm=-70.0,
+                            sinr_db=5.0, mcs=mcs, rate_mbps=rate, delay_ms=0.05, loss=loss)
+
+    # window 1 [5, 10): uav0 -> bs0 jammed (rate 50 -> 5 Mbit/s, loss 0 -> 0.3); uav0 -> uav1 only
+    # changes MCS (rate -2 %, loss +0.5 pp: under both thresholds); bs0 -> uav0 not jammed
+    w1 = PLAN.windows[1].model_copy(update={"link_overrides": [over("uav0", "bs0", 5.0, 0.3, 0),
+                                                                over("uav0", "uav1", 49.0, 0.005, 4)]})
+    plan = PLAN.model_copy(update={"windows": [PLAN.windows[0], w1, *PLAN.windows[2:]]})
+    pk = [pkt(6.0, "uav0", "bs0", 1000, 80, ip_id=1),                 # crossed the jammed direction: jamming
+          pkt(6.1, "uav0", "bs0", 1000, 80, ip_id=2, at=["uav0"]),    # lost on it inside: jamming
+          pkt(2.0, "uav0", "bs0", 1000, 80, ip_id=3, at=["uav0"]),    # lost on it before: channel_loss
+          pkt(6.2, "bs0", "uav0", 80, 1000, ip_id=4),                 # other direction: benign
+          pkt(6.3, "uav0", "uav1", 1000, 80, ip_id=5),                # MCS-only direction crossed: benign
+          pkt(6.4, "uav0", "uav1", 1000, 80, ip_id=6, at=["uav0"]),   # ... lost on it: jamming
+          pkt(8.5, "uav0", "bs0", 1000, 80, ip_id=7)]                 # after the logged stop at 8 s: benign
+    t = table(pk)
+    # the jammer's logged [start, stop): 5.5-8.0 s (a ground jammer: no attacker host)
+    aw = AttackWindow(attack_id="jamming-0", family="jamming", attacker_ips=(), victim_ips=(IPS["uav0"],),
+                      start_unix=T0 + 5.5, stop_unix=T0 + 8.0)
+    ctx = TruthContext(t, AttackLog(windows=(aw,)), follow(t, Timeline.from_plan(plan, T0)), plan, T0)
+    truth = packet_truth(ctx)
+    by_id = {}
+    for r, e in zip(t["ip_id"].tolist(), truth.effect_names().tolist()):
+        by_id.setdefault(r, set()).add(e)
+    assert by_id == {1: {"jamming"}, 2: {"jamming"}, 3: {"channel_loss"}, 4: {"benign"}, 5: {"benign"},
+                     6: {"jamming"}, 7: {"benign"}}

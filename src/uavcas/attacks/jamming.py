@@ -163,6 +163,9 @@ class Jamming(AttackFamily):
         node = np.array([index.get(node_of_point(p) or "", -1) for p in fol.points] or [-1], dtype=np.int64)
         n, W = len(plan.nodes), len(plan.windows)
         hit = np.zeros(fol.n_packets, dtype=bool)
+        lo, c = fol.losses, fol.crossings()
+        ok = lo.to_point >= 0
+        lost_i, lost_j = node[lo.from_point], np.where(ok, node[np.maximum(lo.to_point, 0)], -1)
         for aw in windows:
             lost_keys, slow_keys = [], []  # (window * n + src) * n + dst of the jammed directions
             for win in plan.windows:
@@ -175,11 +178,7 @@ class Jamming(AttackFamily):
                     lk = links.get((o.src, o.dst)) or links[(o.dst, o.src)]
                     if rate_or_loss_changed(lk.rate_mbps, lk.loss, o.rate_mbps, o.loss):
                         slow_keys.append(key)
-            lo = fol.losses
-            ok = lo.to_point >= 0
-            hit[lo.pid[ok & self._on(ctx, lo.t_s, node[lo.from_point], np.where(ok, node[np.maximum(lo.to_point, 0)], -1),
-                                     aw, lost_keys, n, W)]] = True
-            c = fol.crossings()
+            hit[lo.pid[ok & self._on(ctx, lo.t_s, lost_i, lost_j, aw, lost_keys, n, W)]] = True
             hit[c.pid[self._on(ctx, c.t_from, node[c.from_point], node[c.to_point], aw, slow_keys, n, W)]] = True
         return hit[fol.pid] if ctx.n else np.zeros(0, dtype=bool)
 

@@ -34,7 +34,7 @@ from uavcas.rundir import RunDir, RunInfo
 from uavcas.twin.model import Plan
 
 from . import fifo, losses
-from .inforce import PortShaping, port_shaping, shape_spans
+from .inforce import PortShaping, planned_settings, port_shaping, shape_spans
 from .model import Check, Counters, Fidelity, GapDistortion, LinkWindow, Tolerances
 
 TRANSITION_S = 0.05  # margin around a forwarding change (held packets, queues draining)
@@ -123,10 +123,7 @@ class _Audit:
         self.n = len(self.names)
         self.t0 = info.t0_unix if info is not None and info.t0_unix is not None else float(timeline.t_unix[0])
         self.shaping = port_shaping(plan, timeline, shape_spans(rd.read_attacks()))
-        # planned (delay, rate, loss) of each setting: (window, segment, i, j)
-        self.setting = {(int(w), int(sg), i, j): (float(d), float(r), float(lo))
-                        for (i, j), ps in self.shaping.items()
-                        for w, sg, d, r, lo in zip(ps.window, ps.segment, ps.delay_ms, ps.rate_mbps, ps.loss)}
+        self.setting = planned_settings(self.shaping)  # (window, segment, i, j) -> (delay, rate, loss)
         self.netem = info is not None and info.shaper_backend == "netem"
         self._crossings()
         self._losses()
