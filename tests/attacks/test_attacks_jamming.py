@@ -10,7 +10,7 @@ import pytest
 from uavcas.attacks import Emitter, ScenarioError
 from uavcas.attacks.jamming import Jamming, JammingSpec
 from uavcas.channel import Channel
-from uavcas.channel.budget import link_chain, link_chain_mixture
+from uavcas.channel.budget import link_chain
 from uavcas.channel.interference import jammed_chain, received_dbm, sinr_db
 from uavcas.channel.pathloss import FreeSpace
 from uavcas.scenario import parse
@@ -76,12 +76,12 @@ def test_sinr_by_the_link_budget_on_a_hand_computed_case():
 
 def test_one_state_mixture_is_the_link_chain_and_a_duty_cycle_averages_the_loss():
     snr = np.array([3.0, 9.0, 20.0])
-    a, b = link_chain(snr, 100.0), link_chain_mixture([snr], [1.0], 100.0)
+    a, b = link_chain(snr, 100.0), link_chain(snr, 100.0, states=([snr], [1.0]))
     assert np.array_equal(a[0], b[0]) and np.array_equal(a[2].loss, b[2].loss)
     assert np.array_equal(a[2].mac_time_us, b[2].mac_time_us)
     # fixed MCS: a packet meets the jammer on with probability D, so the loss is the D-mixture
     on, off = link_chain(snr - 15, 100.0, fixed_mcs=2), link_chain(snr, 100.0, fixed_mcs=2)
-    mix = link_chain_mixture([snr - 15, snr], [0.3, 0.7], 100.0, fixed_mcs=2)
+    mix = link_chain(snr, 100.0, fixed_mcs=2, states=([snr - 15, snr], [0.3, 0.7]))
     assert np.allclose(mix[2].loss, 0.3 * on[2].loss + 0.7 * off[2].loss, rtol=1e-12, atol=0)
     assert np.allclose(mix[2].mac_time_us, 0.3 * on[2].mac_time_us + 0.7 * off[2].mac_time_us)
 

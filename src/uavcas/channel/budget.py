@@ -193,36 +193,24 @@ def link_chain(
     fixed_mcs: int | None = None,
     selection: Literal["throughput", "threshold"] = "throughput",
     margin_db: float = 3.0,
+    states: tuple[Sequence, Sequence[float]] | None = None,
 ) -> tuple[np.ndarray, np.ndarray, LinkParams]:
     """(mcs, reach, LinkParams) per link: the MCS choice of the module docstring, then the link
-    layer at that MCS (`reach[:, 1]` is the first attempt's PER)."""
-    return link_chain_mixture([snr_db], [1.0], distance_m, table, link, k_db, fixed_mcs, selection, margin_db)
+    layer at that MCS (`reach[:, 1]` is the first attempt's PER).
 
-
-def link_chain_mixture(
-    snr_states_db: Sequence,
-    weights: Sequence[float],
-    distance_m,
-    table: McsTable = MCS_80211AG,
-    link: LinkLayer = DEFAULT_LINK_LAYER,
-    k_db=None,
-    fixed_mcs: int | None = None,
-    selection: Literal["throughput", "threshold"] = "throughput",
-    margin_db: float = 3.0,
-    select_snr_db=None,
-) -> tuple[np.ndarray, np.ndarray, LinkParams]:
-    """`link_chain` for a link whose SNR switches between states while a packet train lasts (a
-    pulsed jammer: SINR while it is on, SNR while it is off), state k with time share
-    weights[k] (summing to 1). Each packet's retry chain sees one state (the switching is slow
-    against a packet's attempts, fast against the train), so the attempt probabilities are the
-    weighted mean of each state's: reach = sum_k w_k reach_k; the MCS choice, loss and MAC time
-    follow from that mean as from one state's. Rate control (Minstrel) judges each level by its
-    success over many packets, i.e. by this mean. The threshold selection picks on
-    `select_snr_db` (default: the first state's SNR). One state of weight 1 is `link_chain`."""
-    snrs = [np.atleast_1d(np.asarray(x, dtype=float)) for x in snr_states_db]
-    w = [float(x) for x in weights]
+    `states` = (SNRs, weights): a link whose SNR switches between states while a packet train
+    lasts (a pulsed jammer: SINR while it is on, SNR while it is off), state k with time share
+    weights[k] (summing to 1); `snr_db` is then only what the threshold selection picks on. Each
+    packet's retry chain sees one state (the switching is slow against a packet's attempts, fast
+    against the train), so the attempt probabilities are the weighted mean of the states':
+    reach = sum_k w_k reach_k; the MCS choice, loss and MAC time follow from that mean as from
+    one state's (Minstrel judges a level by its success over many packets, i.e. by this mean).
+    None: the one state `snr_db`."""
+    snrs_in, w_in = states if states is not None else ([snr_db], [1.0])
+    snrs = [np.atleast_1d(np.asarray(x, dtype=float)) for x in snrs_in]
+    w = [float(x) for x in w_in]
     if len(snrs) != len(w) or not snrs or abs(sum(w) - 1.0) > 1e-9 or min(w) < 0:
-        raise ValueError("link_chain_mixture: one weight >= 0 per SNR state, summing to 1")
+        raise ValueError("link_chain: states need one weight >= 0 per SNR, summing to 1")
 
     def reach_at(mcs: np.ndarray) -> np.ndarray:
         out = w[0] * attempt_reach(snrs[0], mcs, table, link, k_db)
@@ -231,7 +219,7 @@ def link_chain_mixture(
         return out
 
     if fixed_mcs is not None or selection == "threshold":
-        sel = snrs[0] if select_snr_db is None else np.atleast_1d(np.asarray(select_snr_db, dtype=float))
+        sel = np.atleast_1d(np.asarray(snr_db, dtype=float))
         mcs = np.full(sel.shape, fixed_mcs, dtype=np.int64) if fixed_mcs is not None else table.select(sel, margin_db)
         reach = reach_at(mcs)
         return mcs, reach, link_params_from_reach(reach, mcs, distance_m, table, link)

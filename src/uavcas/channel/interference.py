@@ -24,7 +24,7 @@ SINR: noise and interference add in linear power (mW),
 
 and everything after it is the links' chain: MCS (adaptive by Minstrel's criterion or the
 scenario's fixed level), coded PER over fading, the retry chain, loss and MAC time
-(`budget.link_chain_mixture`). A pulsed emitter of duty cycle D (its period long against one
+(`budget.link_chain` with `states`). A pulsed emitter of duty cycle D (its period long against one
 packet's retries, short against a packet train) puts each packet in the jammed state with
 probability D: the chain's mixture of the SINR (weight D) and SNR (1 - D) states. Energy-detect
 deferral of the senders (a jammer above the CCA threshold keeping a transmitter silent) is not
@@ -35,7 +35,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .budget import LinkParams, link_chain_mixture
+from .budget import LinkParams, link_chain
 from .geometry import LinkGeometry
 
 
@@ -74,6 +74,6 @@ def jammed_chain(channel, snr_db, interference_dbm, duty: float, distance_m,
         states, weights = [sinr, snr], [duty, 1.0 - duty]
     # the threshold rule picks on the SINR of the duty-averaged interference power
     avg = sinr_db(snr, channel.budget.noise_dbm, np.asarray(interference_dbm, dtype=float) + 10 * np.log10(duty))
-    mcs, _, lp = link_chain_mixture(states, weights, distance_m, channel.table, channel.link_layer, k_db,
-                                    channel.fixed_mcs, channel.selection, channel.margin_db, select_snr_db=avg)
+    mcs, _, lp = link_chain(avg, distance_m, channel.table, channel.link_layer, k_db, channel.fixed_mcs,
+                            channel.selection, channel.margin_db, states=(states, weights))
     return sinr, mcs, lp
