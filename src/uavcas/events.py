@@ -49,6 +49,8 @@ class AttackStart(_Record):
     paths: dict[str, list[str] | None] | None = None  # wormhole: "victim>bs" -> the path now
     rejected: list[str] | None = None  # wormhole: overrides the controller refused
     mirror: dict[str, str | list[str]] | None = None  # replay: {"from": port, "to": [ports]}
+    jammed: list[str] | None = None  # jamming: the link directions "src>dst" it reshaped now
+    shaping_from_unix: float | None = None  # jamming: when the reshape began (in force at t_unix)
 
 
 class AttackStop(_Record):
@@ -62,6 +64,7 @@ class AttackStop(_Record):
     paths: dict[str, list[str] | None] | None = None
     rejected: list[str] | None = None
     replayer_stats: dict[str, dict[str, Any] | None] | None = None  # replay: per attacker
+    shaping_until_unix: float | None = None  # jamming: when the unjammed shaping was back
 
 
 class AttackRate(_Record):

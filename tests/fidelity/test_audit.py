@@ -193,3 +193,35 @@ def test_audit_cli_re_audits_a_run_in_place(tmp_path):
                                                                         "plan.json", "run.json"]
     r = CliRunner().invoke(app, ["audit", str(rd.root), "--loss-sigma", "100"])
     assert r.exit_code == 0 and read_fidelity(rd.root).verdict == "pass"
+
+
+def test_a_mid_window_reshape_is_audited_against_the_parameters_in_force(tmp_path):
+    """A jammer re-shapes uav1 -> bs0 to loss 0.4 during [1, 3) s of window 0 (its logged start
+    and stop): that segment is held to the jammed loss, the rest of the window to the plan's 0."""
+    from uavcas.events import AttackStart, AttackStop, attack_log_text
+    from uavcas.twin.model import LinkOverride
+
+    p = plan()
+    jam = LinkOverride(attack_id="jamming-0", src="uav1", dst="bs0", start_s=1.0, stop_s=3.0, interference_dbm=-60.0,
+                       sinr_db=3.0, mcs=0, rate_mbps=8.0, delay_ms=2.0, loss=0.4)
+    p = p.model_copy(update={"windows": [p.windows[0].model_copy(update={"link_overrides": [jam]}), p.windows[1]]})
+    tr = _steady(n=1200)  # 0.1 .. 4.9 s
+    rng = np.random.default_rng(11)
+    lost = {k for k, t in enumerate(tr.t_s) if 1.01 <= t < 2.99 and rng.random() < 0.4}
+    rd = build(tmp_path, p, tr, drop=lambda h, k: h == 1 and k in lost)
+    rd.attacks_jsonl.write_text(attack_log_text([
+        AttackStart(attack_id="jamming-0", family="jamming", attackers=[], attacker_ips=[], victims=["uav1"],
+                    victim_ips=["10.20.0.2"], t_unix=T0 + 1.0, params={}, planned_start_s=1.0, planned_stop_s=3.0),
+        AttackStop(attack_id="jamming-0", family="jamming", t_unix=T0 + 3.0)]))
+    f = audit(rd.root)
+    segs = {x.segment: x for x in f.links if (x.src, x.dst, x.window) == ("uav1", "bs0", 0)}
+    assert sorted(segs) == [0, 1, 2]
+    assert segs[0].planned_loss == segs[2].planned_loss == 0.0 and segs[0].lost == segs[2].lost == 0
+    on = segs[1]
+    assert on.planned_loss == 0.4 and on.lost == len(lost) and on.loss_random == pytest.approx(0.4, abs=0.08)
+    assert abs(on.loss_sigma) <= 3.0 and f.verdict == "pass"
+    # the other direction and the other link are not split into a jammed setting
+    assert {x.planned_loss for x in f.links if (x.src, x.dst) != ("uav1", "bs0")} == {0.0}
+    # the same run judged without the reshape (no attack log): the losses break the plan's 0
+    rd.attacks_jsonl.unlink()
+    assert audit(rd.root).verdict == "fail"

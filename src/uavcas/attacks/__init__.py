@@ -15,7 +15,7 @@ from pydantic import Field
 
 from uavcas.vocabulary import FAMILIES
 
-from .base import AttackFamily, ScenarioError, ScheduleDraw, SpecBase
+from .base import AttackFamily, Emitter, EmitterContext, ScenarioError, ScheduleDraw, SpecBase
 from .registry import families, family, register
 
 _INFRA = {"answers", "base", "registry"}  # shared code, no family
@@ -31,5 +31,5 @@ if _missing:
 SPECS: tuple[type[SpecBase], ...] = tuple(dict.fromkeys(f.spec for f in families()))
 AttackSpec = Annotated[Union[SPECS], Field(discriminator="family")]  # type: ignore[valid-type]
 
-__all__ = ["AttackFamily", "AttackSpec", "SPECS", "ScenarioError", "ScheduleDraw", "SpecBase",
+__all__ = ["AttackFamily", "AttackSpec", "Emitter", "EmitterContext", "SPECS", "ScenarioError", "ScheduleDraw", "SpecBase",
            "families", "family", "register"]

@@ -18,6 +18,7 @@ from __future__ import annotations
 import re
 from abc import ABC, abstractmethod
 from collections.abc import Callable
+from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
@@ -28,7 +29,7 @@ if TYPE_CHECKING:
     from uavcas.emulation.controller import Detour
     from uavcas.labels.attacklog import AttackWindow
     from uavcas.labels.effects import TruthContext
-    from uavcas.twin.model import Attack, Window
+    from uavcas.twin.model import Attack, LinkOverride, Window
 
 
 class ScenarioError(ValueError):
@@ -91,6 +92,27 @@ class ScheduleDraw:
         return sorted(chosen, key=self.uav_names.index)
 
 
+@dataclass(frozen=True)
+class EmitterContext:
+    """What placing a radio emitter may look at: the plan's pure inputs (no channel state)."""
+
+    names: list[str]  # node names, plan order
+    window_s: float
+    positions_m: np.ndarray  # (windows, nodes, 3), metres, as Window.positions
+    area_m: tuple[float, float, float, float]  # x_max, y_max, z_min, z_max
+    rng: np.random.Generator  # the plan's emitter stream, shared by the attacks in schedule order
+
+
+@dataclass(frozen=True)
+class Emitter:
+    """A transmitter an attack adds to the channel (a jammer), per plan window."""
+
+    positions_m: np.ndarray  # (windows, 3)
+    ground: bool  # a ground emitter (the ground end of its paths) or an airborne one
+    eirp_dbm: float
+    duty: float  # share of the time it transmits, (0, 1]
+
+
 class AttackFamily(ABC):
     name: ClassVar[str]  # codec token and `Attack.family`; one of vocabulary.FAMILIES
     spec: ClassVar[type[SpecBase]]
@@ -124,6 +146,11 @@ class AttackFamily(ABC):
     def attackers(self, spec: SpecBase, draw: ScheduleDraw) -> list[str]:
         return draw.take(1)
 
+    def emitter(self, attack: "Attack", ctx: EmitterContext) -> Emitter | None:
+        """The radio emitter this attack places (the plan adds its interference to the links'
+        noise floor while the attack lasts: `twin.interference`). Default: none."""
+        return None
+
     # executor ----------------------------------------------------------------------------------
     def calibration_times(self, attack: "Attack") -> list[float]:
         """Plan times (s) at which the runner calls `calibrate` during the attack."""
@@ -153,6 +180,12 @@ class AttackFamily(ABC):
 
     def overrides(self, ex: "AttackExecutor", attack: "Attack", window: "Window") -> list["Detour"]:
         """Forwarding detours (`emulation.controller.Detour`) while the attack is active."""
+        return []
+
+    def shaping_overrides(self, ex: "AttackExecutor", attack: "Attack", window: "Window") -> list["LinkOverride"]:
+        """Link directions shaped with other parameters than `window.links` give them while the
+        attack is active (the runner applies them with every window, `AttackExecutor.reshape`
+        when they change mid-window). Default: none."""
         return []
 
     # ground truth ------------------------------------------------------------------------------

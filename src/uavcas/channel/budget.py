@@ -72,6 +72,7 @@ the emulated kernel adds its own real forwarding cost on top.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Literal
 
@@ -192,18 +193,40 @@ def link_chain(
     fixed_mcs: int | None = None,
     selection: Literal["throughput", "threshold"] = "throughput",
     margin_db: float = 3.0,
+    states: tuple[Sequence, Sequence[float]] | None = None,
 ) -> tuple[np.ndarray, np.ndarray, LinkParams]:
     """(mcs, reach, LinkParams) per link: the MCS choice of the module docstring, then the link
-    layer at that MCS (`reach[:, 1]` is the first attempt's PER)."""
-    snr = np.atleast_1d(np.asarray(snr_db, dtype=float))
+    layer at that MCS (`reach[:, 1]` is the first attempt's PER).
+
+    `states` = (SNRs, weights): a link whose SNR switches between states while a packet train
+    lasts (a pulsed jammer: SINR while it is on, SNR while it is off), state k with time share
+    weights[k] (summing to 1); `snr_db` is then only what the threshold selection picks on. Each
+    packet's retry chain sees one state (the switching is slow against a packet's attempts, fast
+    against the train), so the attempt probabilities are the weighted mean of the states':
+    reach = sum_k w_k reach_k; the MCS choice, loss and MAC time follow from that mean as from
+    one state's (Minstrel judges a level by its success over many packets, i.e. by this mean).
+    None: the one state `snr_db`."""
+    snrs_in, w_in = states if states is not None else ([snr_db], [1.0])
+    snrs = [np.atleast_1d(np.asarray(x, dtype=float)) for x in snrs_in]
+    w = [float(x) for x in w_in]
+    if len(snrs) != len(w) or not snrs or abs(sum(w) - 1.0) > 1e-9 or min(w) < 0:
+        raise ValueError("link_chain: states need one weight >= 0 per SNR, summing to 1")
+
+    def reach_at(mcs: np.ndarray) -> np.ndarray:
+        out = w[0] * attempt_reach(snrs[0], mcs, table, link, k_db)
+        for snr, wk in zip(snrs[1:], w[1:]):
+            out = out + wk * attempt_reach(snr, mcs, table, link, k_db)
+        return out
+
     if fixed_mcs is not None or selection == "threshold":
-        mcs = np.full(snr.shape, fixed_mcs, dtype=np.int64) if fixed_mcs is not None else table.select(snr, margin_db)
-        reach = attempt_reach(snr, mcs, table, link, k_db)
+        sel = np.atleast_1d(np.asarray(snr_db, dtype=float))
+        mcs = np.full(sel.shape, fixed_mcs, dtype=np.int64) if fixed_mcs is not None else table.select(sel, margin_db)
+        reach = reach_at(mcs)
         return mcs, reach, link_params_from_reach(reach, mcs, distance_m, table, link)
     best = None
     for m in range(len(table)):
-        mcs = np.full(snr.shape, m, dtype=np.int64)
-        reach = attempt_reach(snr, mcs, table, link, k_db)
+        mcs = np.full(snrs[0].shape, m, dtype=np.int64)
+        reach = reach_at(mcs)
         # Minstrel's success ratio of a rate: frames delivered at it / attempts made at it (its
         # retries sit in the same fade, so an aggressive rate also pays for its failed retries).
         n_at = link.retry_limit + 1 if link.fallback_after is None else min(link.fallback_after, link.retry_limit + 1)

@@ -77,9 +77,18 @@ def print_summary(p) -> None:
         console.print("attacks: none (benign)")
     for a in p.attacks:
         console.print(
-            f"attack {a.attack_id}: {', '.join(a.attackers)} -> {', '.join(a.victims)} "
+            f"attack {a.attack_id}: {', '.join(a.attackers) or '(no swarm node)'} -> {', '.join(a.victims)} "
             f"from {a.start_s:.3f} s to {a.stop_s:.3f} s {a.params or ''}"
         )
+        # an emitter it places (a jammer) and the link directions whose parameters it changes
+        placed = [(w.index, e) for w in p.windows for e in w.interferers if e.attack_id == a.attack_id]
+        if placed:
+            over = [o for w in p.windows for o in w.link_overrides if o.attack_id == a.attack_id]
+            e = placed[0][1]
+            console.print(f"  emitter {e.eirp_dbm:g} dBm EIRP at {e.fc_ghz:g} GHz, duty {e.duty:.0%}, "
+                          f"{'ground' if e.ground else 'airborne'}, at {e.position} m in window {placed[0][0]}: "
+                          f"{len(over)} link-direction overrides in {len(placed)} windows "
+                          f"(worst SINR {min((o.sinr_db for o in over), default=float('nan')):.1f} dB)")
 
 
 def register(app: typer.Typer) -> None:

@@ -60,7 +60,7 @@ def run_cmd(
     console.print(f"[bold]{p.config}[/] seed={seed}: {len(p.nodes)} nodes, {len(p.windows)} windows x "
                   f"{p.window_s:g} s, shaper {feats.shaper} -> {out}", highlight=False)
     for a in p.attacks:
-        console.print(f"  scheduled {a.attack_id}: {','.join(a.attackers)} -> {','.join(a.victims)} "
+        console.print(f"  scheduled {a.attack_id}: {','.join(a.attackers) or '(no swarm node)'} -> {','.join(a.victims)} "
                       f"[{a.start_s:.2f}, {a.stop_s:.2f}) s", highlight=False)
     with Progress(TextColumn("{task.description}"), BarColumn(), TextColumn("{task.completed:.0f}/{task.total:.0f}"),
                   TimeElapsedColumn(), console=console, transient=False) as progress:

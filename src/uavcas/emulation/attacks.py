@@ -60,6 +60,8 @@ class AttackExecutor:
         self.window: "Window | None" = None
         self.errors: list[str] = []
         self.inject_records: list[AttackRecord] = []
+        # called with (window index, shapes) after every mid-window reshape (the runner's sampler)
+        self.on_reshape: Callable[[int, list], None] = lambda window, shapes: None
         self._finishing: dict[str, tuple["Attack", Future]] = {}  # stops halted, not yet finished
         self._pool: ThreadPoolExecutor | None = None
         self._log_lock = threading.Lock()  # records and on_event from the finishing threads too
@@ -101,10 +103,20 @@ class AttackExecutor:
         if w is None:
             raise AttackError("no window applied yet")
         detours = self.wormholes_for(w)
-        rep = self.emu.apply_links(w.links, [r.hops for r in w.routes], detours, window_index=w.index)
+        rep = self.emu.apply_links(w.links, [r.hops for r in w.routes], detours, window_index=w.index,
+                                   overrides=self.shape_overrides_for(w))
         fwd = self.emu.forwarding
         paths = {d.key: fwd.detour_path(d.victim, d.bs) for d in detours} if fwd else {}
         return {"fdb_changes": rep.fdb_changes, "paths": paths, "rejected": list(rep.rejected)}
+
+    def reshape(self) -> None:
+        """Re-shape the current window's links with the overrides of the attacks active now
+        (forwarding unchanged: `Emulation.reshape`); the sampler starts a new segment of the
+        window's counters there (shaping.jsonl `segment`)."""
+        w = self.window
+        if w is None:
+            raise AttackError("no window applied yet")
+        self.on_reshape(w.index, self.emu.reshape(w.links, self.shape_overrides_for(w)))
 
     # lifecycle -----------------------------------------------------------------------------
     def prepare(self) -> None:
@@ -202,6 +214,13 @@ class AttackExecutor:
         out: list[Detour] = []
         for a in self.active.values():
             out += family(a.family).overrides(self, a, window)
+        return out
+
+    def shape_overrides_for(self, window: "Window") -> list:
+        """Link directions to shape otherwise with `window` given the attacks active now."""
+        out: list = []
+        for a in self.active.values():
+            out += family(a.family).shaping_overrides(self, a, window)
         return out
 
     # the log -------------------------------------------------------------------------------

@@ -22,7 +22,7 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Literal
 
 if TYPE_CHECKING:  # only typed against the plan: importing uavcas.twin pulls the whole planner
-    from uavcas.twin.model import Link, Plan
+    from uavcas.twin.model import Link, LinkOverride, Plan
 
 from uavcas.rundir import ForwardingEpoch
 
@@ -193,9 +193,11 @@ class Emulation:
         return report
 
     def apply_links(self, links: Sequence["Link"], routes: Iterable[Sequence[str]] = (),
-                    wormholes: Iterable["Detour | Sequence[str]"] = (), window_index: int = -1) -> WindowReport:
-        """Make `links` (and only them) active with their shaping, then forwarding for them, with
-        the given wormhole detours diverting (`controller`).
+                    wormholes: Iterable["Detour | Sequence[str]"] = (), window_index: int = -1,
+                    overrides: Sequence["LinkOverride"] = ()) -> WindowReport:
+        """Make `links` (and only them) active with their shaping (`overrides`: directions shaped
+        otherwise, see `shapes`), then forwarding for them, with the given wormhole detours
+        diverting (`controller`).
 
         With `keep_links_up` set, links that leave the window stay up (no forwarding entry
         points at them, so no frame reaches them; taking a port down waits for an RCU grace
@@ -209,7 +211,7 @@ class Emulation:
         active = {key(self.index[lk.a], self.index[lk.b]) for lk in links}
         created = self.fabric.ensure_links(active)
         t1 = time.perf_counter()
-        shapes = self.shapes(links)
+        shapes = self.shapes(links, overrides)
         keep = self._prepared - active  # raised ahead for the next window (prepare_links): stay up
         down, up = self.fabric.toggle_lines(active | keep)
         if self.keep_links_up:
@@ -283,13 +285,26 @@ class Emulation:
             fwd = self._fwd_memo[key] = compute(self.names, list(key[0]), key[1], key[2], key[3])
         return fwd
 
-    def shapes(self, links: Sequence["Link"]) -> list[Shape]:
+    def shapes(self, links: Sequence["Link"], overrides: Sequence["LinkOverride"] = ()) -> list[Shape]:
+        """Both directions of every link with its parameters, except the directions (src, dst)
+        of `overrides`, which take the override's rate, delay and loss (a jammed link)."""
+        other = {(o.src, o.dst): o for o in overrides}
         out = []
         for lk in links:
             i, j = self.index[lk.a], self.index[lk.b]
             for src, dst, a, b in ((lk.a, lk.b, i, j), (lk.b, lk.a, j, i)):
-                out.append(Shape(src, dst, Naming.link_port(a, b), lk.rate_mbps, lk.delay_ms, lk.loss))
+                p = other.get((src, dst), lk)
+                out.append(Shape(src, dst, Naming.link_port(a, b), p.rate_mbps, p.delay_ms, p.loss))
         return out
+
+    def reshape(self, links: Sequence["Link"], overrides: Sequence["LinkOverride"] = ()) -> list[Shape]:
+        """Shaping alone (no link or forwarding change) to the current links with `overrides`:
+        the ports whose parameters change, in one tc batch and one nft batch (`Shaper.apply`).
+        Returns every shape now in force."""
+        self.shaper.check()
+        shapes = self.shapes(links, overrides)
+        self.shaper.apply(shapes)
+        return shapes
 
     def set_wormholes(self, detours: Iterable["Detour | Sequence[str]"]) -> int:
         """Re-route the current links with these wormhole detours (FDB and detour table only)."""

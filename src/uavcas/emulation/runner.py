@@ -185,8 +185,10 @@ class _State:
 def _apply_window(st: _State, i: int) -> None:
     w = st.plan.windows[i]
     st.executor.window = w
-    rep = st.emu.apply_links(w.links, [r.hops for r in w.routes], st.executor.wormholes_for(w), window_index=w.index)
-    st.sampler.window_applied(w.index, st.emu.shapes(w.links))
+    jammed = st.executor.shape_overrides_for(w)  # links an active attack shapes otherwise (jamming)
+    rep = st.emu.apply_links(w.links, [r.hops for r in w.routes], st.executor.wormholes_for(w), window_index=w.index,
+                             overrides=jammed)
+    st.sampler.window_applied(w.index, st.emu.shapes(w.links, jammed))
     st.windows.append({"window": w.index, "t_unix": time.time(), "links_up": rep.links_up,
                        "links_down": rep.links_down, "fdb_changes": rep.fdb_changes, "rejected": rep.rejected,
                        "timings_s": {k: round(v, 6) for k, v in rep.timings_s.items()}})
@@ -203,6 +205,7 @@ def _play(st: _State, opt: RunOptions, notify: Callable[[Progress], None]) -> No
                                video_kbps=opt.video_kbps)
     st.traffic.start_servers()
     st.executor = AttackExecutor(emu, plan, work, dur, on_event=lambda r: notify(AttackLogged(record=r)))
+    st.executor.on_reshape = st.sampler.window_applied  # a mid-window reshape starts a counter segment
     st.executor.prepare()
     st.timings["apps_s"] = time.time() - t
     with urgent(CONTROL_RT_PRIORITY if opt.urgent else 0):

@@ -5,7 +5,9 @@ rate, loss and delay took up to 1 s more under load. `WindowSampler` does it in 
 thread after each change (at real-time priority just below the change itself, see `_work`), together with a snapshot of every port's kernel
 counters (`Shaper.counters`). A window's counters are the difference between the snapshot taken
 right after it was applied and the next one (the next window's change, or `end()` at the end of
-the schedule), so each lands in that window's shaping.jsonl records.
+the schedule), so each lands in that window's shaping.jsonl records. A reshape inside a window (an attack's
+shaping: `AttackExecutor.reshape`) is sampled the same way as a new segment of the window
+(`ShapingRecord.segment`), so each setting's counters are its own.
 """
 
 from __future__ import annotations
@@ -36,12 +38,17 @@ class WindowSampler:
         self.final: dict[str, PortCounters] | None = None
         self.errors: list[str] = []
         self._ports: set[str] = set()  # every port of every window so far
+        self._last: int | None = None  # window of the last apply, and its segment
+        self._segment = 0
         self._jobs: queue.Queue = queue.Queue()
         self._thread = threading.Thread(target=self._work, name="window-sampler", daemon=True)
         self._thread.start()
 
     def window_applied(self, window: int, shapes: Sequence[Shape]) -> None:
-        self._jobs.put((window, list(shapes)))
+        """A window was applied, or (the same window again) re-shaped within it: a new segment."""
+        self._segment = self._segment + 1 if window == self._last else 0
+        self._last = window
+        self._jobs.put(((window, self._segment), list(shapes)))
 
     def end(self) -> None:
         """The schedule is over: the last window's counters end here."""
@@ -49,9 +56,10 @@ class WindowSampler:
 
     def _work(self) -> None:
         while True:
-            window, shapes = self._jobs.get()
-            if window is None:
+            job, shapes = self._jobs.get()
+            if job is None:
                 return
+            window, segment = job if isinstance(job, tuple) else (job, 0)
             try:
                 if window == "end":
                     with urgent(SNAPSHOT_RT_PRIORITY):
@@ -65,6 +73,7 @@ class WindowSampler:
                 with urgent(SNAPSHOT_RT_PRIORITY):
                     counters = self.shaper.counters(sorted(self._ports))
                     records = self.shaper.records(window, shapes, self.shaper.readback(ports)) if self.readback else []
+                records = [replace(r, segment=segment) for r in records]
                 self.samples.append(_Sample(window, shapes, records, counters))
             except Exception as e:  # a failed read must not end the run: it is reported
                 self.errors.append(f"window {window}: {type(e).__name__}: {e}")

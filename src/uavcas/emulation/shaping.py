@@ -78,6 +78,9 @@ class ShapingRecord:
     queue_drops: int | None = None
     loss_drops: int | None = None
     link_drops: int | None = None
+    # which setting of the window: 0 as the window was applied, k after its k-th mid-window
+    # reshape (an attack's shaping, e.g. a jammer's start or stop); counters are per segment
+    segment: int = 0
 
     def to_dict(self) -> dict:
         return asdict(self)

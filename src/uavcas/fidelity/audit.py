@@ -6,7 +6,10 @@ in force on the port at the time (`inforce`): the delay error. Per link directio
 delay-error quantiles, loss split by cause (`losses`: the kernel's counters where the run logged
 them, else how full the model's queue was) with random loss against the planned loss,
 throughput in saturated bins (the model's queue never empty for the whole bin) against the
-planned rate. Per flow: how much the emulator moved inter-packet gaps end to end. The pooled
+planned rate. Per flow: how much the emulator moved inter-packet gaps end to end. A window that
+an attack re-shaped in its middle (a jammer's overrides: `inforce`) is audited per segment, each
+against the parameters in force in it (the jammed plan during the jammer's span, the unjammed
+outside it), with that segment's kernel counters. The pooled
 figures and the schedule (window change time, lateness from run.json) are checked against
 `Tolerances`; any failed check fails the run.
 
@@ -31,13 +34,14 @@ from uavcas.rundir import RunDir, RunInfo
 from uavcas.twin.model import Plan
 
 from . import fifo, losses
-from .inforce import PortShaping, port_shaping
+from .inforce import PortShaping, planned_settings, port_shaping, shape_spans
 from .model import Check, Counters, Fidelity, GapDistortion, LinkWindow, Tolerances
 
 TRANSITION_S = 0.05  # margin around a forwarding change (held packets, queues draining)
 # a frame the model sends within this long after another enters is timing noise, not backlog
 # (`queue_over_limit`: a 54-byte frame at 0.5 Mbit/s takes 0.8 ms)
 OVER_LIMIT_SLACK_S = 0.001
+SEGMENTS = 64  # segments a window can have (keys: (window * SEGMENTS + segment) * n + i) * n + j)
 
 
 @dataclass
@@ -118,7 +122,8 @@ class _Audit:
         self.names = [x.name for x in plan.nodes]
         self.n = len(self.names)
         self.t0 = info.t0_unix if info is not None and info.t0_unix is not None else float(timeline.t_unix[0])
-        self.shaping = port_shaping(plan, timeline)
+        self.shaping = port_shaping(plan, timeline, shape_spans(rd.read_attacks()))
+        self.setting = planned_settings(self.shaping)  # (window, segment, i, j) -> (delay, rate, loss)
         self.netem = info is not None and info.shaper_backend == "netem"
         self._crossings()
         self._losses()
@@ -152,6 +157,7 @@ class _Audit:
         length = self.table["frame_len"][c.row_from].astype(np.float64)
         direction = np.where((i >= 0) & (j >= 0), i * self.n + j, -1)
         w = np.full(len(c), -1, dtype=np.int64)
+        sg = np.zeros(len(c), dtype=np.int64)
         start = np.full(len(c), np.nan)
         held = np.zeros(len(c), dtype=np.int64)
         limit = np.zeros(len(c), dtype=np.int64)
@@ -160,7 +166,7 @@ class _Audit:
             ready = c.t_from[g] + ps.delay_ms[k] / 1000.0
             o = np.lexsort((c.t_from[g], ready))
             g, k, ready = g[o], k[o], ready[o]
-            w[g] = ps.window[k]
+            w[g], sg[g] = ps.window[k], ps.segment[k]
             start[g] = fifo.serve(ready, length[g], ps.t_s, ps.rate_mbps, self.tol.burst_bytes, ps.until_s,
                                   c.t_to[g])
             entered = c.t_from[g] if self.netem else ready
@@ -168,7 +174,7 @@ class _Audit:
             self.ports[key] = port
             held[g] = np.maximum(port.held_before(entered, OVER_LIMIT_SLACK_S), 0)
             limit[g] = ps.queue_limit_pkts(ps.at(entered), self.netem)
-        self.c, self.ci, self.cj, self.cw = c, i, j, w
+        self.c, self.ci, self.cj, self.cw, self.cs = c, i, j, w, sg
         self.c_len, self.c_start = length, start
         self.err_ms = (c.t_to - start) * 1000.0
         # the real queue took these frames, so it was not full: a model holding its limit is wrong
@@ -181,12 +187,13 @@ class _Audit:
         i = self.point_node[lo.from_point]
         j = np.where(routed, self.point_node[np.maximum(lo.to_point, 0)], -1)
         w = np.full(len(lo), -1, dtype=np.int64)
+        sg = np.zeros(len(lo), dtype=np.int64)
         t_in = lo.t_s.copy()  # when it would have entered the queue
         backlog = np.zeros(len(lo), dtype=np.int64)
         limit = np.ones(len(lo), dtype=np.int64)
         direction = np.where((i >= 0) & (j >= 0), i * self.n + j, -1)
         for key, ps, g, k in self._by_port(direction, lo.t_s):
-            w[g] = ps.window[k]
+            w[g], sg[g] = ps.window[k], ps.segment[k]
             if not self.netem:
                 t_in[g] += ps.delay_ms[k] / 1000.0
             port = self.ports.get(key)
@@ -199,13 +206,14 @@ class _Audit:
         down = (w >= 0) & ~self._has(self.tl.window_at(t_ready + TRANSITION_S).astype(np.int64), i, j)
         for b, e in zip(self.tl.t_begin_unix[1:], self.tl.t_unix[1:]):
             down |= (lo.t_s >= b - TRANSITION_S) & (lo.t_s <= e + TRANSITION_S)
-        self.li, self.lj, self.lw, self.l_transition = i, j, w, down
+        self.li, self.lj, self.lw, self.ls, self.l_transition = i, j, w, sg, down
         self.l_backlog, self.l_limit = backlog, limit
         self.l_label = np.full(len(lo), losses.UNEXPLAINED, dtype=np.int8)  # set per link-window (_links)
 
     # aggregates --------------------------------------------------------------------------------
     def _saturation(self, port: _Port) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Saturated bins of one direction: (bin start times, measured/planned rate, window)."""
+        """Saturated bins of one direction: (bin start times, measured/planned rate, setting as
+        window * SEGMENTS + segment)."""
         busy = fifo.busy_intervals(port.ready, port.start)
         bs = self.tol.saturated_bin_s
         e = np.zeros(0)
@@ -228,7 +236,7 @@ class _Audit:
         keep = (s_a == s_b) & (s_a >= 0)
         got = np.array([bits.get(k, 0.0) for k in bins.tolist()]) / bs / 1e6
         s = s_a[keep]
-        return t_bin[keep], got[keep] / port.shaping.rate_mbps[s], port.shaping.window[s]
+        return t_bin[keep], got[keep] / port.shaping.rate_mbps[s], port.shaping.window[s] * SEGMENTS + port.shaping.segment[s]
 
     def _gaps(self) -> GapDistortion:
         c, ok = self.c, ~np.isnan(self.err_ms)
@@ -262,13 +270,12 @@ class _Audit:
         n = self.n
         counters = self._counters()
         index = {x: k for k, x in enumerate(self.names)}
-        ck = np.where(self.cw >= 0, (self.cw * n + self.ci) * n + self.cj, -1)
-        lk = np.where(self.lw >= 0, (self.lw * n + self.li) * n + self.lj, -1)
+        ck = np.where(self.cw >= 0, ((self.cw * SEGMENTS + self.cs) * n + self.ci) * n + self.cj, -1)
+        lk = np.where(self.lw >= 0, ((self.lw * SEGMENTS + self.ls) * n + self.li) * n + self.lj, -1)
         # link-windows the kernel saw traffic on count for the loss test even if no packet was followed
-        kk = [(w * n + index[a]) * n + index[b] for (w, a, b), c in counters.items()
-              if a in index and b in index and 0 <= w < self.planned.loss.shape[0]
-              and losses.counted(c) and c.sent_packets + c.queue_drops + c.loss_drops > 0
-              and not np.isnan(self.planned.loss[w, index[a], index[b]])]
+        kk = [((w * SEGMENTS + sg) * n + index[a]) * n + index[b] for (w, sg, a, b), c in counters.items()
+              if a in index and b in index and (w, sg, index[a], index[b]) in self.setting
+              and losses.counted(c) and c.sent_packets + c.queue_drops + c.loss_drops > 0]
         keys = np.union1d(np.union1d(np.unique(ck[ck >= 0]), np.unique(lk[lk >= 0])), np.array(kk, dtype=np.int64))
         order = np.argsort(ck, kind="stable")
         bounds = np.searchsorted(ck[order], keys), np.searchsorted(ck[order], keys, side="right")
@@ -277,25 +284,27 @@ class _Audit:
         out = []
         for key, a, b, la, lb in zip(keys.tolist(), *bounds, *l_bounds):
             rows, mine = order[a:b], l_order[la:lb]
-            w, rest = divmod(key, n * n)
+            ws, rest = divmod(key, n * n)
             i, j = divmod(rest, n)
-            cnt = counters.get((w, self.names[i], self.names[j]))
-            p = float(self.planned.loss[w, i, j])
+            w, sg = divmod(ws, SEGMENTS)
+            cnt = counters.get((w, sg, self.names[i], self.names[j]))
+            delay, rate, p = self.setting.get((w, sg, i, j), (float(self.planned.delay_ms[w, i, j]),
+                                                              float(self.planned.rate_mbps[w, i, j]),
+                                                              float(self.planned.loss[w, i, j])))
             labels, stage = losses.classify(self.l_backlog[mine], self.l_limit[mine], self.l_transition[mine],
                                             rows.shape[0], cnt, p)
             self.l_label[mine] = labels
             self.stages.append(stage)
             sigma = _sigma(stage.dropped, stage.offered, p)
-            ratios = sat.get((w, i, j), np.zeros(0))
+            ratios = sat.get((ws, i, j), np.zeros(0))
             de = delay_errors(self.err_ms[rows])
             ok = _delay_ok(de, self.tol) and abs(sigma or 0.0) <= self.tol.loss_sigma
             meas = (self.c.t_to[rows] - self.c.t_from[rows]) * 1000.0
             model = (self.c_start[rows] - self.c.t_from[rows]) * 1000.0
             count = np.bincount(labels, minlength=4)
             out.append(LinkWindow(
-                verdict="pass" if ok else "fail", src=self.names[i], dst=self.names[j], window=w, **de,
-                planned_delay_ms=float(self.planned.delay_ms[w, i, j]),
-                planned_rate_mbps=float(self.planned.rate_mbps[w, i, j]), planned_loss=p,
+                verdict="pass" if ok else "fail", src=self.names[i], dst=self.names[j], window=w, segment=sg, **de,
+                planned_delay_ms=delay, planned_rate_mbps=rate, planned_loss=p,
                 measured_delay_p50_ms=_q(meas, 50), model_delay_p50_ms=_q(model, 50),
                 queue_over_limit=int(self.c_over[rows].sum()), lost=int(mine.shape[0]),
                 lost_tail=int(count[losses.TAIL]), lost_random=int(count[losses.RANDOM]),
@@ -311,7 +320,7 @@ class _Audit:
         for r in self.rd.read_shaping():
             fields = {k: r.get(k) for k in Counters.model_fields}
             if any(v is not None for v in fields.values()):
-                out[(r["window"], r["src"], r["dst"])] = Counters(**fields)
+                out[(r["window"], r.get("segment", 0), r["src"], r["dst"])] = Counters(**fields)
         return out
 
     def report(self) -> Fidelity:

@@ -72,7 +72,9 @@ class Counters(_Strict):
 
 
 class LinkWindow(DelayErrors):
-    """One link direction (src's switch -> dst's switch) in one window.
+    """One link direction (src's switch -> dst's switch) in one window, or in one segment of it
+    when an attack re-shaped the link mid-window (`inforce`: a jammer's span), against the
+    parameters planned for that segment.
 
     `verdict`: the run's delay and loss checks on this link alone. Informative only, it does not
     enter the run's verdict (quantiles of a few hundred packets are noisy).
@@ -82,6 +84,7 @@ class LinkWindow(DelayErrors):
     src: str
     dst: str
     window: int
+    segment: int = 0  # 0: as the window was applied; k: after its k-th mid-window reshape
     planned_delay_ms: float
     planned_rate_mbps: float
     planned_loss: float

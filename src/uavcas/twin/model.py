@@ -122,6 +122,12 @@ class Window(_Frozen):
     # Detours of wormholes active during any part of this window (links include their links, routes
     # do not). The runner switches a detour on and off at the attack's own start_s/stop_s.
     wormholes: list["WormholeOverride"] = Field(default_factory=list)
+    # Transmitters outside the swarm (jammers) on during part of this window, and the link
+    # directions whose parameters they change materially (`twin.interference`): `links` keep the
+    # unjammed parameters, each override the jammed ones for [start_s, stop_s), which the runner
+    # switches on and off at the attack's own start and stop.
+    interferers: list["Interferer"] = Field(default_factory=list)
+    link_overrides: list["LinkOverride"] = Field(default_factory=list)
 
 
 class WormholeOverride(_Frozen):
@@ -132,6 +138,38 @@ class WormholeOverride(_Frozen):
     attacker: str
     bs: str
     hops: list[str] = Field(default_factory=list)  # empty in plans written before detours had paths
+
+
+class Interferer(_Frozen):
+    """A transmitter that is no node of the swarm (a jammer), on the swarm's carrier, during
+    [start_s, stop_s) of one window (plan seconds): where it is and what it sends."""
+
+    attack_id: str
+    position: tuple[float, float, float]  # metres, as Window.positions
+    ground: bool  # on the ground (the ground end of its paths, as a BS) or airborne (a UAV end)
+    eirp_dbm: float  # its antenna gain included
+    duty: float = Field(gt=0.0, le=1.0)  # share of the time it transmits (pulsed; 1: continuous)
+    fc_ghz: float = Field(gt=0.0)  # carrier: the swarm's own (the channel profile's)
+    start_s: float
+    stop_s: float
+
+
+class LinkOverride(_Frozen):
+    """The parameters direction src -> dst of one of the window's links holds during
+    [start_s, stop_s) instead of the link's own (which stay as the unjammed plan): the attack's
+    interference at the receiver dst, through the link's chain (`twin.interference`)."""
+
+    attack_id: str
+    src: str
+    dst: str  # the receiver
+    start_s: float
+    stop_s: float
+    interference_dbm: float  # the interferer's mean power at dst
+    sinr_db: float  # the link's SNR with that power added to the noise floor
+    mcs: int
+    rate_mbps: float
+    delay_ms: float
+    loss: float = Field(ge=0.0, le=1.0)
 
 
 class Attack(_Frozen):

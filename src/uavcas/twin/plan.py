@@ -12,6 +12,10 @@ traffic-detouring attacks while one is scheduled, and marks UAVs that reach no B
 The active air links then share the channel's airtime with the links in their carrier-sense
 range (`uavcas.channel.airtime`): a link's rate is its share of the DCF capacity.
 
+An attack that places a radio emitter (a jammer: `AttackFamily.emitter`, placed from a stream of
+its own) adds, while it is on, its interference to the noise floor of the links' receivers; the
+window records the emitter and the link directions it changes (`twin.interference`).
+
 The profile (default: the calibrated one shipped with uavcas) is recorded in the plan by name
 and by the SHA-256 of its JSON.
 """
@@ -20,18 +24,19 @@ from __future__ import annotations
 
 import numpy as np
 
-from uavcas.attacks import family
+from uavcas.attacks import EmitterContext, family
 from uavcas.channel import Channel, hears_matrix, shared_rate_mbps
 from uavcas.mobility import Area, make_mission
 from uavcas.scenario import Scenario
 from uavcas.topology.routing import Topology, nearest_neighbour_topology, route, with_wormholes
 
+from .interference import window_interference
 from .model import Attack, Link, Node, Plan, Route, Window, WormholeOverride, mavlink_sysid
 from .profile import TwinProfile, load_profile, profile_sha256
 from .schedule import schedule_attacks
 
 # Stream ids for SeedSequence([seed, stream]); never renumber (it would change every plan).
-_BS_STREAM, _MOBILITY_STREAM, _CHANNEL_STREAM, _ATTACK_STREAM = 1, 2, 3, 4
+_BS_STREAM, _MOBILITY_STREAM, _CHANNEL_STREAM, _ATTACK_STREAM, _EMITTER_STREAM = 1, 2, 3, 4, 5
 
 
 def node_ip(kind: str, k: int) -> str:
@@ -139,6 +144,11 @@ def plan(
         scenario, names[:n_uav], windows * window_s, _rng(seed, _ATTACK_STREAM), routes0, detour_windows
     )
 
+    # Emitters the attacks place (jammers), drawn from their own stream: other draws stay as they were.
+    ectx = EmitterContext(names, float(window_s), np.stack(positions),
+                          (area.x_max_m, area.y_max_m, area.z_min_m, area.z_max_m), _rng(seed, _EMITTER_STREAM))
+    emitters = [(a, em) for a in attacks if (em := family(a.family).emitter(a, ectx)) is not None]
+
     out_windows = []
     for w in range(windows):
         t0, t1 = w * window_s, (w + 1) * window_s
@@ -149,6 +159,8 @@ def plan(
         topo = with_wormholes(base, pos, is_bs, triples, losses[w]) if triples else base
         shared = _shared_rates(topo, arrs[w], pair_index, n, scenario.tx_dbm, prof)
         links = [_link(names, topo, e, arrs[w], pair_index[e], prof, shared.get(e)) for e in topo.edges]
+        interferers, overrides = window_interference(channel, emitters, w, t0, t1, names, pos, is_bs, links, arrs[w],
+                                                     pair_index, scenario.tx_dbm, prof) if emitters else ([], [])
         out_windows.append(
             Window(
                 index=w,
@@ -162,6 +174,8 @@ def plan(
                                      hops=[names[h] for h in d.path])
                     for d in topo.detours
                 ],
+                interferers=interferers,
+                link_overrides=overrides,
             )
         )
     return Plan(
