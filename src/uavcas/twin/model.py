@@ -16,7 +16,7 @@ from uavcas.attacks import AttackSpec, family
 from uavcas.scenario.codec import Scenario, ScenarioError
 from uavcas.vocabulary import FAMILIES, Family
 
-SCHEMA_VERSION = 2  # 2: Plan.site and Node.sysid (defaults fill both in plans of version 1)
+SCHEMA_VERSION = 3  # 2: Plan.site and Node.sysid; 3: Window.interferers and link_overrides (jamming); defaults fill both in older plans
 
 NodeKind = Literal["uav", "bs"]
 LinkKind = Literal["air", "backhaul"]
