@@ -314,11 +314,11 @@ def info_cmd(
     console.print("fidelity: " + (", ".join(f"{n} {v}" for v, n in fid.items()) or "not recorded")
                   + f"; {sum(r.flagged for r in runs)} run(s) kept flagged", highlight=False, soft_wrap=True)
     per_run = Table(title="runs")
-    for name, justify in (("run", "right"), ("config", "left"), ("seed", "right"), (unit, "right"),
-                          ("classes", "left"), ("fidelity", "left")):
+    for name, justify in (("run", "right"), ("config", "left"), (unit, "right"), ("classes", "left"),
+                          ("fidelity", "left")):
         per_run.add_column(name, justify=justify, overflow="fold")
     for r in runs:
-        per_run.add_row(r.run_id, r.config, "" if r.seed is None else str(r.seed), str(r.rows),
+        per_run.add_row(r.run_id, r.config, str(r.rows),
                         ", ".join(f"{c} {n}" for c, n in r.classes.items()),
                         r.verdict + (f": {'; '.join(r.failed)}" if r.failed else ""))
     console.print(per_run)

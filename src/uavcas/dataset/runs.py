@@ -80,3 +80,9 @@ def percent(n: int, total: int) -> str:
     if n != total and p > 99.9:
         return ">99.9%"
     return f"{p:.1f}%"
+
+
+def flagged_lines(runs: list[RunRow]) -> list[str]:
+    """One line per run kept although its audit did not pass: id, scenario, verdict, failed checks."""
+    return [f"run {r.run_id} ({r.config}): {r.verdict}" + (f": {'; '.join(r.failed)}" if r.failed else "")
+            for r in runs if r.flagged]
