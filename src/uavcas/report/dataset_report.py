@@ -58,7 +58,9 @@ def _summary(card: dict, df: pd.DataFrame, runs) -> dict:
         "runs": card.get("n_runs", len(runs)), "standard": (card.get("features") or {}).get("standard", "cic"),
         "fidelity": card.get("fidelity") or {"unaudited": len(runs)}, "flagged": sum(r.flagged for r in runs),
         "class_table": _class_table(df), "label_modes": card.get("label_modes", []),
-        "label_rules": card.get("label_rules", []), "terminations": card.get("terminations", []),
+        # each rule's first sentence (the policy), then every family's rule (a rule text joins them with " | ")
+        "label_headlines": [rule.split(". ", 1)[0].rstrip(".") + "." for rule in card.get("label_rules", [])],
+        "label_rules": [part.strip() for rule in card.get("label_rules", []) for part in rule.split(" | ")], "terminations": card.get("terminations", []),
         "flow_rules": flow_rules,
     }
 

@@ -50,9 +50,10 @@ def feature_figure(df: pd.DataFrame, feature: str, classes: list[str], unit: str
     fig, ax = plt.subplots(figsize=(max(6.0, 0.62 * len(classes) + 2.0), 4.6), layout="constrained")
     pos = [i + 1 for i, d in enumerate(data) if d.shape[0]]
     if pos:
-        ax.boxplot([d for d in data if d.shape[0]], positions=pos, widths=0.6, showfliers=False)
-        lo = min(float(d.min()) for d in data if d.shape[0])
-        hi = max(float(d.max()) for d in data if d.shape[0])
+        bp = ax.boxplot([d for d in data if d.shape[0]], positions=pos, widths=0.6, showfliers=False)
+        # the axis spans what is drawn (whisker ends), not the outliers the boxes leave out
+        ends = np.concatenate([w.get_ydata() for w in bp["whiskers"]])
+        lo, hi = float(ends[ends > 0].min()), float(ends.max())
         ax.set_yscale("log")
         ax.set_ylim(lo / 1.5, hi * 1.5)
         if np.log10(hi / lo) <= 4:  # few decades: label 1, 2, 5 of each
