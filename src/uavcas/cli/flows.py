@@ -337,7 +337,7 @@ def _print_columns(dataset_dir: Path, card: dict) -> None:
         cols = columns(pq.read_schema(path), card.get("features", {}).get("standard", "cic"),
                        episodes=card.get("unit") == "host-window")
     except DictionaryError as exc:
-        raise fail(str(exc.args[0])) from None
+        raise fail(str(exc)) from None
     sys.stdout.write("column\tdtype\tunit\tmeaning\n")
     sys.stdout.write("".join(f"{c.name}\t{c.dtype}\t{c.unit}\t{c.meaning}\n" for c in cols))
 

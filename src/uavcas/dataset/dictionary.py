@@ -21,7 +21,7 @@ from uavcas import vocabulary as v
 NO_UNIT = "-"
 
 
-class DictionaryError(KeyError):
+class DictionaryError(ValueError):
     """A column the dictionary does not describe."""
 
 
