@@ -282,7 +282,7 @@ def import_cmd(
 
 
 def info_cmd(
-    dataset_dir: Path = typer.Argument(..., help="Dataset directory."),
+    dataset_dir: Path = dataset_argument(),
     columns: bool = typer.Option(False, "--columns", help="List every column of flows.parquet with its dtype, unit "
                                                          "and meaning (tab-separated) instead."),
 ) -> None:

@@ -6,11 +6,11 @@ from pathlib import Path
 
 import typer
 
-from .common import console, fail
+from .common import console, dataset_argument, fail
 
 
 def report_cmd(
-    dataset: Path = typer.Argument(..., help="Dataset directory (flows.parquet + dataset.json)."),
+    dataset: Path = dataset_argument(),
     out: Path = typer.Option(..., "--out", help="Directory for index.html, the one self-contained file written (figures inlined)."),
 ) -> None:
     """Write a self-contained HTML report of a dataset: summary, runs, topology, fidelity, distributions, card."""
