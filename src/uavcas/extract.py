@@ -16,7 +16,7 @@ alone, before anything reads the plan's attacks or the attack log.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -61,6 +61,8 @@ class ShardInfo:
     profile: str | None = None  # twin profile the run's plan was made with, and its SHA-256
     profile_sha256: str | None = None
     fidelity: str | None = None  # the run's fidelity verdict (run.json), None: never audited
+    # the checks it failed (verdict fail), or why the audit could not be made (verdict error)
+    fidelity_failed: list[str] = field(default_factory=list)
     complete: bool = True  # the run finished with exit status 0
     run_exit_status: int | None = 0  # run.json's (None: the run never wrote one)
     context_window_s: float | None = None  # window of the ctx_* columns, None: not computed
@@ -71,6 +73,13 @@ class Shard:
     frame: pd.DataFrame  # schema.METADATA_COLUMNS + features (+ schema.CONTEXT_FEATURES), one row per flow;
     # window-host: schema.EPISODE_METADATA_COLUMNS + episode features, one row per node and window
     info: ShardInfo
+
+
+def _fidelity_failed(info) -> list[str]:
+    fid = info.fidelity if info is not None else None
+    if fid is None:
+        return []
+    return list(fid.failed) if fid.verdict != "error" else [f"audit error: {fid.error or 'unknown'}"]
 
 
 def _check_run_id(run_dir: Path, rid: str) -> str:
@@ -176,6 +185,7 @@ def extract_detailed(
             profile=plan.profile,
             profile_sha256=plan.profile_sha256,
             fidelity=info.fidelity.verdict if info is not None and info.fidelity is not None else None,
+            fidelity_failed=_fidelity_failed(info),
             complete=problem is None,
             run_exit_status=info.exit_status if info else None,
             context_window_s=CONTEXT_WINDOW_S if context else None,

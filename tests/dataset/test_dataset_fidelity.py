@@ -37,7 +37,7 @@ def test_card_counts_runs_by_fidelity_verdict(tmp_path):
 
 
 def test_report_shows_fidelity_verdicts_and_planned_vs_measured(tmp_path):
-    from uavcas.report.fidelity import fidelity_section
+    from uavcas.report.fidelity import COLUMNS, fidelity_figure, fidelity_frame, read_run_fidelity
 
     ds = tmp_path / "ds"
     for rid, late in (("0", 0.0), ("1", 0.002)):
@@ -49,11 +49,14 @@ def test_report_shows_fidelity_verdicts_and_planned_vs_measured(tmp_path):
         write_fidelity(rd.root)
         (ds / "runs" / rid).mkdir(parents=True)
         shutil.copy(rd.fidelity_json, ds / "runs" / rid / "fidelity.json")
-    card = {"fidelity": {"pass": 1, "fail": 1, "error": 0, "unaudited": 0}}
-    page = fidelity_section(ds, tmp_path / "out", card)
-    assert "1 pass, 1 fail" in page and page.count("<tr>") == 3
-    assert audit(tmp_path / "r1").verdict == "fail" and "delay_error_p50_ms" in page
-    assert (tmp_path / "out" / "fidelity" / "fidelity.png").stat().st_size > 10_000
-    empty = tmp_path / "empty"
-    (empty / "runs").mkdir(parents=True)
-    assert "No run of this dataset kept a fidelity.json" in fidelity_section(empty, tmp_path / "o2", {})
+    runs = read_run_fidelity(ds)
+    frame = fidelity_frame(runs, {"1": "replay-..."}, {})
+    assert list(frame.columns) == list(COLUMNS) and list(frame["run"]) == ["0", "1"]
+    assert frame["verdict"][0] == "pass" and frame["verdict"][1].startswith("fail: delay_error_p50_ms")
+    assert audit(tmp_path / "r1").verdict == "fail" and frame["config"][1] == "replay-..."
+    # 15 packets dropped on hop 1: the loss rule's, none at the queue tail
+    assert (frame["lost (packets)"] == 15).all() and (frame["random"] == 15).all() and (frame["queue tail"] == 0).all()
+    uri = fidelity_figure(runs)
+    assert uri.startswith("data:image/png;base64,") and len(uri) > 10_000
+    (tmp_path / "empty" / "runs").mkdir(parents=True)
+    assert read_run_fidelity(tmp_path / "empty") == {}

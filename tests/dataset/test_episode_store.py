@@ -90,11 +90,12 @@ def test_export_writes_host_pairs(synth_run_dir, episode_ds, tmp_path):
 
 
 def test_report_of_an_episode_dataset(episode_ds, tmp_path):
-    from uavcas.report.dataset_report import SHOWN_EPISODE_FEATURES, write_report
+    from uavcas.report.dataset_report import write_report
+    from uavcas.report.distributions import SHOWN_EPISODE_FEATURES
 
     ds, _ = episode_ds
     index = write_report(ds, tmp_path / "report")
     page = index.read_text()
-    assert "Host-window features per class" in page and "<th>rows</th>" in page
-    drawn = {p.stem for p in (tmp_path / "report").glob("feature_*.png")}
-    assert drawn and drawn <= {f"feature_{f}" for f in SHOWN_EPISODE_FEATURES}
+    assert "Host-window features per class" in page and "host-window rows from 1 run(s)" in page
+    drawn = [f for f in SHOWN_EPISODE_FEATURES if f'alt="{f} per class"' in page]
+    assert drawn and sorted(p.name for p in index.parent.iterdir()) == ["index.html"]

@@ -67,3 +67,27 @@ def test_context_columns_on_request(synth_dir, synth_df, tmp_path):
     bare = write_dataset(tmp_path / "bare", synth_df.drop(columns=list(schema.CONTEXT_FEATURES)))
     with pytest.raises(ValueError, match="no context columns"):
         uavcas.load_dataset(bare, context=True)
+
+
+def test_nonfinite_policy_is_applied_and_recorded(tmp_path):
+    from uavcas.dataset.synthetic import make_flows, write_dataset
+
+    df = make_flows(4, flows_per_run=20, seed=5)
+    # what CICFlowMeter writes for a zero-duration flow: an infinite rate, no IAT
+    df.loc[::7, "Flow Packets/s"] = np.inf
+    df.loc[::5, "Flow IAT Mean"] = np.nan
+    ds = write_dataset(tmp_path / "ds", df)
+    raw = df[list(schema.FEATURES)].to_numpy(dtype=float)
+    bad_values, bad_rows = int((~np.isfinite(raw)).sum()), int((~np.isfinite(raw)).any(axis=1).sum())
+    assert bad_values and bad_rows < len(df)
+    zero = uavcas.load_dataset(ds)
+    assert zero.X.attrs["nonfinite"] == {"policy": "zero", "values": bad_values, "rows": bad_rows, "rows_in": len(df)}
+    assert np.isfinite(zero.X.to_numpy()).all() and len(zero.X) == len(df)
+    nan = uavcas.load_dataset(ds, nonfinite="nan")
+    assert nan.X.isna().to_numpy().sum() == bad_values and not np.isinf(nan.X.to_numpy()).any()
+    drop = uavcas.load_dataset(ds, nonfinite="drop")
+    assert len(drop.X) == len(drop.y) == len(drop.groups) == len(drop.meta) == len(df) - bad_rows
+    assert np.isfinite(drop.X.to_numpy()).all() and drop.X.attrs["nonfinite"]["policy"] == "drop"
+    assert (drop.y == drop.meta["label"]).all()
+    with pytest.raises(ValueError, match="nonfinite"):
+        uavcas.load_dataset(ds, nonfinite="mean")

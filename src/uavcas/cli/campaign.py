@@ -104,6 +104,13 @@ def run_cmd(
         f"runs: {len(result.done)} done now, {len(result.skipped)} already done, {len(result.failed)} failed; "
         f"flows: {card.get('n_flows', 0)}; wall time {result.wall_s:.0f} s"
     )
+    from uavcas.dataset.runs import dataset_runs, flagged_lines
+
+    flagged = flagged_lines(dataset_runs(out, card)) if card else []
+    if flagged:  # kept in the dataset (counted in dataset.json), so say which and why
+        console.print(f"[yellow]{len(flagged)} run(s) kept flagged, their fidelity audit did not pass:[/]")
+        for line in flagged:
+            console.print(f"  {line}", highlight=False, soft_wrap=True, markup=False)
     console.print(f"dataset: {Path(out).resolve()}/flows.parquet")
     if report and card:
         from uavcas.report.dataset_report import write_report

@@ -1,4 +1,4 @@
-"""`uavcas report DATASET_DIR --out DIR`: an HTML page with the dataset card and figures."""
+"""`uavcas report DATASET_DIR --out DIR`: one self-contained HTML page about a dataset (`uavcas.report`)."""
 
 from __future__ import annotations
 
@@ -6,14 +6,14 @@ from pathlib import Path
 
 import typer
 
-from .common import console, fail
+from .common import console, dataset_argument, fail
 
 
 def report_cmd(
-    dataset: Path = typer.Argument(..., help="Dataset directory (flows.parquet + dataset.json)."),
-    out: Path = typer.Option(..., "--out", help="Directory for index.html and the PNG figures."),
+    dataset: Path = dataset_argument(),
+    out: Path = typer.Option(..., "--out", help="Directory for index.html, the one self-contained file written (figures inlined)."),
 ) -> None:
-    """Write a self-contained HTML report of a dataset."""
+    """Write a self-contained HTML report of a dataset: summary, runs, topology, fidelity, distributions, card."""
     from uavcas.dataset.store import DatasetError
     from uavcas.report.dataset_report import ReportError, write_report
 

@@ -8,7 +8,8 @@ columns: seq_time_s list<float64>, seq_size list<int32>, seq_flags list<int16>, 
 (+1 forward, -1 backward), seq_effect list<string> (one of vocabulary.EFFECTS per packet); the
 47 features of the dataset's standard float64 (`schema.feature_columns`); attack_packets, provoked_packets and
 attack_packets_<family> int64, attack_fraction float64; label_<family> bool; label, label_source string;
-the context columns (`schema.CONTEXT_FEATURES`, all or none) float64. A window-host shard
+the context columns (`schema.CONTEXT_FEATURES`, all or none) float64. Every field carries its
+data-dictionary entry (`uavcas.dataset.dictionary`) as field metadata: b"unit", b"meaning". A window-host shard
 (episodes, `uavcas.labels.episodes`) has its own columns instead: `episode_arrow_schema`. Any column may hold nulls
 where the source did not carry the value (an imported CSV has no ports, for instance).
 
@@ -27,7 +28,6 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from uavcas.atomic import atomic_path
-
 from uavcas.schema import (
     AXIS_COLUMNS,
     CONTEXT_FEATURES,
@@ -82,6 +82,20 @@ _SEQ_TYPES = {
 META_KEY = b"uavcas"
 
 
+def _described(fields: list[pa.Field], standard: str, episodes: bool) -> pa.Schema:
+    """The fields with their data-dictionary entry (unit, meaning) as Parquet field metadata."""
+    from .dictionary import field_metadata
+
+    return pa.schema([f.with_metadata(field_metadata(f.name, standard, episodes)) for f in fields])
+
+
+def with_dictionary(table: pa.Table, standard: str) -> pa.Table:
+    """`table` with every field's data-dictionary metadata (a union of shards written before the
+    dictionary existed gets it too)."""
+    schema = _described(list(table.schema), standard, episodes=table.schema.get_field_index("host") >= 0)
+    return table.cast(schema.with_metadata(table.schema.metadata))
+
+
 def arrow_schema(standard: str = DEFAULT_STANDARD, context: bool = False) -> pa.Schema:
     """The columns of a shard: `context` adds the ctx_* columns after the features."""
     fields = [pa.field(c, _ID_TYPES[c]) for c in ID_COLUMNS]
@@ -93,7 +107,7 @@ def arrow_schema(standard: str = DEFAULT_STANDARD, context: bool = False) -> pa.
     fields += [pa.field(c, pa.float64() if c == "attack_fraction" else pa.int64()) for c in TRUTH_COLUMNS]
     fields += [pa.field(c, pa.bool_()) for c in LABEL_COLUMNS]
     fields += [pa.field("label", pa.string()), pa.field("label_source", pa.string())]
-    return pa.schema(fields)
+    return _described(fields, standard, episodes=False)
 
 
 COLUMNS: tuple[str, ...] = tuple(arrow_schema().names)
@@ -115,7 +129,7 @@ def episode_arrow_schema(standard: str = DEFAULT_STANDARD, context: bool = False
     fields += [pa.field(c, pa.float64() if c == "attack_fraction" else pa.int64()) for c in TRUTH_COLUMNS]
     fields += [pa.field(c, pa.bool_()) for c in LABEL_COLUMNS]
     fields += [pa.field("label", pa.string()), pa.field("label_source", pa.string())]
-    return pa.schema(fields)
+    return _described(fields, standard, episodes=True)
 
 
 def is_episode_frame(df: pd.DataFrame) -> bool:

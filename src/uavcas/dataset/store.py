@@ -2,8 +2,8 @@
 
     DATASET_DIR/shards/<run_id>.parquet   one run (re-extracting the run replaces it)
     DATASET_DIR/flows.parquet             union of all shards, rewritten after every extract
-    DATASET_DIR/dataset.json              schema version, feature standard and the unit of
-                                          every feature column, views, flow rules, label modes
+    DATASET_DIR/dataset.json              schema version, feature standard, every column's
+                                          dtype, unit and meaning (the data dictionary), views, flow rules, label modes
                                           and rules, class counts, packet effect counts, seeds,
                                           twin profiles (name + SHA-256), runs, library versions
 
@@ -41,7 +41,8 @@ from uavcas.schema import (
 )
 from uavcas.versions import package_versions
 
-from .parquet import META_KEY, table_meta, table_standard, to_table, write_table
+from .dictionary import card_columns
+from .parquet import META_KEY, table_meta, table_standard, to_table, with_dictionary, write_table
 
 __all__ = ["DatasetError", "ShardInfo", "extract_run", "import_layout", "read_card", "rebuild"]
 
@@ -104,7 +105,7 @@ def rebuild(out_dir: Path) -> dict:
     if len(with_ctx) > 1:
         raise DatasetError(f"{out_dir}: some shards have the context columns (ctx_*) and some do not; "
                            "extract every run with the same uavcas version")
-    union = pa.concat_tables([t.replace_schema_metadata(None) for t in tables])
+    union = with_dictionary(pa.concat_tables([t.replace_schema_metadata(None) for t in tables]), standard)
     write_table(union.replace_schema_metadata({META_KEY: json.dumps({"feature_standard": standard}).encode()}),
                 out_dir / "flows.parquet")
     runs = [table_meta(s) for s in shards]
@@ -115,6 +116,8 @@ def rebuild(out_dir: Path) -> dict:
     card = {
         "schema_version": SCHEMA_VERSION,
         "features": feature_card(standard, episodes=episode),
+        # every column of flows.parquet: dtype, unit, meaning (uavcas.dataset.dictionary)
+        "columns": card_columns(union.schema, standard, episodes=episode),
         # what a row is: a flow, or (window-host) one plan node's traffic in one plan window
         "unit": "host-window" if episode else "flow",
         # the ctx_* columns (uavcas.flows.context) and their window, null when the shards lack them

@@ -208,10 +208,11 @@ def make_flows(runs: int = 48, flows_per_run: int = 60, seed: int = 0, sequences
     return df
 
 
-def write_dataset(out_dir: str | Path, df: pd.DataFrame) -> Path:
+def write_dataset(out_dir: str | Path, df: pd.DataFrame, run_meta: dict[str, dict] | None = None) -> Path:
     """Write `df` as a dataset directory: one shard per run, flows.parquet and dataset.json (the
     store's own card), built in a temporary directory beside `out_dir` and renamed onto it.
-    `out_dir` must not exist, or be an empty directory."""
+    `out_dir` must not exist, or be an empty directory. `run_meta`: run id -> more of its shard
+    metadata (e.g. `fidelity`, `fidelity_failed`, as an extracted run records them)."""
     from .parquet import to_table, write_table
     from .store import rebuild
 
@@ -224,7 +225,7 @@ def write_dataset(out_dir: str | Path, df: pd.DataFrame) -> Path:
         for run_id, g in df.groupby("run_id", sort=True):
             meta = {"run_id": str(run_id), "config": str(g["config"].iloc[0]), "seed": int(g["seed"].iloc[0]),
                     "view": str(g["view"].iloc[0]), "labels": LABEL_SOURCE, "n_flows": len(g),
-                    "class_counts": g["label"].value_counts().to_dict()}
+                    "class_counts": g["label"].value_counts().to_dict(), **(run_meta or {}).get(str(run_id), {})}
             write_table(to_table(g, meta), tmp / "shards" / f"{run_id}.parquet")
         rebuild(tmp)
         os.chmod(tmp, 0o777 & ~_umask())

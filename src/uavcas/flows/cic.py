@@ -47,6 +47,7 @@ UNITS.update({f: "us" for f in FEATURES if "IAT" in f or f in ("Flow Duration", 
 UNITS.update({f: "bytes" for f in FEATURES if "Length" in f or f == "Average Packet Size"})
 UNITS.update({"Flow Bytes/s": "bytes/s", "Flow Packets/s": "packets/s", "Down/Up Ratio": "ratio"})
 UNITS.update({f: "packets" for f in ("Total Fwd Packets", "Total Backward Packets")})
+UNITS["Packet Length Variance"] = "bytes^2"  # the square of the length's unit
 
 
 def payload_and_header(proto: np.ndarray, ip_len: np.ndarray, ip_hdr: np.ndarray, l4_hdr: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -1,84 +1,136 @@
-"""`uavcas report DATASET_DIR --out DIR`: one self-contained HTML page about a dataset.
+"""`uavcas report DATASET_DIR --out DIR`: one self-contained HTML page about a dataset, DIR/index.html.
 
-The page embeds every figure (base64 PNG, so it can be mailed or archived alone) and also links
-the PNG files written beside it. Contents: the dataset card, class counts, counts per
-configuration axis, the topology of every window of one example run, and per-class
-distributions of the flow features an analyst looks at first.
+The page is rendered from a jinja2 template (`templates/report.html.j2`, package data) with tables
+from pandas' Styler; every figure is inlined as a base64 PNG, with no link to any other file, no
+script and nothing fetched from a network, so index.html alone can be mailed or archived. In
+order: a summary (runs, rows per class and view, fidelity verdicts, the labelling and flow
+termination policies), one row per run (scenario, seed, classes, verdict with the failed check,
+links to its details), the topology of each attack run at each attack's start, fidelity per run
+with every column explained, feature distributions per class, and the card's JSON (collapsed).
 """
 
 from __future__ import annotations
 
-import base64
 import html
 import json
 from pathlib import Path
 
-import numpy as np
+import jinja2
 import pandas as pd
+import pyarrow.parquet as pq
 
 from uavcas.atomic import atomic_write_text
-from uavcas.schema import AXIS_COLUMNS, CLASSES
+from uavcas.schema import CLASSES
 
-from .figure import plt, save_png
+from .distributions import SHOWN_EPISODE_FEATURES, SHOWN_FEATURES, counts_frame, feature_figure
 
-_DPI = 100
-
-# Features shown per class: time structure, volume and size, the ones the paper's figures use.
-SHOWN_FEATURES = ("Flow IAT Mean", "Flow Packets/s", "Flow Duration", "Packet Length Mean", "Total Fwd Packets", "SYN Flag Count")
-# the same for a dataset of host-window rows (`--view window-host`: `uavcas.labels.episodes`)
-SHOWN_EPISODE_FEATURES = ("packets_per_s", "bytes_per_s", "peers", "syn_in", "synack_out", "flows_in")
+TEMPLATE = "report.html.j2"
 
 
 class ReportError(ValueError):
     pass
 
 
-def _feature_figure(df: pd.DataFrame, out: Path, shown: tuple[str, ...]) -> list[Path]:
-    classes = [c for c in CLASSES if c in set(df["label"])]
-    paths = []
+def _styled(df: pd.DataFrame, raw: tuple[str, ...] = ()) -> str:
+    """HTML of a table (pandas Styler): cells escaped, except the `raw` columns (links we built)."""
+    text = [c for c in df.columns if c not in raw]
+    sty = df.style.hide(axis="index").format(escape="html", subset=text, na_rep="", precision=3)
+    numeric = [c for c in df.columns if pd.api.types.is_numeric_dtype(df[c])]
+    if numeric:
+        sty = sty.set_properties(subset=numeric, **{"text-align": "right"})
+    return f'<div class="wide">{sty.to_html()}</div>'  # a table wider than the page scrolls
+
+
+def _class_table(df: pd.DataFrame) -> str:
+    tab = pd.crosstab(df["label"], df["view"]) if "view" in df.columns else df["label"].value_counts().to_frame("rows")
+    order = [c for c in CLASSES if c in tab.index] + sorted(c for c in tab.index if c not in CLASSES)
+    tab = tab.loc[order]
+    if tab.shape[1] > 1:
+        tab["all views"] = tab.sum(axis=1)
+    return _styled(tab.rename_axis(None, axis=1).reset_index().rename(columns={"label": "class"}))
+
+
+def _summary(card: dict, df: pd.DataFrame, runs) -> dict:
+    rules = card.get("runs") or []
+    flow_rules = sorted({json.dumps(r.get("flow_rules") or {}, sort_keys=True) for r in rules} - {"{}"})
+    return {
+        "rows": len(df), "unit": "host-window row" if card.get("unit") == "host-window" else "flow",
+        "runs": card.get("n_runs", len(runs)), "standard": (card.get("features") or {}).get("standard", "cic"),
+        "fidelity": card.get("fidelity") or {"unaudited": len(runs)}, "flagged": sum(r.flagged for r in runs),
+        "class_table": _class_table(df), "label_modes": card.get("label_modes", []),
+        # each rule's first sentence (the policy), then every family's rule (a rule text joins them with " | ")
+        "label_headlines": [rule.split(". ", 1)[0].rstrip(".") + "." for rule in card.get("label_rules", [])],
+        "label_rules": [part.strip() for rule in card.get("label_rules", []) for part in rule.split(" | ")], "terminations": card.get("terminations", []),
+        "flow_rules": flow_rules,
+    }
+
+
+def _runs_table(runs, topo_ids: set[str], fid_ids: set[str], unit: str) -> str:
+    rows = []
+    for r in runs:
+        links = [f'<a href="#run-{html.escape(r.run_id)}">topology</a>'] if r.run_id in topo_ids else []
+        links += [f'<a href="#fidelity-{html.escape(r.run_id)}">fidelity</a>'] if r.run_id in fid_ids else []
+        rows.append({"run": r.run_id, "config": r.config, "seed": "" if r.seed is None else str(r.seed),
+                     f"{unit}s": r.rows, "classes": ", ".join(f"{c} {n}" for c, n in r.classes.items()),
+                     "fidelity": r.verdict + (f": {'; '.join(r.failed)}" if r.failed else ""),
+                     "details": " ".join(links) or "-"})
+    return _styled(pd.DataFrame(rows), raw=("details",))
+
+
+def _topologies(dataset_dir: Path, runs) -> list[dict]:
+    from uavcas.twin.model import Plan
+
+    from .figure import png_data_uri
+    from .topology import attack_start_figure
+
+    out = []
+    for r in runs:
+        path = dataset_dir / "runs" / r.run_id / "plan.json"
+        if not path.is_file():
+            continue
+        try:
+            plan = Plan.from_json(path.read_text())
+        except ValueError:
+            continue  # an unreadable plan: the run is listed without a figure
+        fig = attack_start_figure(plan)
+        if fig is not None:
+            out.append({"run_id": r.run_id, "config": plan.config, "seed": plan.seed, "uri": png_data_uri(fig, dpi=90)})
+    return out
+
+
+def _fidelity(dataset_dir: Path, runs) -> tuple[str | None, str | None]:
+    from .fidelity import fidelity_figure, fidelity_frame, read_run_fidelity
+
+    audits = read_run_fidelity(dataset_dir)
+    if not audits:
+        return None, None
+    by_id = {r.run_id: r for r in runs}
+    frame = fidelity_frame(audits, {k: r.config for k, r in by_id.items()},
+                           {k: "; ".join(r.failed) for k, r in by_id.items()})
+    # each row an anchor (#fidelity-<run>) the run table links to
+    frame["run"] = [f'<a id="fidelity-{html.escape(str(rid))}"></a>{html.escape(str(rid))}' for rid in frame["run"]]
+    table = _styled(frame, raw=("run",))
+    return table, fidelity_figure(audits)
+
+
+def _distributions(df: pd.DataFrame, shown: tuple[str, ...], standard: str, episodes: bool) -> dict:
+    from uavcas.dataset.dictionary import describe
+
+    classes = [c for c in CLASSES if c in set(df["label"])] + sorted(set(df["label"]) - set(CLASSES))
+    figures, counts = [], {}
     for feat in shown:
-        if feat not in df.columns:
-            continue
-        fig, ax = plt.subplots(figsize=(7, 3.6))
-        data, names = [], []
-        for c in classes:
-            v = df.loc[df["label"] == c, feat].to_numpy(dtype=float)
-            v = v[np.isfinite(v)]
-            pos = v[v > 0]
-            if len(pos):
-                # log scale: zeros (e.g. the IAT of a one-packet flow) are counted, not drawn
-                data.append(np.log10(pos))
-                names.append(f"{c}\n(n={len(pos)}, {len(v) - len(pos)} zero)")
-        if not data:
-            plt.close(fig)
-            continue
-        ax.boxplot(data, showfliers=False)
-        ax.set_xticks(range(1, len(names) + 1), names, fontsize=7, rotation=30)
-        ax.set_ylabel(f"log10({feat})")
-        ax.set_title(f"{feat} per class", fontsize=10)
-        safe = feat.replace("/", "_per_").replace(" ", "_")
-        paths.append(save_png(fig, out / f"feature_{safe}.png", dpi=_DPI))
-    return paths
-
-
-def _img(path: Path, out: Path) -> str:
-    b64 = base64.b64encode(path.read_bytes()).decode()
-    rel = html.escape(str(path.relative_to(out)))
-    return f'<a href="{rel}"><img alt="{rel}" src="data:image/png;base64,{b64}" style="max-width:100%"></a>'
-
-
-def _table(rows: list[tuple], header: tuple[str, ...]) -> str:
-    head = "".join(f"<th>{html.escape(str(h))}</th>" for h in header)
-    body = "".join("<tr>" + "".join(f"<td>{html.escape(str(c))}</td>" for c in r) + "</tr>" for r in rows)
-    return f"<table><thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>"
+        if feat in df.columns:
+            uri, counts[feat] = feature_figure(df, feat, classes, describe(feat, standard, episodes)[0])
+            figures.append({"feature": feat, "uri": uri})
+    title = "Host-window features per class" if episodes else "Flow features per class"
+    return {"title": title, "figures": figures, "counts_table": _styled(counts_frame(counts, classes)) if counts else ""}
 
 
 def write_report(dataset_dir: str | Path, out_dir: str | Path) -> Path:
+    """Render DATASET_DIR's report into OUT_DIR/index.html (the only file written); returns its path."""
     from uavcas.dataset.parquet import read_flows
+    from uavcas.dataset.runs import dataset_runs
     from uavcas.dataset.store import read_card
-    from uavcas.twin.model import Plan
-
-    from .topology import draw_plan_windows
 
     dataset_dir, out = Path(dataset_dir), Path(out_dir)
     card = read_card(dataset_dir)
@@ -86,48 +138,27 @@ def write_report(dataset_dir: str | Path, out_dir: str | Path) -> Path:
     if not flows_path.exists():
         raise ReportError(f"{dataset_dir}: no flows.parquet")
     episodes = card.get("unit") == "host-window"
-    shown, unit = (SHOWN_EPISODE_FEATURES, "rows") if episodes else (SHOWN_FEATURES, "flows")
-    df = read_flows(flows_path, columns=["run_id", "label", *AXIS_COLUMNS, *shown])
+    shown = SHOWN_EPISODE_FEATURES if episodes else SHOWN_FEATURES
+    standard = (card.get("features") or {}).get("standard", "cic")
+    names = set(pq.read_schema(flows_path).names)
+    df = read_flows(flows_path, columns=[c for c in ("run_id", "label", "view", *shown) if c in names])
+    runs = dataset_runs(dataset_dir, card)
+    summary = _summary(card, df, runs)
+    topologies = _topologies(dataset_dir, runs)
+    fid_table, fid_uri = _fidelity(dataset_dir, runs)
+    from .fidelity import COLUMNS as FIDELITY_HELP
+
+    fid_ids = {r.run_id for r in runs if (dataset_dir / "runs" / r.run_id / "fidelity.json").is_file()}
+    card_json = json.dumps(card, indent=1)
+    env = jinja2.Environment(loader=jinja2.PackageLoader("uavcas.report", "templates"),
+                             autoescape=jinja2.select_autoescape(["html", "j2"]), undefined=jinja2.StrictUndefined)
+    page = env.get_template(TEMPLATE).render(
+        name=dataset_dir.resolve().name, summary=summary,
+        runs_table=_runs_table(runs, {t["run_id"] for t in topologies}, fid_ids, summary["unit"]),
+        topologies=topologies, fidelity_table=fid_table, fidelity_help=FIDELITY_HELP, fidelity_uri=fid_uri,
+        distributions=_distributions(df, shown, standard, episodes),
+        card_json=card_json, card_lines=card_json.count("\n") + 1)
     out.mkdir(parents=True, exist_ok=True)
-
-    sections = [f"<h2>Dataset card</h2><pre>{html.escape(json.dumps({k: v for k, v in card.items() if k != 'runs'}, indent=1))}</pre>"]
-    counts = df["label"].value_counts()
-    sections.append("<h2>Classes</h2>" + _table([(c, int(counts.get(c, 0))) for c in CLASSES if counts.get(c, 0)], ("class", unit)))
-    axis_html = []
-    for ax in AXIS_COLUMNS:
-        vc = df.groupby(ax, observed=True).agg(n=("label", "size"), runs=("run_id", "nunique")).reset_index()
-        if len(vc) > 1 or ax in ("attacks", "mission", "pathloss", "n_uav", "tx_dbm"):
-            axis_html.append(f"<h3>{html.escape(ax)}</h3>" + _table([tuple(r) for r in vc.itertuples(index=False)], (ax, unit, "runs")))
-    sections.append("<h2>Configuration axes</h2>" + "".join(axis_html))
-
-    example = None
-    for plan_path in sorted((dataset_dir / "runs").glob("*/plan.json"), key=lambda p: int(p.parent.name) if p.parent.name.isdigit() else 0):
-        plan = Plan.from_json(plan_path.read_text())
-        if plan.attacks or example is None:
-            example = (plan_path.parent.name, plan)
-        if plan.attacks:
-            break
-    if example is not None:
-        run_id, plan = example
-        figs = draw_plan_windows(plan, out / "topology")
-        sections.append(
-            f"<h2>Example topology: run {html.escape(run_id)}</h2><p><code>{html.escape(plan.config)}</code> seed {plan.seed}</p>"
-            + "".join(_img(p, out) for p in figs)
-        )
-    from .fidelity import fidelity_section
-
-    sections.append(fidelity_section(dataset_dir, out, card))
-    feat_figs = _feature_figure(df, out, shown)
-    title = "Host-window features per class" if episodes else "Flow features per class"
-    sections.append(f"<h2>{title}</h2>" + "".join(_img(p, out) for p in feat_figs))
-    links = "".join(f'<li><a href="{html.escape(str(p.relative_to(out)))}">{html.escape(p.name)}</a></li>' for p in sorted(out.rglob("*.png")))
-    sections.append(f"<h2>Figures</h2><ul>{links}</ul>")
-    page = (
-        "<!doctype html><html><head><meta charset='utf-8'><title>uavcas dataset report</title>"
-        "<style>body{font-family:sans-serif;max-width:1100px;margin:auto}table{border-collapse:collapse}"
-        "td,th{border:1px solid #ccc;padding:2px 8px;text-align:right}</style></head><body>"
-        f"<h1>uavcas dataset: {html.escape(str(dataset_dir))}</h1>" + "".join(sections) + "</body></html>\n"
-    )
     index = out / "index.html"
     atomic_write_text(index, page)
     return index

@@ -6,6 +6,8 @@ Modules that draw import `plt` from here, so the backend is chosen before any fi
 
 from __future__ import annotations
 
+import base64
+import io
 from pathlib import Path
 
 import matplotlib
@@ -16,7 +18,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 
 from uavcas.atomic import atomic_path  # noqa: E402
 
-__all__ = ["plt", "save_png"]
+__all__ = ["plt", "png_data_uri", "save_png"]
 
 
 def save_png(fig, path: str | Path, dpi: float | str = 120, tight: bool = True) -> Path:
@@ -31,3 +33,13 @@ def save_png(fig, path: str | Path, dpi: float | str = 120, tight: bool = True) 
     finally:
         plt.close(fig)
     return Path(path)
+
+
+def png_data_uri(fig, dpi: float = 100) -> str:
+    """The figure as a `data:image/png;base64,...` URI (a page that carries its images), closed."""
+    buf = io.BytesIO()
+    try:
+        fig.savefig(buf, format="png", dpi=dpi, bbox_inches="tight")
+    finally:
+        plt.close(fig)
+    return "data:image/png;base64," + base64.b64encode(buf.getvalue()).decode("ascii")

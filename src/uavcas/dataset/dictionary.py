@@ -1,0 +1,286 @@
+"""The data dictionary: every column a uavcas dataset can hold, with its Arrow dtype, its unit and a
+one-line meaning, in one registry.
+
+Everything that describes columns reads it: the card (`dataset.json: columns`, `store.rebuild`),
+the Parquet field metadata (`field_metadata`, set by `uavcas.dataset.parquet`), the generated
+section of docs/formats.md (`markdown`; a test keeps the file equal to it) and
+`uavcas info DATASET --columns`. Feature units are those of the feature standard's module
+(`uavcas.flows.cic.UNITS`, `uavcas.flows.paper.UNITS`); family columns (`attack_packets_<family>`,
+`label_<family>`) and effect words derive from `uavcas.vocabulary`, so a new family or effect is
+described without an edit here. A column with no entry raises `DictionaryError` (a test extracts
+datasets and looks every column up).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from uavcas import schema as s
+from uavcas import vocabulary as v
+
+NO_UNIT = "-"
+
+
+class DictionaryError(ValueError):
+    """A column the dictionary does not describe."""
+
+
+@dataclass(frozen=True)
+class Column:
+    name: str
+    dtype: str  # the Arrow type of flows.parquet, as pyarrow prints it
+    unit: str  # NO_UNIT for names, flags and labels
+    meaning: str
+
+
+_IDS: dict[str, tuple[str, str]] = {
+    "run_id": (NO_UNIT, "the run the row comes from (a campaign's manifest index)"),
+    "config": (NO_UNIT, "the run's scenario string, canonical form"),
+    "seed": (NO_UNIT, "the seed the run's plan was made with"),
+    "view": (NO_UNIT, "how packets were grouped into rows: 5tuple, hostpair, window-hostpair or window-host"),
+    "flow_id": (NO_UNIT, "0..n-1 within a run, in order of the flows' first packets"),
+    "src_ip": (NO_UNIT, "the initiator's address (sender of the first packet; of the SYN for TCP)"),
+    "src_port": (NO_UNIT, "the initiator's TCP/UDP port (0 in the host-pair views)"),
+    "dst_ip": (NO_UNIT, "the responder's address"),
+    "dst_port": (NO_UNIT, "the responder's TCP/UDP port (0 in the host-pair views)"),
+    "protocol": (NO_UNIT, "IP protocol number: 6 TCP, 17 UDP, 1 ICMP (0 in the host-pair views)"),
+    "first_ts": ("s", "Unix time of the first packet (float64: rounded to about 0.2 us)"),
+    "last_ts": ("s", "Unix time of the last packet (float64: rounded to about 0.2 us)"),
+    "first_ts_ns": ("ns", "Unix time of the first packet, exact; packet k is at first_ts_ns + seq_time_s[k] x 1e9"),
+    "capture_point": (NO_UNIT, "the switch whose capture holds the row's packets (s-<node>)"),
+    "host": (NO_UNIT, "the plan node (UAV or base station) the episode is about"),
+    "host_ip": (NO_UNIT, "the node's address"),
+    "window": (NO_UNIT, "plan window index: floor((t - t0) / window_s)"),
+}
+_AXES: dict[str, tuple[str, str]] = {
+    "attacks": (NO_UNIT, "the scenario's attacks field: family tokens with their parameters, or benign"),
+    "n_uav": ("UAVs", "UAVs in the swarm"),
+    "n_bs": ("base stations", "base stations (ground control) of the swarm"),
+    "payload": (NO_UNIT, f"the benign traffic: one of {', '.join(v.PAYLOADS)}"),
+    "pathloss": (NO_UNIT, f"the air-to-ground path-loss model: one of {', '.join(v.PATHLOSS_MODELS)}"),
+    "modulation": (NO_UNIT, "802.11a/g MCS choice: adaptive, or a fixed level mcs0..mcs6"),
+    "mission": (NO_UNIT, f"the UAVs' mission: one of {', '.join(v.MISSIONS)}"),
+    "tx_dbm": ("dBm", "transmit power of every radio"),
+    "noise_dbm": ("dBm", "noise floor (the scenario's 95 is -95.0)"),
+}
+_COUNTS: dict[str, tuple[str, str]] = {
+    "packets": ("packets", "packets of the row (flows: at its capture point; episodes: sent or received by the node)"),
+    "bytes": ("bytes", "sum of the flow's frame lengths (link-layer, as tshark frame.len)"),
+    "duration_s": ("s", "last packet time - first packet time"),
+}
+_SEQUENCES: dict[str, tuple[str, str]] = {
+    "seq_time_s": ("s", "each packet's time since the flow's first packet"),
+    "seq_size": ("bytes", "each packet's frame length"),
+    "seq_flags": (NO_UNIT, "each packet's TCP flags (0 for other protocols, -1 where an imported file had none)"),
+    "seq_dir": (NO_UNIT, "each packet's direction: +1 forward (initiator -> responder), -1 backward"),
+    "seq_effect": (NO_UNIT, f"each packet's ground-truth effect: one of {', '.join(v.EFFECTS)}"),
+}
+_TRUTH: dict[str, tuple[str, str]] = {
+    "attack_packets": ("packets", f"packets with an attack effect ({', '.join(v.ATTACK_EFFECTS)})"),
+    "attack_fraction": ("ratio", "attack_packets / packets, exactly"),
+    "provoked_packets": ("packets", "of attack_packets, those whose effect is provoked (answers to attack packets)"),
+    "label": (NO_UNIT, "the class: Benign, one family's class or a composition's (vocabulary.CLASSES)"),
+    "label_source": (NO_UNIT, "the labelling rules that fired (uavcas.labels.label.SOURCES), joined by +; none: Benign"),
+}
+for _f in v.FAMILIES:
+    _TRUTH[f"attack_packets_{_f}"] = ("packets", f"attack packets whose effect comes from a {_f} attack "
+                                                 f"(provoked: the provoking family)")
+    _TRUTH[f"label_{_f}"] = (NO_UNIT, f"the row carries family {_f} (class {v.FAMILY_CLASS[_f]}); multi-hot")
+
+# the window-host view's packet features (schema.EPISODE_PACKET_UNITS gives their units)
+_EPISODE: dict[str, str] = {
+    "packets_out": "packets the node sent in the window", "packets_in": "packets the node received",
+    "bytes_out": "frame bytes the node sent", "bytes_in": "frame bytes the node received",
+    "packets_per_s": "packets sent or received per second of window", "bytes_per_s": "frame bytes per second of window",
+    "active_s": "last packet time - first packet time in the window", "peers": "distinct addresses at the other end",
+    "peer_ports": "distinct TCP/UDP ports at the other end", "syn_out": "TCP SYNs (ACK clear) sent",
+    "syn_in": "TCP SYNs (ACK clear) received", "synack_out": "TCP SYN-ACKs sent", "synack_in": "TCP SYN-ACKs received",
+    "rst_out": "TCP RSTs sent", "rst_in": "TCP RSTs received", "fin_out": "TCP FINs sent", "fin_in": "TCP FINs received",
+    "udp_share": "share of the episode's packets that are UDP", "icmp_share": "share that are ICMP (or ICMPv6)",
+    "flows": "5-tuple flows starting in the window with the node as an endpoint",
+    "flows_out": "of those, initiated by the node", "flows_in": "of those, initiated by its peer",
+}  # fmt: skip
+
+# context columns (uavcas.flows.context; docs/formats.md "Context columns" says what a node must observe)
+_CTX_FLOW: dict[str, tuple[str, str]] = {
+    "ctx_path_len_mean": ("switches", "mean number of switches that saw each of the flow's packets"),
+    "ctx_delay_ms": ("ms", "mean first-to-last observation time of packets seen at >= 2 switches (-1: none)"),
+    "ctx_lost_frac": ("ratio", "share of the flow's packets its destination's switch never saw"),
+    "ctx_offhome_frac": ("ratio", "share of packets that entered the network away from their source's home switch"),
+    "ctx_ttl_off_frac": ("ratio", "share of packets whose TTL is not their source's usual TTL"),
+    "ctx_ttl_levels": ("TTL values", "distinct TTLs per direction less one, the larger direction"),
+    "ctx_neardup_frac": ("ratio", "share of packets repeating an earlier one's IP id, length and flags with another seq or TTL"),
+    "ctx_retx_frac": ("ratio", "share of packets repeating an earlier data/SYN/FIN packet (retransmissions)"),
+    "ctx_seq_regress_frac": ("ratio", "share of data packets whose TCP seq lies below the highest sent before (stale copies)"),
+    "ctx_rtt_ms": ("ms", "first SYN entering the network to the first SYN-ACK's last observation (-1: no handshake)"),
+}
+_CTX_METRIC: dict[str, tuple[str, str]] = {
+    "flow_share": ("ratio", "share of the window's flows that have it as an endpoint"),
+    "unanswered_frac": ("ratio", "share of its request flows with no packet back"),
+    "rtt_ms": ("ms", "median ctx_rtt_ms of its flows (-1: none)"),
+    "delay_ms": ("ms", "median delay of its transmissions seen at >= 2 switches (-1: none)"),
+    "out_share": ("ratio", "share of its transmissions that it sent"),
+    "lost_out_frac": ("ratio", "share of transmissions from it that never reached their destination's switch"),
+    "lost_in_frac": ("ratio", "share of transmissions to it that never reached its switch"),
+    "lost_frac": ("ratio", "share of its transmissions that never reached their destination's switch"),
+    "offhome_frac": ("ratio", "share of its transmissions that entered away from their source's home switch"),
+    "ttl_off_frac": ("ratio", "share of its transmissions with an unusual TTL"),
+    "path_len_mean": ("switches", "mean number of switches that saw each of its transmissions"),
+    "flows_log_ratio": ("ln ratio", "ln((1 + flows) / (1 + median flows of its earlier windows))"),
+    "unanswered_shift": ("ratio", "unanswered_frac less the median of its earlier windows"),
+    "rtt_shift_ms": ("ms", "rtt_ms less the median of its earlier windows"),
+    "delay_shift_ms": ("ms", "delay_ms less the median of its earlier windows"),
+    "out_share_shift": ("ratio", "out_share less the median of its earlier windows"),
+    "lost_out_shift": ("ratio", "lost_out_frac less the median of its earlier windows"),
+    "path_len_shift": ("switches", "path_len_mean less the median of its earlier windows"),
+}
+_CTX_SUBJECT = {"src": "the flow's initiator in the window", "dst": "the flow's responder in the window",
+                "pair": "the flow's host pair in the window", "net": "the whole network in the window"}
+_CTX_OWN_SHIFT = {"ctx_rtt_shift_ms": "ctx_rtt_ms", "ctx_delay_shift_ms": "ctx_delay_ms",
+                  "ctx_path_len_shift": "ctx_path_len_mean"}
+
+
+def _context(name: str) -> tuple[str, str] | None:
+    if name in _CTX_FLOW:
+        return _CTX_FLOW[name]
+    if name in _CTX_OWN_SHIFT:
+        base = _CTX_OWN_SHIFT[name]
+        return _CTX_FLOW[base][0], f"the flow's {base} less the median of its host pair's earlier windows"
+    for subject, who in _CTX_SUBJECT.items():
+        prefix = f"ctx_{subject}_"
+        if name.startswith(prefix) and name[len(prefix):] in _CTX_METRIC:
+            unit, what = _CTX_METRIC[name[len(prefix):]]
+            return unit, f"{who}: {what}"
+    return None
+
+
+def _feature(name: str, standard: str) -> tuple[str, str] | None:
+    from uavcas.flows import cic, paper
+
+    mod = cic if standard == "cic" else paper
+    if name not in mod.UNITS:
+        return None
+    length = "TCP/UDP payload length" if standard == "cic" else "frame length"
+    fwd = "forward (initiator -> responder)" if standard == "cic" else "forward (sent by the string-smaller address)"
+    words = name.replace("Backward", "Bwd").split()
+    who = f"{fwd} packets" if "Fwd" in words else "backward packets" if "Bwd" in words else "packets of both directions"
+    stat = {"Mean": "mean", "Std": "standard deviation", "Max": "largest", "Min": "smallest", "Total": "sum",
+            "Variance": "variance"}
+    flags = {"CWE": "CWR" if standard == "cic" else "ECE", "ECE": "ECE" if standard == "cic" else "CWR"}
+    if "IAT" in words:
+        what = f"{stat[words[-1]]} of the gaps between consecutive {who}"
+    elif name.endswith("Flag Count"):
+        what = f"packets with the {flags.get(words[0], words[0])} flag set"
+    elif "Header" in words:
+        what = (f"sum of the TCP/UDP header bytes of {who}" if standard == "cic" else f"20 bytes x the number of {who}")
+    elif name in ("Min Packet Length", "Max Packet Length"):
+        what = f"{stat[words[0]]} {length} of all packets"
+    elif "Packet Length" in name:
+        what = f"{stat[words[-1]]} of the {length} of {who}"
+    elif name.startswith("Total Length of"):
+        what = f"sum of the {length} of {who}"
+    elif name.startswith("Total"):
+        what = f"number of {who}"
+    elif name.endswith("/s"):
+        what = (f"{length} summed over all packets per second of Flow Duration" if "Bytes" in name
+                else f"number of {who} per second of Flow Duration") + " (0-duration flows: " + (
+            "NaN or inf, as CICFlowMeter divides)" if standard == "cic" else "0)")
+    else:
+        what = {
+            "Flow Duration": "last packet time - first packet time",
+            "Down/Up Ratio": "backward packets / forward packets, integer division (0 without forward packets)",
+            "Average Packet Size": f"sum of the {length} / number of packets",
+            "Active Mean": "mean length of the active periods (between idle gaps over 5 s)",
+            "Idle Mean": "mean of the idle gaps over 5 s", "Idle Max": "largest idle gap over 5 s",
+        }[name]
+    return mod.UNITS[name], f"{what} [{standard}]"
+
+
+def describe(name: str, standard: str = s.DEFAULT_STANDARD, episodes: bool = False) -> tuple[str, str]:
+    """(unit, meaning) of column `name` of a dataset of feature standard `standard` (rows are
+    window-host episodes when `episodes`)."""
+    for table in (_IDS, _AXES, _COUNTS, _SEQUENCES, _TRUTH):
+        if name in table:
+            return table[name]
+    if not episodes:
+        found = _feature(name, standard) or _context(name)
+    elif name in _EPISODE:
+        found = s.EPISODE_PACKET_UNITS[name], _EPISODE[name]
+    else:
+        found = _episode_summary(name, standard)
+    if found is None:
+        raise DictionaryError(f"column {name!r} has no entry in the data dictionary (uavcas.dataset.dictionary)")
+    return found
+
+
+def _episode_summary(name: str, standard: str) -> tuple[str, str] | None:
+    stem, _, stat = name.rpartition("_")
+    if stat not in s.EPISODE_STATS:
+        return None
+    word = "mean" if stat == "mean" else "largest"
+    for feat, feat_stem in s.EPISODE_FLOW_SUBSETS.get(standard, {}).items():
+        if feat_stem == stem:
+            unit, _ = _feature(feat, standard)
+            return unit, f"{word} of the flows' {feat} [{standard}] over the flows starting in the window with the node as an endpoint"
+    ctx = _context(stem)
+    if ctx is not None:
+        return ctx[0], f"{word} of {stem} over those flows ({ctx[1]})"
+    return None
+
+
+def field_metadata(name: str, standard: str = s.DEFAULT_STANDARD, episodes: bool = False) -> dict[bytes, bytes]:
+    """The Parquet field metadata of a column: b"unit" and b"meaning"."""
+    unit, meaning = describe(name, standard, episodes)
+    return {b"unit": unit.encode(), b"meaning": meaning.encode()}
+
+
+def columns(arrow_schema, standard: str = s.DEFAULT_STANDARD, episodes: bool = False) -> list[Column]:
+    """Every column of `arrow_schema` (a pyarrow Schema: a dataset's file or a shard's) described."""
+    return [Column(f.name, str(f.type), *describe(f.name, standard, episodes)) for f in arrow_schema]
+
+
+def card_columns(arrow_schema, standard: str = s.DEFAULT_STANDARD, episodes: bool = False) -> dict[str, dict]:
+    """The card's `columns`: name -> {dtype, unit, meaning}, in file order."""
+    return {c.name: {"dtype": c.dtype, "unit": c.unit, "meaning": c.meaning} for c in columns(arrow_schema, standard, episodes)}
+
+
+def markdown() -> str:
+    """docs/formats.md's generated section: the columns of a cic flow dataset with context, the
+    paper standard's features, and the window-host view's own columns."""
+    from .parquet import arrow_schema, episode_arrow_schema
+
+    def table(cols: list[Column]) -> list[str]:
+        rows = ["| column | dtype | unit | meaning |", "|---|---|---|---|"]
+        return rows + [f"| `{c.name}` | {c.dtype} | {c.unit} | {c.meaning.replace('|', '/')} |" for c in cols]
+
+    flows = columns(arrow_schema("cic", context=True), "cic")
+    paper = [c for c in columns(arrow_schema("paper"), "paper") if c.name in s.PAPER_FEATURES]
+    flow_names = {c.name for c in flows}
+    ep_schema = episode_arrow_schema("cic", context=False)
+    episode = [c for c in columns(ep_schema, "cic", episodes=True) if c.name not in flow_names or c.name == "packets"]
+    episode += [c for c in columns(episode_arrow_schema("paper"), "paper", episodes=True)
+                if c.name not in {e.name for e in episode} and c.name not in flow_names]
+    out = ["<!-- generated: python -m uavcas.dataset.dictionary docs/formats.md (tests/dataset/test_dictionary.py checks it) -->",
+           "", "Flow datasets (`cic` standard, with the context columns):", "", *table(flows), "",
+           "The `paper` standard's 47 features (in place of the `cic` ones):", "", *table(paper), "",
+           "The window-host view's own columns (identity, axes, truth and labels as for flows; each context column "
+           "`ctx_<name>` as `ctx_<name>_mean` and `ctx_<name>_max` over the episode's flows, same unit):", "",
+           *table(episode)]
+    return "\n".join(out) + "\n"
+
+
+DOCS_BEGIN, DOCS_END = "<!-- BEGIN data dictionary -->\n", "<!-- END data dictionary -->"
+
+
+def with_docs_section(text: str) -> str:
+    """`text` (docs/formats.md) with the section between the markers replaced by `markdown()`."""
+    a, b = text.index(DOCS_BEGIN) + len(DOCS_BEGIN), text.index(DOCS_END)
+    return text[:a] + markdown() + text[b:]
+
+
+if __name__ == "__main__":  # python -m uavcas.dataset.dictionary docs/formats.md: rewrite its section
+    import sys
+    from pathlib import Path
+
+    doc = Path(sys.argv[1])
+    doc.write_text(with_docs_section(doc.read_text()))
