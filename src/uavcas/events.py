@@ -62,6 +62,8 @@ class AttackStop(_Record):
     paths: dict[str, list[str] | None] | None = None
     rejected: list[str] | None = None
     replayer_stats: dict[str, dict[str, Any] | None] | None = None  # replay: per attacker
+    commands_sent: int | None = None  # mavlink_inject: forged commands that left the attackers
+    commands_acked: int | None = None  # mavlink_inject: COMMAND_ACKs the attackers received
 
 
 class AttackRate(_Record):

@@ -96,7 +96,7 @@ def test_gcs_and_uav_exchange_mission_commands_and_streams_over_udp(tmp_path):
                        uavs=[mv.gcs_target(p, "uav0")], t0_path=t0_path, window_s=p.window_s, n_windows=3,
                        duration_s=dur, log_path=tmp_path / "mavlink-bs0.jsonl")
     uspec = mv.uav_spec(p, "uav0", "127.0.0.1", None, dur, tmp_path / "mavlink-uav0.jsonl", gcs_port=relay.port,
-                        t0_path=t0_path)
+                        bind_port=0, t0_path=t0_path)
     (tmp_path / "g.json").write_text(gspec.model_dump_json())
     (tmp_path / "u.json").write_text(uspec.model_dump_json())
     run = [sys.executable, "-m", "uavcas.emulation.apps.mavlink"]

@@ -40,8 +40,9 @@ Run: python -m uavcas.emulation.apps.mavlink {uav|gcs} SPEC.json
 """
 
 from .link import T0_WAIT_S, read_log, write_t0
-from .specs import (GCS_PORT, BatterySpec, GcsSpec, GcsTarget, RetrySpec, StreamRates, UavSpec, gcs_target,
-                    uav_spec)
+from .signing import SigningSpec, signing_key, signing_spec
+from .specs import (GCS_PORT, UAV_PORT, BatterySpec, GcsSpec, GcsTarget, RetrySpec, StreamRates, UavSpec,
+                    gcs_target, uav_spec)
 
-__all__ = ["GCS_PORT", "T0_WAIT_S", "BatterySpec", "GcsSpec", "GcsTarget", "RetrySpec", "StreamRates", "UavSpec",
-           "gcs_target", "read_log", "uav_spec", "write_t0"]
+__all__ = ["GCS_PORT", "T0_WAIT_S", "UAV_PORT", "BatterySpec", "GcsSpec", "GcsTarget", "RetrySpec", "SigningSpec",
+           "StreamRates", "UavSpec", "gcs_target", "read_log", "signing_key", "signing_spec", "uav_spec", "write_t0"]
