@@ -41,7 +41,9 @@ from .effects import PacketTruth
 
 PAPER_SOURCE = "ip-membership"
 # Order of the parts of a label_source value (fixed: datasets compare across versions).
-SOURCES: tuple[str, ...] = ("flood-packets", "replay-injections", "blackhole-drops", "wormhole-detour", PAPER_SOURCE)
+# New sources go at the end.
+SOURCES: tuple[str, ...] = ("flood-packets", "replay-injections", "blackhole-drops", "wormhole-detour", PAPER_SOURCE,
+                            "mavlink-injections")
 assert {f.label_source for f in families()} <= set(SOURCES), "a family's label_source is missing from SOURCES"
 
 
