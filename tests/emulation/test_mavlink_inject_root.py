@@ -74,12 +74,17 @@ def test_runs_are_faithful_and_record_signing(runs, signed):
 def test_without_signing_the_forged_rtl_is_acknowledged_and_the_mode_changes(runs):
     run = runs[False]
     start, stop = _attack(run)
-    assert stop["commands_sent"] >= 20 and stop["commands_acked"] == stop["commands_sent"]
+    assert stop["commands_sent"] >= 20 and stop["commands_acked"] >= 0.8 * stop["commands_sent"]
     t, at_v, ts, modes, (sent, arrived) = _decoded(run, start)
     assert len(sent) == stop["commands_sent"]  # every frame the injector logged left its switch
+    # what the injector received is what reached its switch (the shaped links may lose some)
+    back = t[(t.point == f"s-{start['attackers'][0]}") & (t.msg_name == "COMMAND_ACK")
+             & (t.src_ip == start["victim_ips"][0]) & (t.dst_ip == start["attacker_ips"][0])]
+    assert len(back) == stop["commands_acked"]
     assert (t[(t.msg_name == "COMMAND_LONG") & (t.src_ip == start["attacker_ips"][0])].effect == "mavlink_inject").all()
     # every forged frame that reached the victim is answered: its COMMAND_ACK, provoked by the injection
-    acks = at_v[(at_v.msg_name == "COMMAND_ACK") & (at_v.dst_ip == start["attacker_ips"][0])]
+    acks = at_v[(at_v.msg_name == "COMMAND_ACK") & (at_v.src_ip == start["victim_ips"][0])
+                & (at_v.dst_ip == start["attacker_ips"][0])]
     assert len(arrived) >= 20 and len(acks) == len(arrived)
     assert (acks.effect == "provoked").all() and (acks.family == "mavlink_inject").all()
     first = arrived.ts_s.min()
@@ -95,7 +100,8 @@ def test_with_signing_the_forged_rtl_is_dropped_but_keeps_its_label(runs):
     t, at_v, ts, modes, (sent, arrived) = _decoded(run, start)
     assert len(sent) == stop["commands_sent"] and len(arrived) >= 20
     assert (t[(t.msg_name == "COMMAND_LONG") & (t.src_ip == start["attacker_ips"][0])].effect == "mavlink_inject").all()
-    assert not (t.dst_ip == start["attacker_ips"][0]).any() and not (t.effect == "provoked").any()
+    assert not ((t.src_ip == start["victim_ips"][0]) & (t.dst_ip == start["attacker_ips"][0])).any()  # no answer
+    assert not (t.effect == "provoked").any()
     assert set(modes) == {3} and len(modes) >= 15
     ulog = read_log(run.logs_dir / f"mavlink-{start['victims'][0]}.jsonl")
     assert sum(e["event"] == "rejected" for e in ulog) == len(arrived)
