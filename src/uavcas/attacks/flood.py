@@ -147,11 +147,7 @@ class _Flood(AttackFamily):
     def effects(self, ctx: "TruthContext", windows: list["AttackWindow"]) -> np.ndarray:
         p = ctx.packets
         syn_only = (p["proto"] == 6) & ((p["tcp_flags"] & (TCP_SYN | TCP_ACK)) == TCP_SYN)
-        hit = np.zeros(ctx.n, dtype=bool)
-        for w in windows:
-            hit |= (syn_only & ctx.during(w.start_unix, w.stop_unix)
-                    & ctx.packets_from(w.attacker_ips) & ctx.packets_to(w.victim_ips))
-        return ctx.spread(hit)
+        return ctx.spread(ctx.attacker_to_victim(windows, syn_only))
 
     def provoked(self, ctx: "TruthContext", windows: list["AttackWindow"], made: np.ndarray) -> np.ndarray:
         p = ctx.packets

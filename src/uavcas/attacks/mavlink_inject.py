@@ -194,11 +194,7 @@ class MavlinkInject(AttackFamily):
 
         p = ctx.packets
         to_autopilot = (p["proto"] == 17) & (p["dport"] == UAV_PORT)
-        hit = np.zeros(ctx.n, dtype=bool)
-        for w in windows:
-            hit |= (to_autopilot & ctx.during(w.start_unix, w.stop_unix)
-                    & ctx.packets_from(w.attacker_ips) & ctx.packets_to(w.victim_ips))
-        return ctx.spread(hit)
+        return ctx.spread(ctx.attacker_to_victim(windows, to_autopilot))
 
     def provoked(self, ctx: "TruthContext", windows: list["AttackWindow"], made: np.ndarray) -> np.ndarray:
         p = ctx.packets
