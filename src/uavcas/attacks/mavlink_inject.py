@@ -15,10 +15,11 @@
   station's system id and component id (MAV_COMP_ID_MISSIONPLANNER, 190), targeting the
   victim's autopilot, MAVLink 2 and unsigned (the attacker has no key), from one ephemeral UDP
   port to the autopilot's fixed port (`apps.mavlink.specs.UAV_PORT`). The start is logged
-  before the go file is written (no frame leaves before it); `halt` stops the injector and
-  returns once its process has exited (no frame leaves after); the stop is logged when the last
-  frame can have crossed the network (the flood's `quiet_after_s` over the attacker -> victim
-  path), with the frames sent and the COMMAND_ACKs received. The victim's autopilot
+  before the go file is written (no frame leaves before it); `halt` signals the injector, whose
+  handler exits at once (after the frame being sent, if any); the stop is logged, off the
+  schedule's thread, once it has exited and its last frame can have crossed the network (the
+  flood's `quiet_after_s` over the attacker -> victim path), with the frames sent and the
+  COMMAND_ACKs received. The victim's autopilot
   (`apps.mavlink.commands`) accepts and acknowledges RTL / LAND (its HEARTBEAT's custom_mode
   becomes 6 / 9) and DO_CHANGE_SPEED, unless the run signs MAVLink (`--mavlink-signing`,
   `apps.mavlink.signing`): then it drops the unsigned frames unanswered;
@@ -174,11 +175,14 @@ class MavlinkInject(AttackFamily):
         from uavcas.emulation.apps.mavinject import read_log
 
         procs = ex.state.pop(attack.attack_id, {})
-        for proc, _, _ in procs.values():
-            proc.stop(signal.SIGTERM, grace_s=2.0)  # returns when the injector has exited
-        t_closed = ex.now()
+        for proc, _, _ in procs.values():  # its handler exits at once (after the frame being sent, if any)
+            if proc.alive():
+                proc.popen.send_signal(signal.SIGTERM)
 
         def finish() -> dict[str, Any]:
+            for proc, _, _ in procs.values():
+                proc.stop(signal.SIGTERM, grace_s=2.0)  # returns when the injector has exited
+            t_closed = ex.now()
             counts = [read_log(log) for _, _, log in procs.values()]
             # no frame left an attacker after t_closed; the last ones may still be crossing the network
             quiet = max((quiet_after_s(path_hops(ex, x, v)) for x in attack.attackers for v in attack.victims),
