@@ -122,3 +122,13 @@ def test_forged_frames_and_their_acks_are_labelled_packet_exact():
         assert effects(name) == ({"provoked"}, {k}), name
     for name in ("icmp", "before", "after", "other_port", "victim_to_bs", "bs_to_victim", "early"):
         assert effects(name) == ({"benign"}, {-1}), name
+
+
+def test_run_refuses_signing_on_a_payload_without_mavlink(tmp_path):
+    import subprocess
+    import sys
+
+    r = subprocess.run([sys.executable, "-m", "uavcas", "run", "blackhole-6-2-image-logdist-adaptive-random-30-95",
+                        "--mavlink-signing", "--out", str(tmp_path / "run")], capture_output=True, text=True, timeout=120)
+    assert r.returncode == 2 and "--mavlink-signing: payload 'image' carries no MAVLink" in r.stderr
+    assert len(r.stderr.strip().splitlines()) == 1 and not (tmp_path / "run").exists()
