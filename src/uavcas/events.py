@@ -65,6 +65,8 @@ class AttackStop(_Record):
     rejected: list[str] | None = None
     replayer_stats: dict[str, dict[str, Any] | None] | None = None  # replay: per attacker
     shaping_until_unix: float | None = None  # jamming: when the unjammed shaping was back
+    commands_sent: int | None = None  # mavlink_inject: forged commands that left the attackers
+    commands_acked: int | None = None  # mavlink_inject: COMMAND_ACKs the attackers received
 
 
 class AttackRate(_Record):

@@ -66,6 +66,7 @@ class ShardInfo:
     complete: bool = True  # the run finished with exit status 0
     run_exit_status: int | None = 0  # run.json's (None: the run never wrote one)
     context_window_s: float | None = None  # window of the ctx_* columns, None: not computed
+    mavlink_signing: bool | None = None  # run.json's: MAVLink 2 signing on (None: no run.json)
 
 
 @dataclass(frozen=True)
@@ -189,6 +190,7 @@ def extract_detailed(
             complete=problem is None,
             run_exit_status=info.exit_status if info else None,
             context_window_s=CONTEXT_WINDOW_S if context else None,
+            mavlink_signing=info.mavlink_signing if info is not None else None,
         ),
     )
     return Extracted(shard, ex.packets, ex.flows, followed, truth)

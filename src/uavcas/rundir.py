@@ -147,6 +147,7 @@ class RunInfo(_Strict):
     profile: str | None = None  # twin profile of the plan (plan.json has it too) and its SHA-256
     profile_sha256: str | None = None
     fidelity: FidelitySummary | None = None  # set by the audit (uavcas.fidelity), None: not audited
+    mavlink_signing: bool = False  # the MAVLink endpoints signed their messages (MAVLink 2 signing)
 
     def to_json(self) -> str:
         return self.model_dump_json(indent=1, exclude_none=False) + "\n"

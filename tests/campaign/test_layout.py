@@ -84,3 +84,19 @@ def test_a_campaign_from_before_the_extraction_was_recorded_is_checked_by_its_sh
     _shard_meta(old, 0, {"view": "5tuple", "flow_rules": {"fin_rst": True}})
     with pytest.raises(CampaignError, match="--termination None, not --view 5tuple --termination connection"):
         old.bind_extraction(Extraction())
+
+
+def test_a_resumed_campaign_keeps_its_mavlink_signing(tmp_path):
+    cdir = CampaignDir(tmp_path)
+    cdir.bind_emulation(mavlink_signing=True)
+    cdir.bind_emulation(mavlink_signing=True)  # resume
+    assert json.loads(cdir.emulation_path.read_text()) == {"mavlink_signing": True}
+    with pytest.raises(CampaignError, match="emulated with --mavlink-signing; resume it with that"):
+        cdir.bind_emulation(mavlink_signing=False)
+    # a campaign with runs done before the option was recorded had no signing
+    old = CampaignDir(tmp_path / "old")
+    _shard_meta(old, 0, {"view": "5tuple"})
+    with pytest.raises(CampaignError, match="emulated with --no-mavlink-signing"):
+        old.bind_emulation(mavlink_signing=True)
+    old.bind_emulation(mavlink_signing=False)
+    assert json.loads(old.emulation_path.read_text()) == {"mavlink_signing": False}

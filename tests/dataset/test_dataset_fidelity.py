@@ -60,3 +60,14 @@ def test_report_shows_fidelity_verdicts_and_planned_vs_measured(tmp_path):
     assert uri.startswith("data:image/png;base64,") and len(uri) > 10_000
     (tmp_path / "empty" / "runs").mkdir(parents=True)
     assert read_run_fidelity(tmp_path / "empty") == {}
+
+
+def test_card_counts_runs_by_mavlink_signing(tmp_path):
+    ds = tmp_path / "ds"
+    for rid, signed in {"a": True, "b": False, "c": False}.items():
+        rd = RunDir(build_run(tmp_path / rid, run_id=rid))
+        rd.run_json.write_text(rd.read_info().model_copy(update={"mavlink_signing": signed}).to_json())
+        extract_run(rd.root, ds)
+    card = json.loads((ds / "dataset.json").read_text())
+    assert card["mavlink_signing"] == {"on": 1, "off": 2, "unknown": 0}
+    assert {r["run_id"]: r["mavlink_signing"] for r in card["runs"]} == {"a": True, "b": False, "c": False}

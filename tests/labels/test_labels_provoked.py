@@ -12,6 +12,7 @@ from uavcas.labels.effects import packet_truth
 from uavcas.labels.label import constructed_truth, label_flows, rule_text
 from uavcas.vocabulary import FAMILIES
 from uavcas.schema import TRUTH_COLUMNS
+from uavcas.vocabulary import EFFECT_PRECEDENCE, FAMILIES
 
 
 def test_a_flow_of_only_provoked_packets_carries_the_provoking_family():
@@ -42,5 +43,5 @@ def test_constructed_truth_has_no_provoked_packets_and_the_rule_names_them():
     out = constructed_truth(frame)
     assert list(out.provoked_packets) == [0, 0] and list(out.attack_packets) == [3, 0]
     text = rule_text("ours")
-    assert "provoked" in text and "replay > flood > wormhole > blackhole > provoked > jamming > channel_loss > benign" in text
+    assert "provoked" in text and " > ".join(EFFECT_PRECEDENCE) in text
     assert text.count("provoked: ") == len(FAMILIES)  # one provoked rule per family

@@ -79,6 +79,24 @@ def answers(p: "PacketTable", answered: np.ndarray, cand: np.ndarray, reverse: b
     return _matched(cands, trig, [*_ENDS, "proto", "num"], within_s, n)
 
 
+def udp_answers(p: "PacketTable", answered: np.ndarray, cand: np.ndarray,
+                within_s: float = ANSWER_WITHIN_S) -> np.ndarray:
+    """UDP rows of `cand` on the reversed 5-tuple of an `answered` UDP row (from its destination
+    address and port back to its source address and port), at most `within_s` after it. UDP has
+    no sequence number: the 5-tuple is the whole key, so it ties an answer only where nothing else
+    travels on that reversed 5-tuple (an attacker's own ephemeral port, `attacks.mavlink_inject`)."""
+    n = len(p)
+    a = np.flatnonzero(answered & (p["proto"] == 17))
+    c = np.flatnonzero(cand & (p["proto"] == 17))
+    if a.shape[0] == 0 or c.shape[0] == 0:
+        return np.zeros(n, dtype=bool)
+    trig = pd.DataFrame({k: p[src][a] for k, src in zip(_ENDS, _REVERSED)})
+    trig["t"] = p["ts_s"][a]
+    cands = pd.DataFrame({k: p[k][c] for k in _ENDS})
+    cands["t"], cands["row"] = p["ts_s"][c], c
+    return _matched(cands, trig, list(_ENDS), within_s, n)
+
+
 def icmp_errors_quoting(p: "PacketTable", answered: np.ndarray, exact: bool = False,
                         within_s: float = ANSWER_WITHIN_S) -> np.ndarray:
     """ICMP errors that quote an `answered` row: the quoted protocol, addresses (low words),

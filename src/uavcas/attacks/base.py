@@ -126,6 +126,10 @@ class AttackFamily(ABC):
     python_modules: ClassVar[tuple[str, ...]] = ()  # importable modules the executor needs
     min_uavs: ClassVar[int] = 2  # attacker(s) + victim
     routes_attack_traffic: ClassVar[bool] = False  # the plan routes attacker -> victim paths
+    # families of one group cannot be combined in a composition (the floods: one flood per run)
+    exclusive_group: ClassVar[str | None] = None
+    # the scenario payloads whose traffic the family acts on (None: any payload)
+    payloads: ClassVar[tuple[str, ...] | None] = None
     detours_traffic: ClassVar[bool] = False  # the plan detours victim <-> BS through the attacker
 
     # codec -------------------------------------------------------------------------------------

@@ -56,7 +56,7 @@ class FloodSpec(SpecBase):
         return f"{self.family}={self.interval_us}"
 
 
-def _path_hops(ex: "AttackExecutor", src: str, dst: str) -> list[tuple[float, float]]:
+def path_hops(ex: "AttackExecutor", src: str, dst: str) -> list[tuple[float, float]]:
     """(delay_ms, rate_mbps) of each link a frame from src to dst crosses now ([] if dropped)."""
     fwd, w = ex.emu.forwarding, ex.window
     path = fwd.path(src, dst) if fwd is not None else None
@@ -78,6 +78,7 @@ class _Flood(AttackFamily):
                      f"{ANSWER_WITHIN_S:g} s after the SYN, even after the attack's stop")
     tools = ("hping3",)
     routes_attack_traffic = True
+    exclusive_group = "flood"
 
     @property
     def usage(self) -> str:  # type: ignore[override]
@@ -129,7 +130,7 @@ class _Flood(AttackFamily):
         def finish() -> dict[str, Any]:
             results = collect_all(floods)
             # no SYN left an attacker after t_closed; the last ones may still be crossing the network
-            quiet = max((quiet_after_s(_path_hops(ex, x, v)) for x in attack.attackers for v in attack.victims),
+            quiet = max((quiet_after_s(path_hops(ex, x, v)) for x in attack.attackers for v in attack.victims),
                         default=0.0)
             t = max(ex.now(), t_closed + quiet)
             for r in results:
@@ -146,11 +147,7 @@ class _Flood(AttackFamily):
     def effects(self, ctx: "TruthContext", windows: list["AttackWindow"]) -> np.ndarray:
         p = ctx.packets
         syn_only = (p["proto"] == 6) & ((p["tcp_flags"] & (TCP_SYN | TCP_ACK)) == TCP_SYN)
-        hit = np.zeros(ctx.n, dtype=bool)
-        for w in windows:
-            hit |= (syn_only & ctx.during(w.start_unix, w.stop_unix)
-                    & ctx.packets_from(w.attacker_ips) & ctx.packets_to(w.victim_ips))
-        return ctx.spread(hit)
+        return ctx.spread(ctx.attacker_to_victim(windows, syn_only))
 
     def provoked(self, ctx: "TruthContext", windows: list["AttackWindow"], made: np.ndarray) -> np.ndarray:
         p = ctx.packets

@@ -28,6 +28,7 @@ def run_local(
     on_retry: Callable[[RunOutcome, int], None] | None = None,
     extraction: Extraction = Extraction(),
     fidelity: str = "flag",
+    mavlink_signing: bool = False,
 ) -> Iterator[RunOutcome]:
     """Run entries `jobs` at a time into their run directories; retry a failure `retries` times
     (and a run whose fidelity failed, with `fidelity="retry"`: see `task.execute_entry`)."""
@@ -39,7 +40,7 @@ def run_local(
         tries.started(e.index)
         cdir.reset(e.index)
         return pool.submit(execute_entry, e, str(cdir.run_dir(e.index)), profile, extraction=extraction,
-                           fidelity=fidelity)
+                           fidelity=fidelity, mavlink_signing=mavlink_signing)
 
     with ThreadPoolExecutor(max_workers=max(1, jobs)) as pool:
         running: set[Future] = set()
@@ -64,6 +65,7 @@ def run_dask(
     connect_timeout_s: float = 30.0,
     extraction: Extraction = Extraction(),
     fidelity: str = "flag",
+    mavlink_signing: bool = False,
 ) -> Iterator[RunOutcome]:
     """Submit every entry to the scheduler at `address` (tcp://HOST:8786); yield as they finish."""
     from distributed import Client, as_completed
@@ -82,6 +84,7 @@ def run_dask(
                 return_files=True,
                 extraction=extraction,
                 fidelity=fidelity,
+                mavlink_signing=mavlink_signing,
                 resources={"emulator": 1},
                 pure=False,
                 key=f"uavcas-run-{e.index}-try{n}",

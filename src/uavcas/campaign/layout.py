@@ -2,6 +2,7 @@
 
     DATASET_DIR/campaign.jsonl        the manifest being worked on (written once, then checked)
     DATASET_DIR/campaign_extraction.json  the view and termination policy runs are extracted with (likewise)
+    DATASET_DIR/campaign_emulation.json   the run options runs are emulated with: MAVLink signing (likewise)
     DATASET_DIR/runs/<index>/         one run: plan.json, run.json, attacks.jsonl, shaping.jsonl,
                                       pcap/ (local runs), outcome.json
     DATASET_DIR/runs/<index>/DONE     written last, by rename: the run and its shard are complete
@@ -66,6 +67,27 @@ class CampaignDir:
                     f"not --view {want['view']} --termination {want['termination']}; resume it with those or use another --out")
         if not self.extraction_path.exists():
             atomic_write_text(self.extraction_path, json.dumps(want) + "\n")
+
+    @property
+    def emulation_path(self) -> Path:
+        return self.root / "campaign_emulation.json"
+
+    def bind_emulation(self, mavlink_signing: bool) -> None:
+        """Record the run options every run of the campaign is emulated with (MAVLink signing);
+        resuming with others is refused, so one campaign's runs are all defended or all not. A
+        campaign begun before this was recorded had no signing."""
+        want = {"mavlink_signing": bool(mavlink_signing)}
+        if self.emulation_path.exists():
+            have = json.loads(self.emulation_path.read_text())
+        elif any(s.stem.isdigit() and self.is_done(int(s.stem)) for s in (self.root / "shards").glob("*.parquet")):
+            have = {"mavlink_signing": False}
+        else:
+            have = want
+        if have != want:
+            flag = "--mavlink-signing" if have["mavlink_signing"] else "--no-mavlink-signing"
+            raise CampaignError(f"{self.root} holds a campaign emulated with {flag}; resume it with that or use another --out")
+        if not self.emulation_path.exists():
+            atomic_write_text(self.emulation_path, json.dumps(want) + "\n")
 
     def run_dir(self, index: int) -> Path:
         return self.root / "runs" / str(index)

@@ -61,6 +61,7 @@ def run_campaign(
     console: Console | None = None,
     extraction: Extraction = Extraction(),
     fidelity: str = "flag",
+    mavlink_signing: bool = False,
 ) -> CampaignResult:
     from uavcas.dataset.store import rebuild
 
@@ -75,6 +76,7 @@ def run_campaign(
     cdir.root.mkdir(parents=True, exist_ok=True)
     cdir.bind_manifest(entries)
     cdir.bind_extraction(extraction)  # a resumed campaign keeps its view and termination: rows never mix
+    cdir.bind_emulation(mavlink_signing=mavlink_signing)  # and its runs' MAVLink signing
     cdir.prune_orphan_shards()
     result = CampaignResult(out_dir=cdir.root)
     todo = []
@@ -102,9 +104,11 @@ def run_campaign(
 
             progress.update(task, status=status())
             outcomes = (
-                run_dask(todo, scheduler, profile, retries, on_retry, extraction=extraction, fidelity=fidelity)
+                run_dask(todo, scheduler, profile, retries, on_retry, extraction=extraction, fidelity=fidelity,
+                         mavlink_signing=mavlink_signing)
                 if scheduler
-                else run_local(todo, cdir, jobs, profile, retries, on_retry, extraction=extraction, fidelity=fidelity)
+                else run_local(todo, cdir, jobs, profile, retries, on_retry, extraction=extraction, fidelity=fidelity,
+                               mavlink_signing=mavlink_signing)
             )
             for out in outcomes:
                 if out.ok:

@@ -86,6 +86,7 @@ def execute_entry(
     extraction: Extraction = Extraction(),
     return_files: bool = False,
     fidelity: str = "flag",
+    mavlink_signing: bool = False,
 ) -> RunOutcome:
     """Run one manifest entry into `run_dir` (a temporary directory when None) and extract it.
 
@@ -107,7 +108,7 @@ def execute_entry(
         shutil.rmtree(base)
     out = RunOutcome(index=entry.index, ok=False, host=host, wall_s=0.0)
     req = WorkerRequest(config=entry.config, seed=entry.seed, windows=entry.windows, window_s=entry.window_s,
-                        out_dir=str(base), profile=profile)
+                        out_dir=str(base), profile=profile, mavlink_signing=mavlink_signing)
     try:
         res = realize_in_child(req, limit_s=entry.windows * entry.window_s + RUN_SLACK_S)
         if not res.ok:

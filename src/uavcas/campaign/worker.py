@@ -33,6 +33,7 @@ class WorkerRequest(BaseModel):
     window_s: float
     out_dir: str
     profile: str | None = None
+    mavlink_signing: bool = False  # RunOptions.mavlink_signing
 
 
 class WorkerResult(BaseModel):
@@ -57,7 +58,7 @@ def realize_request(req: WorkerRequest) -> WorkerResult:
         feats, reason = probe_kernel()
     if reason:
         return WorkerResult(ok=False, exit_status=2, error=reason)
-    art = realize(p, out, RunOptions(), features=feats)
+    art = realize(p, out, RunOptions(mavlink_signing=req.mavlink_signing), features=feats)
     return WorkerResult(ok=art.exit_status == 0, exit_status=art.exit_status,
                         error="" if art.exit_status == 0 else f"run exited {art.exit_status}: {art.exit_reason}")
 

@@ -60,6 +60,9 @@ def run_cmd(
     view: one_of((*VIEWS, EPISODE_VIEW)) = typer.Option("5tuple", "--view", help="What each run is extracted to: 5tuple, hostpair, window-hostpair "
                                                       "(flows) or window-host (one row per node per plan window)."),
     termination: one_of(TERMINATIONS) | None = typer.Option(None, "--termination", help=TERMINATION_HELP),
+    mavlink_signing: bool = typer.Option(False, "--mavlink-signing/--no-mavlink-signing",
+                                         help="Every run signs its MAVLink (MAVLink 2 signing, a per-run key): "
+                                              "the defended twin."),
 ) -> None:
     """Plan, emulate, extract and label every scenario; append each run's shard to the dataset."""
     check_output(out, "dir")
@@ -86,7 +89,7 @@ def run_cmd(
 
             load_profile(profile)
         result = run_campaign(entries, out, jobs=jobs, scheduler=scheduler, profile=profile, retries=retries,
-                              extraction=extraction, fidelity=fidelity)
+                              extraction=extraction, fidelity=fidelity, mavlink_signing=mavlink_signing)
     except (CampaignError, ValueError) as e:
         raise fail(str(e).splitlines()[0]) from None
     except KeyboardInterrupt:

@@ -13,6 +13,8 @@ from pathlib import Path
 import typer
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
+from uavcas.vocabulary import MAVLINK_PAYLOADS
+
 from .audit import fidelity_line
 from .common import (check_output, config_argument, console, fail, plan_or_fail, profile_option, seed_option,
                      window_s_option, windows_option)
@@ -29,12 +31,18 @@ def run_cmd(
     think_s: float = typer.Option(0.5, "--think-s", min=0.0, help="Mean pause between a BS's image fetches."),
     video_kbps: int = typer.Option(None, "--video-kbps", min=1,
                                    help="H.264 bitrate of each UAV's video in kbit/s (payload video, mixed; default 500)."),
+    mavlink_signing: bool = typer.Option(False, "--mavlink-signing/--no-mavlink-signing",
+                                         help="MAVLink 2 message signing between ground stations and UAVs, with a "
+                                              "per-run key (payload telemetry, video, mixed)."),
     audit: bool = typer.Option(True, "--audit/--no-audit",
                                help="Audit the run's fidelity at the end (fidelity.json; `uavcas audit` later)."),
 ) -> None:
     """Realise a scenario's plan on real Linux stacks, attack it, capture every switch."""
     check_output(out, "dir")
     p = plan_or_fail(config, seed, windows, window_s, profile)
+    if mavlink_signing and p.scenario is not None and p.scenario.payload not in MAVLINK_PAYLOADS:
+        raise fail(f"--mavlink-signing: payload {p.scenario.payload!r} carries no MAVLink "
+                   f"(use {', '.join(MAVLINK_PAYLOADS)})")
     if prefix is not None:
         from uavcas.emulation.naming import check_prefix
 
@@ -55,7 +63,7 @@ def run_cmd(
 
     from uavcas.emulation.runner import RunOptions, realize
 
-    opts = RunOptions(prefix=prefix, think_mean_s=think_s, audit=audit,
+    opts = RunOptions(prefix=prefix, think_mean_s=think_s, audit=audit, mavlink_signing=mavlink_signing,
                       **({"video_kbps": video_kbps} if video_kbps is not None else {}))
     console.print(f"[bold]{p.config}[/] seed={seed}: {len(p.nodes)} nodes, {len(p.windows)} windows x "
                   f"{p.window_s:g} s, shaper {feats.shaper} -> {out}", highlight=False)

@@ -140,6 +140,9 @@ def rebuild(out_dir: Path) -> dict:
         # runs by fidelity verdict (uavcas.fidelity): how many failed their audit
         "fidelity": {v: sum(1 for r in runs if (r.get("fidelity") or "unaudited") == v)
                      for v in ("pass", "fail", "error", "unaudited")},
+        # runs whose MAVLink was signed (MAVLink 2 signing, `uavcas run --mavlink-signing`) or not
+        "mavlink_signing": {k: sum(1 for r in runs if r.get("mavlink_signing") is v)
+                            for k, v in (("on", True), ("off", False), ("unknown", None))},
         "runs": runs,
         "versions": package_versions("numpy", "pandas", "pyarrow"),
     }

@@ -61,6 +61,7 @@ class RunOptions:
     think_mean_s: float = 0.5  # mean pause between a BS's image fetches
     n_images: int = 24
     video_kbps: int = BITRATE_KBPS  # H.264 bitrate of each UAV's video (payload video and mixed; apps/video.py)
+    mavlink_signing: bool = False  # MAVLink 2 signing between GCS and UAV endpoints (apps/mavlink/signing.py)
     keep_logs: bool = True  # copy tool logs (curl results, stderr) to OUT/logs
     urgent: bool = True  # window changes and attack actions at real-time priority (emulation.priority)
     softirq_boost: bool = True  # the kernel's softirq threads at real-time priority during the run
@@ -202,7 +203,7 @@ def _play(st: _State, opt: RunOptions, notify: Callable[[Progress], None]) -> No
     st.captures = capture.start_all(emu, [n.name for n in plan.nodes], RunDir(st.out).pcap_dir, work / "logs",
                                     dur + 120)
     st.traffic = BenignTraffic(emu, plan, work, dur, think_mean_s=opt.think_mean_s, n_images=opt.n_images,
-                               video_kbps=opt.video_kbps)
+                               video_kbps=opt.video_kbps, mavlink_signing=opt.mavlink_signing)
     st.traffic.start_servers()
     st.executor = AttackExecutor(emu, plan, work, dur, on_event=lambda r: notify(AttackLogged(record=r)))
     st.executor.on_reshape = st.sampler.window_applied  # a mid-window reshape starts a counter segment
@@ -383,5 +384,7 @@ def _write_outputs(st: _State) -> None:
         attack_errors=ex.errors if ex else [],
         wind_down_errors=st.wind_down_errors,
         profile=st.plan.profile, profile_sha256=st.plan.profile_sha256,
+        # whether the run's MAVLink was signed (never the key): off when no payload carries MAVLink
+        mavlink_signing=bool(st.traffic and st.traffic.mavlink_on and st.traffic.signing is not None),
     )
     atomic_write_text(rd.run_json, st.info.to_json())

@@ -84,6 +84,15 @@ class TruthContext:
     def during(self, start_unix: float, stop_unix: float) -> np.ndarray:
         return (self.ts >= start_unix) & (self.ts < stop_unix)
 
+    def attacker_to_victim(self, windows, rows: np.ndarray) -> np.ndarray:
+        """The rows of `rows` sent from an attacker to a victim of an attack window and captured
+        inside its [start, stop)."""
+        hit = np.zeros(self.n, dtype=bool)
+        for w in windows:
+            hit |= rows & self.during(w.start_unix, w.stop_unix) & self.packets_from(w.attacker_ips) \
+                & self.packets_to(w.victim_ips)
+        return hit
+
     def at_switch_of(self, names) -> np.ndarray:
         """Rows captured at the switch of any of these nodes (capture point s-<node>)."""
         from uavcas.flows.follow import POINT_PREFIX

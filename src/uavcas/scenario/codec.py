@@ -137,9 +137,13 @@ def attacks_of(field: str) -> tuple:
     fams = [a.family for a in attacks]
     if len(set(fams)) != len(fams):
         raise ScenarioError(f"field 'attacks': a family appears twice in {field!r}")
-    floods = [f for f in fams if family(f).routes_attack_traffic]
-    if len(floods) > 1:
-        raise ScenarioError(f"field 'attacks': {' and '.join(sorted(floods))} cannot be combined (use one)")
+    groups: dict[str, list[str]] = {}
+    for f in fams:
+        if family(f).exclusive_group is not None:
+            groups.setdefault(family(f).exclusive_group, []).append(f)
+    for same in groups.values():
+        if len(same) > 1:
+            raise ScenarioError(f"field 'attacks': {' and '.join(sorted(same))} cannot be combined (use one)")
     return tuple(sorted(attacks, key=lambda a: FAMILIES.index(a.family)))
 
 
@@ -165,11 +169,17 @@ def parse(text: str) -> Scenario:
         need = family(a.family).min_uavs
         if n_uav < need:
             raise ScenarioError(f"field 'n_uav': {a.family} needs at least {need} UAVs (attackers + victim)")
+    payload = choice("payload", raw["payload"], PAYLOADS)
+    for a in attacks:
+        acts_on = family(a.family).payloads
+        if acts_on is not None and payload not in acts_on:
+            raise ScenarioError(f"field 'payload': {a.family} acts on traffic that payload {payload!r} does not "
+                                f"carry (use {', '.join(acts_on)})")
     sc = Scenario(
         attacks=attacks,
         n_uav=n_uav,
         n_bs=int_field("n_bs", raw["n_bs"], 1, 16),
-        payload=choice("payload", raw["payload"], PAYLOADS),
+        payload=payload,
         pathloss=choice("pathloss", raw["pathloss"], PATHLOSS_MODELS),
         modulation=modulation,
         mission=choice("mission", raw["mission"], MISSIONS),

@@ -72,6 +72,20 @@ def _free_port() -> int:
     return port
 
 
+def wait_all(procs, timeout_s: float) -> None:
+    """Every endpoint process ends by itself within timeout_s, with exit status 0."""
+    for proc in procs:
+        _, err = proc.communicate(timeout=timeout_s)
+        assert proc.returncode == 0, err[-1000:]
+
+
+def stop_all(relay: Relay, procs) -> None:
+    relay.stop = True
+    relay.join(2)
+    for proc in procs:
+        proc.kill()
+
+
 def _parse_each(datagrams):
     from pymavlink.dialects.v20 import common
 
@@ -96,7 +110,7 @@ def test_gcs_and_uav_exchange_mission_commands_and_streams_over_udp(tmp_path):
                        uavs=[mv.gcs_target(p, "uav0")], t0_path=t0_path, window_s=p.window_s, n_windows=3,
                        duration_s=dur, log_path=tmp_path / "mavlink-bs0.jsonl")
     uspec = mv.uav_spec(p, "uav0", "127.0.0.1", None, dur, tmp_path / "mavlink-uav0.jsonl", gcs_port=relay.port,
-                        t0_path=t0_path)
+                        bind_port=0, t0_path=t0_path)
     (tmp_path / "g.json").write_text(gspec.model_dump_json())
     (tmp_path / "u.json").write_text(uspec.model_dump_json())
     run = [sys.executable, "-m", "uavcas.emulation.apps.mavlink"]
@@ -106,14 +120,9 @@ def test_gcs_and_uav_exchange_mission_commands_and_streams_over_udp(tmp_path):
         # both load, bind and say "ready" before t0 (as in a run); t0 is then published
         assert [proc.stdout.readline().strip() for proc in procs] == ["ready", "ready"]
         mv.write_t0(t0_path, time.time())
-        for proc in procs:
-            _, err = proc.communicate(timeout=dur + 10)
-            assert proc.returncode == 0, err[-1000:]
+        wait_all(procs, dur + 10)
     finally:
-        relay.stop = True
-        relay.join(2)
-        for proc in procs:
-            proc.kill()
+        stop_all(relay, procs)
 
     glog, ulog = mv.read_log(gspec.log_path), mv.read_log(uspec.log_path)
     uploads = [e for e in glog if e["event"] == "mission_upload"]

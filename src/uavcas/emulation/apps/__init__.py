@@ -10,6 +10,7 @@
               byte-counting sink on its BS, port 5600 (payload video or mixed);
 * `flood`     hping3 SYN flood with closed-loop rate calibration and an exact SYN counter;
 * `replayer`  scapy replay process fed by a port mirror (run inside the attacker namespace);
+* `mavinject` forged MAVLink COMMAND_LONG to a victim's autopilot (pymavlink, attacker namespace);
 * `capture`   one tcpdump per switch, with its drop counters;
 * `traffic`   the benign traffic of a run by the scenario's payload (servers before t0, clients at t0);
 * `procs`     a supervised process: started in its own session, stopped by PID with a signal;

@@ -25,6 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from uavcas.emulation import kernel
+from uavcas.vocabulary import MAVLINK_PAYLOADS
 
 from . import client, images, mavlink, nginx, video
 from .procs import Proc, spawn, wait_for
@@ -57,16 +58,18 @@ class BenignTraffic:
     def __init__(self, emu, plan, work_dir: Path, duration_s: float, *,
                  think_mean_s: float = client.THINK_MEAN_S, n_images: int = images.DEFAULT_COUNT,
                  stream_rates: mavlink.StreamRates = mavlink.StreamRates(),
-                 video_kbps: int = video.BITRATE_KBPS) -> None:
+                 video_kbps: int = video.BITRATE_KBPS, mavlink_signing: bool = False) -> None:
         self.emu, self.plan = emu, plan
         self.work, self.log_dir = work_dir, work_dir / "logs"
         self.duration_s = duration_s
         self.think_mean_s, self.n_images, self.stream_rates = think_mean_s, n_images, stream_rates
         self.payload = plan.scenario.payload if plan.scenario is not None else "image"
         self.http_on = self.payload in ("image", "mixed")
-        self.mavlink_on = self.payload in ("telemetry", "video", "mixed")
+        self.mavlink_on = self.payload in MAVLINK_PAYLOADS
         self.video_on = self.payload in ("video", "mixed")
         self.video_kbps = video_kbps
+        # MAVLink 2 signing on both ends, with the run's key (mavlink/signing.py); never the attacker's
+        self.signing = mavlink.signing_spec(plan.seed, plan.config) if mavlink_signing else None
         self.uavs = [n for n in plan.nodes if n.kind == "uav"]
         self.bss = [n for n in plan.nodes if n.kind == "bs"]
         self.servers: list[Proc] = []
@@ -144,7 +147,7 @@ class BenignTraffic:
             if b.sysid is None:
                 raise ValueError(f"{b.name} has no MAVLink system id in the plan")
             served = [mavlink.gcs_target(self.plan, uav) for bs, uav in pairs if bs == b.name]
-            spec = mavlink.GcsSpec(name=b.name, sysid=b.sysid, rates=self.stream_rates, uavs=served,
+            spec = mavlink.GcsSpec(name=b.name, sysid=b.sysid, rates=self.stream_rates, uavs=served, signing=self.signing,
                                    t0_path=self.t0_path, window_s=self.plan.window_s,
                                    n_windows=len(self.plan.windows), duration_s=app_s,
                                    log_path=self.log_dir / f"mavlink-{b.name}.jsonl")
@@ -154,7 +157,8 @@ class BenignTraffic:
                                             self.log_dir, timeout_s))
         for bs, uav in pairs:
             spec = mavlink.uav_spec(self.plan, uav, self.plan.node(bs).ip, None, app_s,
-                                    self.log_dir / f"mavlink-{uav}.jsonl", t0_path=self.t0_path)
+                                    self.log_dir / f"mavlink-{uav}.jsonl", t0_path=self.t0_path,
+                                    signing=self.signing)
             path = spec_dir / f"{uav}.json"
             path.write_text(spec.model_dump_json())
             self.mavlink_procs.append(spawn(self._start(uav), f"mavlink-{uav}", run + ["uav", str(path)],

@@ -3,8 +3,9 @@
 Two endpoint processes, one per node, each a small MAVLink peer over UDP (one message per
 datagram; every byte is packed and parsed by pymavlink's `dialects.v20.common`):
 
-* `uav` (autopilot, in the UAV's namespace): HEARTBEAT at 1 Hz (MAV_TYPE_QUADROTOR,
-  MAV_AUTOPILOT_ARDUPILOTMEGA, Copter custom mode AUTO = 3) to its BS's port 14550, always, also
+* `uav` (autopilot, in the UAV's namespace, bound to UDP `UAV_PORT` = 14550: a fixed port an
+  attacker can address): HEARTBEAT at 1 Hz (MAV_TYPE_QUADROTOR, MAV_AUTOPILOT_ARDUPILOTMEGA,
+  Copter custom mode: AUTO = 3 until a command changes it) to its BS's port 14550, always, also
   while the plan marks it disconnected (a radio sends into the void). The streams start at
   ArduCopter's defaults, which are 0 Hz (libraries/GCS_MAVLink/GCS_MAVLink_Parameters.cpp:
   AP_MAV_DEFAULT_STREAM_RATE_EXT_STAT, _POSITION, _EXTRA1, _EXTRA2 = 0 for
@@ -16,7 +17,10 @@ datagram; every byte is packed and parsed by pymavlink's `dialects.v20.common`):
   and roll = pitch = 0 (the track's velocity is constant within a window: no acceleration to
   tilt for); GPS_RAW_INT has fix type 3 (3D) and 12 satellites; the battery drains linearly
   (`BatterySpec`). It accepts a mission (MISSION_COUNT -> MISSION_REQUEST_INT per item ->
-  MISSION_ACK) and acknowledges COMMAND_LONG with COMMAND_ACK (MAV_RESULT_ACCEPTED).
+  MISSION_ACK) and answers every COMMAND_LONG with COMMAND_ACK to the address it came from
+  (`commands`: DO_CHANGE_SPEED, NAV_RETURN_TO_LAUNCH -> mode RTL 6, NAV_LAND -> mode LAND 9
+  ACCEPTED; anything else UNSUPPORTED), whoever sent it: a forged command is obeyed unless signing
+  is on.
 * `gcs` (ground station, in the BS's namespace, UDP 14550, all its UAVs): from the first
   datagram of a UAV on, HEARTBEAT (MAV_TYPE_GCS) at 1 Hz to it, REQUEST_DATA_STREAM at
   `StreamRates` (default: MAVProxy's `streamrate` setting, 4 Hz, with which it asks an
@@ -33,15 +37,21 @@ the runner writes at t0 (`write_t0`). Both ends stop at their deadline or on SIG
 log JSON lines to `log_path`: one line per mission upload, command and ack as they happen, and a
 final `summary` line with sent/received message counts per type.
 
+Signing (`signing`, `UavSpec.signing` / `GcsSpec.signing`, the run option `--mavlink-signing`):
+MAVLink 2 message signing with the run's key on both ends: every frame sent is signed, every
+frame received unsigned or wrongly signed is dropped unanswered (and logged `rejected`).
+
 Modules: `specs` (the typed specs and what the plan gives them), `link` (what both endpoints
-share: t0, the UDP peer, the log), `autopilot` (the UAV end), `ground` (the GCS end).
+share: t0, the UDP peer, the log), `autopilot` (the UAV end), `commands` (what a command does to
+the autopilot's state), `signing` (MAVLink 2 signing and the run's key), `ground` (the GCS end).
 
 Run: python -m uavcas.emulation.apps.mavlink {uav|gcs} SPEC.json
 """
 
 from .link import T0_WAIT_S, read_log, write_t0
-from .specs import (GCS_PORT, BatterySpec, GcsSpec, GcsTarget, RetrySpec, StreamRates, UavSpec, gcs_target,
-                    uav_spec)
+from .signing import SigningSpec, signing_key, signing_spec
+from .specs import (GCS_PORT, UAV_PORT, BatterySpec, GcsSpec, GcsTarget, RetrySpec, StreamRates, UavSpec,
+                    gcs_target, uav_spec)
 
-__all__ = ["GCS_PORT", "T0_WAIT_S", "BatterySpec", "GcsSpec", "GcsTarget", "RetrySpec", "StreamRates", "UavSpec",
-           "gcs_target", "read_log", "uav_spec", "write_t0"]
+__all__ = ["GCS_PORT", "T0_WAIT_S", "UAV_PORT", "BatterySpec", "GcsSpec", "GcsTarget", "RetrySpec", "SigningSpec",
+           "StreamRates", "UavSpec", "gcs_target", "read_log", "signing_key", "signing_spec", "uav_spec", "write_t0"]

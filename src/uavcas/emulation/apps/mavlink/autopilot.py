@@ -9,18 +9,21 @@ from collections import Counter
 
 from uavcas.twin.track import local_to_geodetic
 
+from . import signing
+from .commands import VehicleState
 from .link import Log, Peer, Periodic, Stop, await_t0, recv_all
-from .specs import COMPONENT_AUTOPILOT, COPTER_MODE_AUTO, GPS_FIX_3D, GPS_SATELLITES, STREAM_MESSAGES, UavSpec, _mavlink
+from .specs import COMPONENT_AUTOPILOT, GPS_FIX_3D, GPS_SATELLITES, STREAM_MESSAGES, UavSpec, _mavlink
 
 
 def run_uav(spec: UavSpec) -> dict:
     m = _mavlink()
     stop = Stop()
     sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-    sock.bind((spec.bind_ip, 0))
+    sock.bind((spec.bind_ip, spec.bind_port))
     sock.setblocking(False)
     sent, received = Counter(), Counter()
     gcs = Peer(sock, (spec.gcs_ip, spec.gcs_port), spec.sysid, COMPONENT_AUTOPILOT, sent)
+    signing.enable(gcs.mav, spec.signing)
     track = spec.track()
     spec = spec.model_copy(update={"t0_unix": await_t0(spec, stop)})
     log = Log(spec.log_path, spec.t0_unix)
@@ -29,15 +32,16 @@ def run_uav(spec: UavSpec) -> dict:
     heartbeat = Periodic(1.0, now)
     streams = {sid: Periodic(0.0, now) for sid in STREAM_MESSAGES}  # ArduCopter default: 0 Hz
     mission: dict = {"count": None, "items": {}, "from_": None, "asked": None, "seq": None, "tries": 0}
-    speed_mps: float | None = None
+    vehicle = VehicleState()
     while not stop.flag and (now := time.time()) < deadline:
         for data, addr in recv_all(sock, _wait(now, deadline, heartbeat, streams, mission, spec.retry.timeout_s)):
             for msg in gcs.parse(data):
                 typ = msg.get_type()
                 received[typ] += 1
+                if typ == "BAD_DATA" and "signature" in str(getattr(msg, "reason", "")):
+                    log("rejected", reason=msg.reason, src=f"{addr[0]}:{addr[1]}")  # signing on: no answer
                 if typ == "BAD_DATA" or msg.get_srcSystem() == spec.sysid:
                     continue
-                gcs.addr = addr  # answer where the GCS speaks from
                 if typ == "REQUEST_DATA_STREAM" and msg.target_system == spec.sysid:
                     ids = STREAM_MESSAGES if msg.req_stream_id == m.MAV_DATA_STREAM_ALL else [msg.req_stream_id]
                     for sid in ids:
@@ -55,13 +59,13 @@ def run_uav(spec: UavSpec) -> dict:
                     mission["items"][msg.seq] = (msg.x / 1e7, msg.y / 1e7, msg.z)
                     _ask_next(gcs, m, mission, spec, log)
                 elif typ == "COMMAND_LONG" and msg.target_system == spec.sysid:
-                    result = m.MAV_RESULT_UNSUPPORTED
-                    if msg.command == m.MAV_CMD_DO_CHANGE_SPEED:
-                        speed_mps, result = float(msg.param2), m.MAV_RESULT_ACCEPTED
-                    gcs.send(m.MAVLink_command_ack_message(msg.command, result, 0, 0, msg.get_srcSystem(),
-                                                           msg.get_srcComponent()))
+                    result = vehicle.command(m, msg)
+                    # the answer goes back to the sender's address (a command's link)
+                    gcs.send_to(m.MAVLink_command_ack_message(msg.command, result, 0, 0, msg.get_srcSystem(),
+                                                              msg.get_srcComponent()), addr)
                     log("command", command=int(msg.command), confirmation=int(msg.confirmation),
-                        param2=float(msg.param2), result=int(result))
+                        param2=float(msg.param2), result=int(result), src=f"{addr[0]}:{addr[1]}",
+                        mode=vehicle.custom_mode)
         now = time.time()
         t = now - spec.t0_unix
         if mission["asked"] is not None and now >= mission["asked"] + spec.retry.timeout_s:
@@ -77,13 +81,14 @@ def run_uav(spec: UavSpec) -> dict:
                 m.MAV_TYPE_QUADROTOR, m.MAV_AUTOPILOT_ARDUPILOTMEGA,
                 m.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED | m.MAV_MODE_FLAG_SAFETY_ARMED | m.MAV_MODE_FLAG_STABILIZE_ENABLED
                 | m.MAV_MODE_FLAG_GUIDED_ENABLED | m.MAV_MODE_FLAG_AUTO_ENABLED,
-                COPTER_MODE_AUTO, m.MAV_STATE_ACTIVE, 3))
+                vehicle.custom_mode, m.MAV_STATE_ACTIVE, 3))
         for sid, per in streams.items():
             if per.due(now):
                 for typ in STREAM_MESSAGES[sid]:
                     gcs.send(_telemetry(m, typ, spec, p, t))
     summary = {"node": spec.name, "sysid": spec.sysid, "sent": dict(sent), "received": dict(received),
-               "mission_items": len(mission["items"]), "last_speed_mps": speed_mps}
+               "mission_items": len(mission["items"]), "last_speed_mps": vehicle.speed_mps,
+               "custom_mode": vehicle.custom_mode}
     log("summary", **summary)
     return summary
 

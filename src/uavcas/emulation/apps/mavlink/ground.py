@@ -6,6 +6,7 @@ import socket
 import time
 from collections import Counter
 
+from . import signing
 from .link import Log, Peer, Periodic, Stop, await_t0, recv_all
 from .specs import COMPONENT_AUTOPILOT, COMPONENT_GCS, GcsSpec, GcsTarget, _mavlink
 
@@ -26,6 +27,9 @@ def run_gcs(spec: GcsSpec) -> dict:
     peers: dict[int, Peer] = {}
     state: dict[int, dict] = {}
     deadline = spec.t0_unix + spec.duration_s
+    # one signing state checks every datagram (its streams' last timestamps persist across the
+    # per-datagram parsers); each peer signs what it sends with its own
+    checks = signing.new_signing_state(spec.signing) if spec.signing is not None else None
     stream_wait_s = 2.0  # re-request streams not seen this long after a request (bounded retries)
     while not stop.flag and (now := time.time()) < deadline:
         waits = [deadline]
@@ -39,6 +43,8 @@ def run_gcs(spec: GcsSpec) -> dict:
         for data, addr in recv_all(sock, max(0.0, min(waits) - now)):
             probe = m.MAVLink(None)  # one message per datagram: a fresh parser per datagram
             probe.robust_parsing = True
+            if checks is not None:
+                probe.signing = checks
             for msg in probe.parse_buffer(data) or []:
                 typ, src = msg.get_type(), msg.get_srcSystem()
                 received[typ] += 1
@@ -47,6 +53,7 @@ def run_gcs(spec: GcsSpec) -> dict:
                 received_by[targets[src].name][typ] += 1
                 if src not in peers:
                     peers[src] = Peer(sock, addr, spec.sysid, COMPONENT_GCS, sent)
+                    signing.enable(peers[src].mav, spec.signing)
                     state[src] = {"hb": Periodic(spec.rates.heartbeat_rate_hz, time.time()), "pending": None,
                                   "pending_at": 0.0, "tries": 0, "mission_t0": time.time() - spec.t0_unix,
                                   "uploaded": False, "cmd": None, "cmd_at": 0.0, "cmd_tries": 0,

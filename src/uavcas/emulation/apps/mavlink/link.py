@@ -67,6 +67,14 @@ class Peer:
         self.mav.send(msg)
         self.sent[msg.get_type()] += 1
 
+    def send_to(self, msg, addr) -> None:
+        """One message to another address than the peer's (an answer to whoever asked)."""
+        home, self.addr = self.addr, addr
+        try:
+            self.send(msg)
+        finally:
+            self.addr = home
+
     def parse(self, data: bytes) -> list:
         return self.mav.parse_buffer(data) or []
 

@@ -10,7 +10,13 @@ from pydantic import BaseModel, ConfigDict, Field
 from uavcas.twin.model import Site
 from uavcas.twin.track import Track, local_to_geodetic
 
+from .signing import SigningSpec
+
 GCS_PORT = 14550  # the customary ground-station UDP port (MAVProxy, QGroundControl, Mission Planner)
+# The autopilot's own UDP port: fixed (the customary MAVLink port on both ends), so that a sender
+# other than its ground station (an attacker, `attacks.mavlink_inject`) can address it; a real
+# attacker would read the port from one sniffed datagram. It answers commands from any address.
+UAV_PORT = 14550
 COMPONENT_AUTOPILOT = 1  # MAV_COMP_ID_AUTOPILOT1
 COMPONENT_GCS = 190  # MAV_COMP_ID_MISSIONPLANNER, what ground stations use
 COPTER_MODE_AUTO = 3  # ArduCopter custom_mode AUTO: flying the uploaded mission
@@ -92,6 +98,8 @@ class UavSpec(_Frozen):
     gcs_ip: str
     gcs_port: int = GCS_PORT
     bind_ip: str = "0.0.0.0"
+    bind_port: int = Field(default=UAV_PORT, ge=0, le=65535)  # 0: an ephemeral port (tests)
+    signing: SigningSpec | None = None  # MAVLink 2 signing (signing.py), None: off
     site: Site
     times_s: list[float]  # the plan's track: window starts ...
     positions_m: list[tuple[float, float, float]]  # ... and the UAV's position at each
@@ -119,6 +127,7 @@ class GcsSpec(_Frozen):
     sysid: int = Field(ge=1, le=255)
     bind_ip: str = "0.0.0.0"
     port: int = GCS_PORT
+    signing: SigningSpec | None = None  # MAVLink 2 signing (signing.py), None: off
     rates: StreamRates = StreamRates()
     retry: RetrySpec = RetrySpec()
     uavs: list[GcsTarget]
