@@ -12,12 +12,13 @@ from typing import Literal, get_args
 # Attack families in canonical (alphabetical) order. The scenario codec orders attack tokens this
 # way, and class strings of compositions join in this order, which is also the order of the paper's
 # composition names (Blackhole+DoS, DDoS+Replay, ...).
-Family = Literal["blackhole", "ddos", "dos", "replay", "wormhole"]
+Family = Literal["blackhole", "ddos", "dos", "gps_spoof", "replay", "wormhole"]
 FAMILIES: tuple[str, ...] = get_args(Family)
 FAMILY_CLASS: dict[str, str] = {
     "blackhole": "Blackhole",
     "ddos": "DDoS",
     "dos": "DoS",
+    "gps_spoof": "GPSSpoofing",
     "replay": "Replay",
     "wormhole": "Wormhole",
 }
@@ -57,9 +58,10 @@ LABEL_COLUMNS: tuple[str, ...] = tuple(f"label_{f}" for f in FAMILIES)
 # over the attacker's detour; blackhole: dropped at the victim's switch), it exists only because
 # an attack packet did (provoked: the victim's SYN-ACK to a flood SYN, the RST answering that,
 # an ICMP error quoting an attack packet, an answer to an injected copy), the channel lost it on
-# a shaped link (channel_loss), or nothing did (benign). New words go at the end: stored effect
-# codes keep their meaning.
-Effect = Literal["benign", "flood", "replay", "blackhole", "wormhole", "channel_loss", "provoked"]
+# a shaped link (channel_loss), or nothing did (benign); gps_spoof: a position report the
+# victim's spoofed GPS receiver wrote (its content is the attack's). New words go at the end:
+# stored effect codes keep their meaning.
+Effect = Literal["benign", "flood", "replay", "blackhole", "wormhole", "channel_loss", "provoked", "gps_spoof"]
 EFFECTS: tuple[str, ...] = get_args(Effect)
 # One effect per packet: where several apply, the first of this order wins. A packet an attack
 # made stays that packet whatever happens to it later; one carried over a detour and then dropped
@@ -67,12 +69,13 @@ EFFECTS: tuple[str, ...] = get_args(Effect)
 # that a blackhole drops or a wormhole detours shows that other family (so a blackhole+DoS
 # victim's dropped SYN-ACK shows both families in its flow: the SYN is the flood's, the SYN-ACK
 # the blackhole's); a provoked packet lost on the channel is still provoked (the loss is the
-# channel's chance, the packet's existence the attack's).
+# channel's chance, the packet's existence the attack's). gps_spoof ranks with the made effects:
+# the spoofed report's content is the attack's whatever a detour or a drop does to it later.
 EFFECT_PRECEDENCE: tuple[str, ...] = (
-    "replay", "flood", "wormhole", "blackhole", "provoked", "channel_loss", "benign",
+    "replay", "flood", "gps_spoof", "wormhole", "blackhole", "provoked", "channel_loss", "benign",
 )  # fmt: skip
 # count as attack packets (the family that made, moved, dropped or provoked them)
-ATTACK_EFFECTS: tuple[str, ...] = ("flood", "replay", "blackhole", "wormhole", "provoked")
+ATTACK_EFFECTS: tuple[str, ...] = ("flood", "replay", "blackhole", "wormhole", "provoked", "gps_spoof")
 # Per-family counts of attack packets in a flow (the family whose attack gave the packet its effect).
 ATTACK_PACKET_COLUMNS: tuple[str, ...] = tuple(f"attack_packets_{f}" for f in FAMILIES)
 
@@ -92,7 +95,8 @@ def class_name(families: set[str] | list[str] | tuple[str, ...]) -> str:
     return "+".join(FAMILY_CLASS[f] for f in fams) if fams else BENIGN
 
 
-# The 15 classes of the paper: Benign, 5 singles, 9 complementary pairs.
+# The classes: the paper's 15 (Benign, its 5 singles, 9 complementary pairs) and each family
+# added since as a single (its compositions are in PAIRS once a preset draws them).
 PAIRS: tuple[tuple[str, str], ...] = (
     ("blackhole", "dos"),
     ("blackhole", "ddos"),
@@ -107,7 +111,7 @@ PAIRS: tuple[tuple[str, str], ...] = (
 CLASSES: tuple[str, ...] = (
     (BENIGN,) + tuple(FAMILY_CLASS[f] for f in FAMILIES) + tuple(class_name(p) for p in PAIRS)
 )
-assert len(CLASSES) == 15
+assert len(CLASSES) == 1 + len(FAMILIES) + len(PAIRS) == len(set(CLASSES))
 
 # Families that leave a flow's statistics near benign (no flood): the benchmark's "stealth" score
 # is the macro-F1 over the classes holding one of them (3 singles + every pair, 12 classes).

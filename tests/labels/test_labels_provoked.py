@@ -11,6 +11,7 @@ from uavcas.flows.assemble import assemble
 from uavcas.labels.effects import packet_truth
 from uavcas.labels.label import constructed_truth, label_flows, rule_text
 from uavcas.schema import TRUTH_COLUMNS
+from uavcas.vocabulary import FAMILIES
 
 
 def test_a_flow_of_only_provoked_packets_carries_the_provoking_family():
@@ -37,9 +38,9 @@ def test_a_flow_of_only_provoked_packets_carries_the_provoking_family():
 
 def test_constructed_truth_has_no_provoked_packets_and_the_rule_names_them():
     frame = pd.DataFrame({"packets": [3, 2], **{f"label_{f}": [f == "dos", False]
-                                                for f in ("blackhole", "ddos", "dos", "replay", "wormhole")}})
+                                                for f in FAMILIES}})
     out = constructed_truth(frame)
     assert list(out.provoked_packets) == [0, 0] and list(out.attack_packets) == [3, 0]
     text = rule_text("ours")
-    assert "provoked" in text and "replay > flood > wormhole > blackhole > provoked > channel_loss > benign" in text
-    assert text.count("provoked: ") == 5  # one provoked rule per family
+    assert "provoked" in text and "replay > flood > gps_spoof > wormhole > blackhole > provoked > channel_loss > benign" in text
+    assert text.count("provoked: ") == len(FAMILIES)  # one provoked rule per family

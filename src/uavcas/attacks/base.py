@@ -23,6 +23,8 @@ from typing import TYPE_CHECKING, Any, ClassVar
 import numpy as np
 from pydantic import BaseModel, ConfigDict
 
+from uavcas.vocabulary import PAYLOADS
+
 if TYPE_CHECKING:
     from uavcas.emulation.attacks import AttackExecutor
     from uavcas.emulation.controller import Detour
@@ -105,6 +107,9 @@ class AttackFamily(ABC):
     min_uavs: ClassVar[int] = 2  # attacker(s) + victim
     routes_attack_traffic: ClassVar[bool] = False  # the plan routes attacker -> victim paths
     detours_traffic: ClassVar[bool] = False  # the plan detours victim <-> BS through the attacker
+    # the scenario payloads whose traffic the attack acts on (the codec refuses the others), and why
+    payloads: ClassVar[tuple[str, ...]] = PAYLOADS
+    payloads_why: ClassVar[str] = ""
 
     # codec -------------------------------------------------------------------------------------
     def parse(self, arg: str | None, tok: str) -> SpecBase:
@@ -123,6 +128,12 @@ class AttackFamily(ABC):
 
     def attackers(self, spec: SpecBase, draw: ScheduleDraw) -> list[str]:
         return draw.take(1)
+
+    def drawn_params(self, spec: SpecBase, draw: ScheduleDraw) -> dict[str, float | int | str]:
+        """Parameters the schedule draws (seeded, from `draw.rng`, after `attackers`), recorded in
+        the plan attack's `params` beside `params(spec)`. Default: none (no draw, so the schedules
+        of the families that draw nothing do not change)."""
+        return {}
 
     # executor ----------------------------------------------------------------------------------
     def calibration_times(self, attack: "Attack") -> list[float]:

@@ -44,7 +44,8 @@ LabelMode = Literal["ours", "paper"]
 LABEL_MODES: tuple[str, ...] = ("ours", "paper")
 PAPER_SOURCE = "ip-membership"
 # Order of the parts of a label_source value (fixed: datasets compare across versions).
-SOURCES: tuple[str, ...] = ("flood-packets", "replay-injections", "blackhole-drops", "wormhole-detour", PAPER_SOURCE)
+SOURCES: tuple[str, ...] = ("flood-packets", "replay-injections", "blackhole-drops", "wormhole-detour",
+                            "gps-spoof-reports", PAPER_SOURCE)
 assert {f.label_source for f in families()} <= set(SOURCES), "a family's label_source is missing from SOURCES"
 
 

@@ -176,6 +176,12 @@ def parse(text: str) -> Scenario:
         tx_dbm=int_field("tx_dbm", raw["tx_dbm"], 0, 60),
         noise=int_field("noise", raw["noise"], 30, 200),
     )
+    for a in attacks:
+        fam = family(a.family)
+        if sc.payload not in fam.payloads:
+            why = f" ({fam.payloads_why})" if fam.payloads_why else ""
+            raise ScenarioError(f"field 'payload': {a.family} needs payload {' or '.join(fam.payloads)}{why}, "
+                                f"got {sc.payload!r}")
     # Only the order of attack tokens may differ from the canonical form; e.g. leading zeros are
     # refused by int_field already (belt and braces).
     expected = "-".join([sc.attacks_token] + fields[1:])

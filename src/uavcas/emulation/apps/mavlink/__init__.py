@@ -34,14 +34,16 @@ log JSON lines to `log_path`: one line per mission upload, command and ack as th
 final `summary` line with sent/received message counts per type.
 
 Modules: `specs` (the typed specs and what the plan gives them), `link` (what both endpoints
-share: t0, the UDP peer, the log), `autopilot` (the UAV end), `ground` (the GCS end).
+share: t0, the UDP peer, the log), `autopilot` (the UAV end), `ground` (the GCS end), `gps` (the
+UAV's GPS receiver: true fixes, or a spoofer's that the `gps_spoof` attack publishes at run time).
 
 Run: python -m uavcas.emulation.apps.mavlink {uav|gcs} SPEC.json
 """
 
+from . import gps
 from .link import T0_WAIT_S, read_log, write_t0
 from .specs import (GCS_PORT, BatterySpec, GcsSpec, GcsTarget, RetrySpec, StreamRates, UavSpec, gcs_target,
                     uav_spec)
 
-__all__ = ["GCS_PORT", "T0_WAIT_S", "BatterySpec", "GcsSpec", "GcsTarget", "RetrySpec", "StreamRates", "UavSpec",
+__all__ = ["gps", "GCS_PORT", "T0_WAIT_S", "BatterySpec", "GcsSpec", "GcsTarget", "RetrySpec", "StreamRates", "UavSpec",
            "gcs_target", "read_log", "uav_spec", "write_t0"]
