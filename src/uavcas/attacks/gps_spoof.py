@@ -54,7 +54,7 @@ if TYPE_CHECKING:
 DEFAULT_DRIFT_MPS = 3.0  # module docstring
 MAX_DRIFT_MPS = 100.0
 LURE_MIN_M, LURE_MAX_M = 200.0, 1000.0
-_DRIFT = re.compile(r"^(0|[1-9][0-9]*)(\.[0-9]?[1-9])?$")  # canonical: no leading or trailing zeros
+_DRIFT = re.compile(r"^(0|[1-9][0-9]*)(\.[0-9]{1,2})?$")  # the codec then asks for the canonical form
 
 
 class GpsSpoofSpec(SpecBase):
