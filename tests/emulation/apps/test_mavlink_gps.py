@@ -100,3 +100,73 @@ def test_the_stop_is_seen_by_a_receiver_polling_meanwhile(tmp_path):
     time.sleep(max(0.0, stop[0] - time.time()))
     t = rx.settle()
     assert rx.spoof.stop_unix == stop[0] and t >= stop[0] and not rx.spoof.active(t)
+
+
+@pytest.mark.slow
+def test_autopilot_reports_the_spoofers_drift_between_the_logged_times(tmp_path):
+    """The real endpoints on 127.0.0.1 (as test_mavlink_units), the real executor publishing the
+    plan's gps_spoof attack mid-run: the reports decided inside the logged [start, stop) carry the
+    drift, the others the track, and the autopilot counts them."""
+    import subprocess
+    import sys
+
+    from test_mavlink_units import Relay, _free_port, _parse_each
+
+    from uavcas.emulation.apps import mavlink as mv
+    from uavcas.emulation.attacks import AttackExecutor
+    from uavcas.twin import plan
+    from uavcas.twin.track import geodetic_to_local
+
+    p = plan("gps_spoof=5-6-2-telemetry-logdist-adaptive-random-30-95", seed=14, windows=4, window_s=1.5)
+    (att,) = p.attacks
+    att = att.model_copy(update={"start_s": 2.0, "stop_s": 4.0})  # inside the 6 s run, after the streams start
+    victim = att.victims[0]
+    gcs_port = _free_port()
+    relay = Relay(gcs_port)
+    relay.drop_once = set()
+    relay.start()
+    dur, t0_path, apps = p.duration_s + 0.5, tmp_path / "t0", tmp_path / "apps"
+    gspec = mv.GcsSpec(name="bs0", sysid=p.node("bs0").sysid, bind_ip="127.0.0.1", port=gcs_port,
+                       uavs=[mv.gcs_target(p, victim)], t0_path=t0_path, window_s=p.window_s, n_windows=4,
+                       duration_s=dur, log_path=tmp_path / "mavlink-bs0.jsonl")
+    uspec = mv.uav_spec(p, victim, "127.0.0.1", None, dur, tmp_path / "mavlink-uav.jsonl", gcs_port=relay.port,
+                        t0_path=t0_path, gps_path=control_path(apps, victim))
+    (tmp_path / "g.json").write_text(gspec.model_dump_json())
+    (tmp_path / "u.json").write_text(uspec.model_dump_json())
+    run = [sys.executable, "-m", "uavcas.emulation.apps.mavlink"]
+    procs = [subprocess.Popen(run + [role, str(tmp_path / f"{role[0]}.json")], stdout=subprocess.PIPE,
+                              stderr=subprocess.PIPE, text=True) for role in ("gcs", "uav")]
+    ex = AttackExecutor(None, p, apps, p.duration_s)
+    try:
+        assert [proc.stdout.readline().strip() for proc in procs] == ["ready", "ready"]
+        t0 = time.time()
+        mv.write_t0(t0_path, t0)
+        time.sleep(max(0.0, t0 + att.start_s - time.time()))
+        start = ex.start(att).t_unix
+        time.sleep(max(0.0, t0 + att.stop_s - time.time()))
+        stop = ex.stop(att).t_unix
+        for proc in procs:
+            _, err = proc.communicate(timeout=dur + 10)
+            assert proc.returncode == 0, err[-1000:]
+    finally:
+        relay.stop = True
+        relay.join(2)
+        for proc in procs:
+            proc.kill()
+
+    b, inside, outside = math.radians(att.params["lure_bearing_deg"]), 0, 0
+    track = Track.of(p, victim)
+    for _, m in _parse_each(relay.up):
+        if m.get_type() not in ("GLOBAL_POSITION_INT", "GPS_RAW_INT"):
+            continue
+        ms = m.time_boot_ms if m.get_type() == "GLOBAL_POSITION_INT" else m.time_usec / 1000
+        t = t0 + ms / 1000
+        x, y, _ = geodetic_to_local(p.site, m.lat / 1e7, m.lon / 1e7, m.alt / 1000)
+        q = track.at(ms / 1000)
+        spoofed = start <= t < stop
+        d = min(5.0 * (t - start), att.params["lure_distance_m"]) if spoofed else 0.0
+        assert abs(x - q.x_m - d * math.sin(b)) < 0.05 and abs(y - q.y_m - d * math.cos(b)) < 0.05, (t - t0, d)
+        inside, outside = inside + spoofed, outside + (not spoofed)
+    assert inside >= 2 * 4 * 1.5 and outside >= 2 * 4 * 1.5  # both reports at 4 Hz, >= 1.5 s each side
+    summary = next(e for e in mv.read_log(uspec.log_path) if e["event"] == "summary")
+    assert summary["gps"] == {"spoofed": inside, "straddled": 0}
