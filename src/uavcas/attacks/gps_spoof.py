@@ -138,8 +138,9 @@ class GpsSpoof(AttackFamily):
     def effects(self, ctx: "TruthContext", windows: list["AttackWindow"]) -> np.ndarray:
         from pymavlink.dialects.v20 import common
 
-        # the message ids of the reports a GPS fix feeds (gps.POSITION_MESSAGES): 24 and 33
-        ids = [getattr(common, f"MAVLINK_MSG_ID_{name}") for name in ("GPS_RAW_INT", "GLOBAL_POSITION_INT")]
+        from uavcas.emulation.apps.mavlink.gps import POSITION_MESSAGES
+
+        ids = [getattr(common, f"MAVLINK_MSG_ID_{name}") for name in POSITION_MESSAGES]  # 33 and 24
         reports = np.isin(ctx.packets["mav_msgid"], ids)
         hit = np.zeros(ctx.n, dtype=bool)
         for w in windows:
