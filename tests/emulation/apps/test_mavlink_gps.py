@@ -107,10 +107,7 @@ def test_autopilot_reports_the_spoofers_drift_between_the_logged_times(tmp_path)
     """The real endpoints on 127.0.0.1 (as test_mavlink_units), the real executor publishing the
     plan's gps_spoof attack mid-run: the reports decided inside the logged [start, stop) carry the
     drift, the others the track, and the autopilot counts them."""
-    import subprocess
-    import sys
-
-    from test_mavlink_units import Relay, _free_port, _parse_each
+    from test_mavlink_units import Relay, _free_port, _parse_each, run_endpoints
 
     from uavcas.emulation.apps import mavlink as mv
     from uavcas.emulation.attacks import AttackExecutor
@@ -131,28 +128,17 @@ def test_autopilot_reports_the_spoofers_drift_between_the_logged_times(tmp_path)
                        duration_s=dur, log_path=tmp_path / "mavlink-bs0.jsonl")
     uspec = mv.uav_spec(p, victim, "127.0.0.1", None, dur, tmp_path / "mavlink-uav.jsonl", gcs_port=relay.port,
                         t0_path=t0_path, gps_path=control_path(apps, victim))
-    (tmp_path / "g.json").write_text(gspec.model_dump_json())
-    (tmp_path / "u.json").write_text(uspec.model_dump_json())
-    run = [sys.executable, "-m", "uavcas.emulation.apps.mavlink"]
-    procs = [subprocess.Popen(run + [role, str(tmp_path / f"{role[0]}.json")], stdout=subprocess.PIPE,
-                              stderr=subprocess.PIPE, text=True) for role in ("gcs", "uav")]
     ex = AttackExecutor(None, p, apps, p.duration_s)
-    try:
-        assert [proc.stdout.readline().strip() for proc in procs] == ["ready", "ready"]
-        t0 = time.time()
-        mv.write_t0(t0_path, t0)
+    times: dict[str, float] = {}
+
+    def attack(t0: float) -> None:  # the runner's schedule, in short
         time.sleep(max(0.0, t0 + att.start_s - time.time()))
-        start = ex.start(att).t_unix
+        times["start"] = ex.start(att).t_unix
         time.sleep(max(0.0, t0 + att.stop_s - time.time()))
-        stop = ex.stop(att).t_unix
-        for proc in procs:
-            _, err = proc.communicate(timeout=dur + 10)
-            assert proc.returncode == 0, err[-1000:]
-    finally:
-        relay.stop = True
-        relay.join(2)
-        for proc in procs:
-            proc.kill()
+        times["stop"] = ex.stop(att).t_unix
+
+    t0 = run_endpoints(tmp_path, gspec, uspec, relay, attack)
+    start, stop = times["start"], times["stop"]
 
     b, inside, outside = math.radians(att.params["lure_bearing_deg"]), 0, 0
     track = Track.of(p, victim)
