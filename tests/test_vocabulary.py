@@ -30,6 +30,7 @@ def test_families_are_canonical_and_classes_join_in_that_order():
     assert len(v.CLASSES) == len(set(v.CLASSES)) == 1 + len(v.FAMILIES) + len(v.PAIRS)
     paper = {"Benign", "Blackhole", "DDoS", "DoS", "Replay", "Wormhole"} | {v.class_name(p) for p in v.PAIRS}
     assert len(paper) == 15 and paper <= set(v.CLASSES)  # the paper's 15 classes are all there
+    assert v.CLASSES[:1] == (v.BENIGN,) and {"GPSSpoofing", "Jamming", "MAVLinkInjection"} <= set(v.CLASSES)
     with pytest.raises(ValueError, match="teleport"):
         v.class_name(["teleport"])
 

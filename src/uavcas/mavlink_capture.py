@@ -28,6 +28,11 @@ Columns (`COLUMNS`, then `POSITION_COLUMNS`, then effect and family):
   good message, else missing), fields_json (the decoded fields as a JSON object; missing unless
   crc_ok), the position fields the message has in its own units (`POSITION_COLUMNS`,
   `<field>_<unit>`, e.g. lat_degE7, alt_mm, vx_cm_s, hdg_cdeg; missing where it has none),
+  offset_east_m, offset_north_m, offset_up_m float64 (`OFFSET_COLUMNS`: a UAV's position report,
+  GLOBAL_POSITION_INT or GPS_RAW_INT with a good CRC, minus the plan's track of the UAV with that
+  sysid at the message's own time, time_boot_ms (ms since the run's t0), both in the plan's
+  tangent plane at `Plan.site`; ~0 for a true report (lat/lon in 1e-7 degrees: ~1 cm), the
+  spoofer's drift for a `gps_spoof` victim's; missing for other messages),
   effect (`vocabulary.EFFECTS`) and family (`vocabulary.FAMILIES`; missing for benign and
   channel_loss).
 For a row whose CRC failed, sysid/compid/seq/msg_id/msg_name are what its header claims.
@@ -79,8 +84,12 @@ COLUMNS: dict[str, str] = {
 }  # fmt: skip
 # what one datagram's decoding gives (the rest of COLUMNS comes from the packet table)
 DECODED_COLUMNS: tuple[str, ...] = ("msg_index", *list(COLUMNS)[list(COLUMNS).index("mavlink_version"):])
+OFFSET_COLUMNS: dict[str, str] = {"offset_east_m": "float64", "offset_north_m": "float64", "offset_up_m": "float64"}
+# the reports a GPS fix feeds, and the field holding each one's time since boot, in ms per unit
+REPORT_TIME_FIELDS: dict[str, tuple[str, float]] = {"GLOBAL_POSITION_INT": ("time_boot_ms", 1.0),
+                                                    "GPS_RAW_INT": ("time_usec", 1e-3)}
 TRUTH_COLUMNS: dict[str, str] = {"effect": "object", "family": "object"}
-ALL_COLUMNS: dict[str, str] = {**COLUMNS, **POSITION_COLUMNS, **TRUTH_COLUMNS}
+ALL_COLUMNS: dict[str, str] = {**COLUMNS, **POSITION_COLUMNS, **OFFSET_COLUMNS, **TRUTH_COLUMNS}
 UDP = 17
 UDP_HEADER = 8
 V1_MAGIC, V2_MAGIC = 0xFE, 0xFD
@@ -218,6 +227,7 @@ class RunPackets:
     """A run's packet table, its capture files (one per point) and every row's truth."""
 
     packets: Any  # uavcas.flows.PacketTable
+    plan: Any  # uavcas.twin.model.Plan
     pcaps: list[Path]
     effect: np.ndarray  # int8 per row, index into EFFECTS
     family: np.ndarray  # int8 per row, index into FAMILIES, -1: none
@@ -234,7 +244,7 @@ def run_packets(run_dir: str | Path, allow_truncated: bool = False) -> RunPacket
     plan, pcaps, t0 = run_inputs(rd)
     packets = read_packets(pcaps, points=[p.stem for p in pcaps], allow_truncated=allow_truncated)
     _, _, truth = run_truth(rd, packets, plan, t0)
-    return RunPackets(packets, pcaps, truth.effect, truth.family)
+    return RunPackets(packets, plan, pcaps, truth.effect, truth.family)
 
 
 def mavlink_rows(packets, port: int = MAVLINK_PORT) -> np.ndarray:
@@ -286,10 +296,32 @@ def mavlink_table(run_dir: str | Path, port: int = MAVLINK_PORT, point: str | No
         "packet_row": r.astype(np.int64), "frame_index": p["frame_index"][r],
     })  # fmt: skip
     out = pd.concat([out, msgs], axis=1)
+    out = pd.concat([out, report_offsets(out, rp.plan)], axis=1)
     out["effect"] = np.asarray(EFFECTS, dtype=object)[rp.effect[r].astype(np.int64)]
     out["family"] = np.where(fam >= 0, np.asarray(FAMILIES, dtype=object)[np.maximum(fam, 0)], None)
     out = out[list(ALL_COLUMNS)].astype(ALL_COLUMNS)
     return out.sort_values(["ts_ns", "point", "packet_row", "msg_index"], kind="stable").reset_index(drop=True)
+
+
+def report_offsets(table: pd.DataFrame, plan) -> pd.DataFrame:
+    """`OFFSET_COLUMNS` of each row of `table` (module docstring): claimed minus true position of a
+    UAV's good GLOBAL_POSITION_INT / GPS_RAW_INT, in metres east, north, up; NaN elsewhere."""
+    from uavcas.twin.track import Track, geodetic_to_local
+
+    out = pd.DataFrame(np.nan, index=table.index, columns=list(OFFSET_COLUMNS))
+    uav_of = {n.sysid: n.name for n in plan.nodes if n.kind == "uav" and n.sysid is not None}
+    tracks: dict[str, Track] = {}
+    good = table["crc_ok"].fillna(False).astype(bool) & table["msg_name"].isin(list(REPORT_TIME_FIELDS))
+    for i, row in table[good].iterrows():
+        uav = uav_of.get(int(row["sysid"]))
+        if uav is None:
+            continue
+        fields = json.loads(row["fields_json"])
+        name, per_ms = REPORT_TIME_FIELDS[row["msg_name"]]
+        true = (tracks.get(uav) or tracks.setdefault(uav, Track.of(plan, uav))).at(fields[name] * per_ms / 1000.0)
+        x, y, z = geodetic_to_local(plan.site, fields["lat"] / 1e7, fields["lon"] / 1e7, fields["alt"] / 1000.0)
+        out.loc[i] = (x - true.x_m, y - true.y_m, z - true.z_m)
+    return out
 
 
 def problems(table: pd.DataFrame) -> list[str]:

@@ -12,12 +12,13 @@ from typing import Literal, get_args
 # Attack families in canonical (alphabetical) order. The scenario codec orders attack tokens this
 # way, and class strings of compositions join in this order, which is also the order of the paper's
 # composition names (Blackhole+DoS, DDoS+Replay, ...).
-Family = Literal["blackhole", "ddos", "dos", "jamming", "mavlink_inject", "replay", "wormhole"]
+Family = Literal["blackhole", "ddos", "dos", "gps_spoof", "jamming", "mavlink_inject", "replay", "wormhole"]
 FAMILIES: tuple[str, ...] = get_args(Family)
 FAMILY_CLASS: dict[str, str] = {
     "blackhole": "Blackhole",
     "ddos": "DDoS",
     "dos": "DoS",
+    "gps_spoof": "GPSSpoofing",
     "jamming": "Jamming",
     "mavlink_inject": "MAVLinkInjection",
     "replay": "Replay",
@@ -68,10 +69,11 @@ LABEL_COLUMNS: tuple[str, ...] = tuple(f"label_{f}" for f in FAMILIES)
 # an attack packet did (provoked: the victim's SYN-ACK to a flood SYN, the RST answering that,
 # an ICMP error quoting an attack packet, an answer to an injected copy), the channel lost it on
 # a shaped link (channel_loss), a jammer's interference lost or slowed it on a jammed link
-# (jamming), an attacker forged it as a MAVLink command (mavlink_inject), or nothing did (benign).
-# New words go at the end: stored effect codes keep their meaning.
+# (jamming), an attacker forged it as a MAVLink command (mavlink_inject), the victim's spoofed GPS
+# receiver wrote it as a position report (gps_spoof: its content is the attack's), or nothing did
+# (benign). New words go at the end: stored effect codes keep their meaning.
 Effect = Literal["benign", "flood", "replay", "blackhole", "wormhole", "channel_loss", "provoked", "jamming",
-                 "mavlink_inject"]
+                 "mavlink_inject", "gps_spoof"]
 EFFECTS: tuple[str, ...] = get_args(Effect)
 # One effect per packet: where several apply, the first of this order wins. A packet an attack
 # made stays that packet whatever happens to it later; one carried over a detour and then dropped
@@ -79,16 +81,19 @@ EFFECTS: tuple[str, ...] = get_args(Effect)
 # that a blackhole drops or a wormhole detours shows that other family (so a blackhole+DoS
 # victim's dropped SYN-ACK shows both families in its flow: the SYN is the flood's, the SYN-ACK
 # the blackhole's); a provoked packet lost on the channel is still provoked (the loss is the
-# channel's chance, the packet's existence the attack's). mavlink_inject sits with the other "made"
-# effects (replay, flood): a forged command stays forged whatever later carries or drops it.
-# Jamming ranks below every effect that made, moved, dropped or provoked a packet (those say why the
-# packet exists or where it went; the jammer only changed the channel it crossed) and above
-# channel_loss: a loss on a jammed link inside the jammer's window is the jammer's, not chance.
+# channel's chance, the packet's existence the attack's). mavlink_inject and gps_spoof sit with the
+# other "made" effects (replay, flood): a forged command or a spoofed report stays the attack's
+# whatever later carries or drops it. Jamming ranks below every effect that made, moved, dropped or
+# provoked a packet (those say why the packet exists or where it went; the jammer only changed the
+# channel it crossed) and above channel_loss: a loss on a jammed link inside the jammer's window is
+# the jammer's, not chance.
 EFFECT_PRECEDENCE: tuple[str, ...] = (
-    "replay", "flood", "mavlink_inject", "wormhole", "blackhole", "provoked", "jamming", "channel_loss", "benign",
+    "replay", "flood", "mavlink_inject", "gps_spoof", "wormhole", "blackhole", "provoked", "jamming",
+    "channel_loss", "benign",
 )  # fmt: skip
 # count as attack packets (the family that made, moved, dropped or provoked them)
-ATTACK_EFFECTS: tuple[str, ...] = ("flood", "replay", "blackhole", "wormhole", "provoked", "jamming", "mavlink_inject")
+ATTACK_EFFECTS: tuple[str, ...] = ("flood", "replay", "blackhole", "wormhole", "provoked", "jamming", "mavlink_inject",
+                                   "gps_spoof")
 # Per-family counts of attack packets in a flow (the family whose attack gave the packet its effect).
 ATTACK_PACKET_COLUMNS: tuple[str, ...] = tuple(f"attack_packets_{f}" for f in FAMILIES)
 
@@ -108,8 +113,8 @@ def class_name(families: set[str] | list[str] | tuple[str, ...]) -> str:
     return "+".join(FAMILY_CLASS[f] for f in fams) if fams else BENIGN
 
 
-# The classes: Benign, one per family, the 9 complementary pairs of the paper (whose 15 classes are
-# Benign, its 5 singles and these pairs).
+# The classes: the paper's 15 (Benign, its 5 singles, 9 complementary pairs) and each family
+# added since as a single (its compositions are in PAIRS once a preset draws them).
 PAIRS: tuple[tuple[str, str], ...] = (
     ("blackhole", "dos"),
     ("blackhole", "ddos"),

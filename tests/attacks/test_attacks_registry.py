@@ -40,8 +40,8 @@ def test_register_refuses_names_outside_the_vocabulary_and_duplicates():
 @pytest.mark.parametrize("name", FAMILIES)
 def test_each_token_parses_through_its_family_and_reads_back(name):
     tok = {"dos": "dos=250", "ddos": "ddos=500", "replay": "replay=7,0,3,1,zero", "jamming": "jamming=20",
-           "mavlink_inject": "mavlink_inject=land"}.get(name, name)
-    payload = (family(name).payloads or ("image",))[0]  # one the family acts on
+           "mavlink_inject": "mavlink_inject=land", "gps_spoof": "gps_spoof=2.5"}.get(name, name)
+    payload = "image" if "image" in family(name).payloads else family(name).payloads[0]
     sc = parse(f"{tok}-9-2-{payload}-logdist-adaptive-grid-30-95")
     (spec,) = sc.attacks
     assert spec.family == name and spec.token() == tok

@@ -21,8 +21,9 @@ _DTYPES = {"ts_ns": np.int64, "ip_len": np.uint32, "frame_len": np.uint32, "cap_
            "src_hi": np.uint64, "src_lo": np.uint64, "dst_hi": np.uint64, "dst_lo": np.uint64, "sport": np.uint16,
            "dport": np.uint16, "proto": np.uint8, "tcp_flags": np.uint16, "ttl": np.uint8, "ip_id": np.uint32,
            "tcp_seq": np.uint32, "tcp_ack": np.uint32, "ip_hdr_len": np.uint16, "l4_hdr_len": np.uint16, "frame_index": np.int64,
-           "point": np.int16, **{c: empty_columns()[c].dtype for c in QUOTE_COLUMNS}}
-QUOTE_ZERO = {c: 0 for c in QUOTE_COLUMNS}  # TCP only: no ICMP error quotes a packet
+           "point": np.int16, **{c: empty_columns()[c].dtype for c in QUOTE_COLUMNS},
+           "mav_msgid": np.int32}
+QUOTE_ZERO = {**{c: 0 for c in QUOTE_COLUMNS}, "mav_msgid": -1}  # TCP only: no ICMP error quotes a packet
 
 
 def table(obs: list[dict], ips: dict[str, str] = IPS) -> PacketTable:

@@ -42,7 +42,7 @@ PLAN = _plan()
 TL = Timeline.from_plan(PLAN, T0)
 
 
-QUOTE_ZERO = {c: 0 for c in QUOTE_COLUMNS}  # no ICMP error quotes a packet here
+QUOTE_ZERO = {**{c: 0 for c in QUOTE_COLUMNS}, "mav_msgid": -1}  # no ICMP error quotes a packet here
 
 
 def _table(rows: list[dict]) -> PacketTable:
@@ -63,7 +63,8 @@ def _table(rows: list[dict]) -> PacketTable:
               "src_hi": np.uint64, "src_lo": np.uint64, "dst_hi": np.uint64, "dst_lo": np.uint64,
               "sport": np.uint16, "dport": np.uint16, "proto": np.uint8, "tcp_flags": np.uint16, "ttl": np.uint8,
               "ip_id": np.uint32, "tcp_seq": np.uint32, "tcp_ack": np.uint32, "ip_hdr_len": np.uint16, "l4_hdr_len": np.uint16,
-              "frame_index": np.int64, "point": np.int16, **{c: empty_columns()[c].dtype for c in QUOTE_COLUMNS}}
+              "frame_index": np.int64, "point": np.int16, **{c: empty_columns()[c].dtype for c in QUOTE_COLUMNS},
+              "mav_msgid": np.int32}
     return PacketTable({c: np.array(v, dtype=dtypes[c]) for c, v in cols.items()}, POINTS)
 
 

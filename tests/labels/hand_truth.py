@@ -23,9 +23,9 @@ POINTS = tuple(f"s-{n}" for n in NODES)
 
 
 def pkt(t, src, dst, sport=0, dport=0, flags=0, seq=0, ack=0, ip_id=0, ttl=64, payload=0, proto=6, at=None,
-        quote=None) -> dict:
+        quote=None, mav_msgid=-1) -> dict:
     return dict(t=t, src=src, dst=dst, sport=sport, dport=dport, flags=flags, seq=seq, ack=ack, ip_id=ip_id, ttl=ttl,
-                payload=payload, proto=proto, at=at or [src, dst], quote=quote)
+                payload=payload, proto=proto, at=at or [src, dst], quote=quote, mav_msgid=mav_msgid)
 
 
 def icmp_error(t, src, dst, quote: dict, ip_id=0) -> dict:
@@ -54,7 +54,7 @@ def table(packets: list[dict]) -> PacketTable:
                     "sport": p["sport"], "dport": p["dport"], "proto": p["proto"], "tcp_flags": p["flags"],
                     "ttl": p["ttl"], "ip_id": p["ip_id"], "tcp_seq": p["seq"], "tcp_ack": p["ack"], "ip_len": ip_len,
                     "ip_hdr_len": 20, "l4_hdr_len": l4, "frame_index": k, "point": POINTS.index(f"s-{node}"),
-                    **quoted}
+                    "mav_msgid": p["mav_msgid"], **quoted}
             k += 1
             for c in COLUMNS:
                 cols[c].append(vals[c])

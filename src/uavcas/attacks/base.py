@@ -24,6 +24,8 @@ from typing import TYPE_CHECKING, Any, ClassVar
 import numpy as np
 from pydantic import BaseModel, ConfigDict
 
+from uavcas.vocabulary import PAYLOADS
+
 if TYPE_CHECKING:
     from uavcas.emulation.attacks import AttackExecutor
     from uavcas.emulation.controller import Detour
@@ -128,9 +130,10 @@ class AttackFamily(ABC):
     routes_attack_traffic: ClassVar[bool] = False  # the plan routes attacker -> victim paths
     # families of one group cannot be combined in a composition (the floods: one flood per run)
     exclusive_group: ClassVar[str | None] = None
-    # the scenario payloads whose traffic the family acts on (None: any payload)
-    payloads: ClassVar[tuple[str, ...] | None] = None
     detours_traffic: ClassVar[bool] = False  # the plan detours victim <-> BS through the attacker
+    # the scenario payloads whose traffic the attack acts on (the codec refuses the others), and why
+    payloads: ClassVar[tuple[str, ...]] = PAYLOADS
+    payloads_why: ClassVar[str] = ""
 
     # codec -------------------------------------------------------------------------------------
     def parse(self, arg: str | None, tok: str) -> SpecBase:
@@ -154,6 +157,12 @@ class AttackFamily(ABC):
         """The radio emitter this attack places (the plan adds its interference to the links'
         noise floor while the attack lasts: `twin.interference`). Default: none."""
         return None
+
+    def drawn_params(self, spec: SpecBase, draw: ScheduleDraw) -> dict[str, float | int | str]:
+        """Parameters the schedule draws (seeded, from `draw.rng`, after `attackers`), recorded in
+        the plan attack's `params` beside `params(spec)`. Default: none (no draw, so the schedules
+        of the families that draw nothing do not change)."""
+        return {}
 
     # executor ----------------------------------------------------------------------------------
     def calibration_times(self, attack: "Attack") -> list[float]:

@@ -97,6 +97,7 @@ class MavlinkInject(AttackFamily):
     python_modules = ("pymavlink",)
     routes_attack_traffic = True  # the attacker -> victim path must exist in the forwarding
     payloads = MAVLINK_PAYLOADS
+    payloads_why = "it forges MAVLink commands, which image traffic does not carry"
 
     def parse(self, arg: str | None, tok: str) -> MavlinkInjectSpec:
         if not arg:

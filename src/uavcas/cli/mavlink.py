@@ -23,8 +23,9 @@ def mavlink_cmd(
     allow_truncated: bool = typer.Option(False, "--allow-truncated", help="Keep the packets before a truncation."),
 ) -> None:
     """Decode every MAVLink message of a run's captures: one row per message and capture point, with
-    time, addresses, header, fields (JSON and position columns in the message's units), CRC check
-    and the packet's effect and family from the ground truth."""
+    time, addresses, header, fields (JSON and position columns in the message's units), CRC check,
+    a position report's offset from the plan's track (claimed minus true, metres east/north/up: a
+    spoofed GPS's drift) and the packet's effect and family from the ground truth."""
     from uavcas.mavlink_capture import mavlink_table, problems
 
     if out is not None and out.suffix.lower() not in OUT_SUFFIXES:
@@ -58,12 +59,14 @@ def _print(df, point: str | None) -> None:
 
     where = f"at {point}" if point else "over all capture points (one row per observation)"
     table = Table(title=f"{len(df)} MAVLink rows {where}")
-    for c in ("ts_s", "point", "src", "dst", "sysid", "compid", "seq", "msg_name", "crc_ok", "effect"):
-        table.add_column(c, justify="right" if c in ("sysid", "compid", "seq") else "left")
+    for c in ("ts_s", "point", "src", "dst", "sysid", "compid", "seq", "msg_name", "crc_ok", "offset e/n/u m",
+              "effect"):
+        table.add_column(c, justify="right" if c in ("sysid", "compid", "seq", "offset e/n/u m") else "left")
     na = lambda v: "-" if pd.isna(v) else str(v)  # noqa: E731  (None, NaN and pd.NA alike)
     for r in df.head(TABLE_ROWS).itertuples(index=False):
+        off = "-" if pd.isna(r.offset_east_m) else f"{r.offset_east_m:.2f}/{r.offset_north_m:.2f}/{r.offset_up_m:.2f}"
         table.add_row(f"{r.ts_s:.6f}", str(r.point), f"{r.src_ip}:{r.src_port}", f"{r.dst_ip}:{r.dst_port}",
-                      na(r.sysid), na(r.compid), na(r.seq), na(r.msg_name), na(r.crc_ok), str(r.effect))
+                      na(r.sysid), na(r.compid), na(r.seq), na(r.msg_name), na(r.crc_ok), off, str(r.effect))
     if len(df) > TABLE_ROWS:
         table.caption = f"first {TABLE_ROWS} of {len(df)} rows; use --out FILE.parquet for all"
     wide = Console(width=max(console.width, 140))  # addresses must not be cut

@@ -106,7 +106,7 @@ def _benign_mean_iat(n_uav: int, tx_dbm: int, mission: str, pathloss: str) -> fl
 def _packet_table(seqs, src_ips: list[int], src_ports: list[int], dst_ip: int, dst_port: int):
     """The packets of the flows `seqs` as a uavcas.flows packet table (TCP over IPv4, one capture
     point), so the synthetic features come from the real extractor."""
-    from uavcas.flows.packets import COLUMNS, QUOTE_COLUMNS, PacketTable, empty_columns
+    from uavcas.flows.packets import COLUMNS, NO_MAVLINK, QUOTE_COLUMNS, PacketTable, empty_columns
 
     n = np.array([len(s[0]) for s in seqs], dtype=np.int64)
     fid = np.repeat(np.arange(len(seqs)), n)
@@ -142,6 +142,7 @@ def _packet_table(seqs, src_ips: list[int], src_ports: list[int], dst_ip: int, d
     }
     # no ICMP errors: nothing quoted
     cols.update({c: np.zeros(total, empty[c].dtype) for c in QUOTE_COLUMNS})
+    cols["mav_msgid"] = np.full(total, NO_MAVLINK, empty["mav_msgid"].dtype)  # TCP: no MAVLink
     assert tuple(cols) == COLUMNS
     return PacketTable(cols, ("s-synthetic",))
 

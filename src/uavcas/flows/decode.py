@@ -21,6 +21,17 @@ packets); they are 0 for every other packet and for an error whose quote (IP hea
 was not captured. A quoted IPv6 packet's extension headers are not walked: its `q_proto` is then
 the first extension header and its ports stay 0.
 
+MAVLink (`mav_msgid`): the message id of the first MAVLink frame a UDP datagram starts with, -1
+for every other packet. Decoded here, vectorised like every other field, from the frame header
+alone (MAVLink 2, 0xFD: len at byte 1, incompat_flags at byte 2, the 24-bit id little-endian at
+bytes 7-9, frame = 10 + len + 2 CRC (+ 13 signature when incompat_flags bit 0 is set); MAVLink 1,
+0xFE: len at byte 1, the 8-bit id at byte 5, frame = 6 + len + 2), validated by the magic byte, no
+unknown incompat flag, and the frame fitting inside the datagram's UDP length. Not by its CRC:
+that needs each message's CRC_EXTRA and a per-packet checksum, i.e. pymavlink per message, which
+on a run's hundreds of thousands of packets is the slow path; `uavcas.mavlink_capture` does parse
+every MAVLink datagram with pymavlink (CRC checked) for users. The ground truth needs which
+message a datagram carries (a spoofed position report), not its fields.
+
 IP fragments: the first fragment carries the transport header; later fragments are marked
 (`frag` 2) and get their datagram's ports in `uavcas.flows.fragments`.
 """
@@ -49,6 +60,8 @@ FRAG_NONE, FRAG_FIRST, FRAG_LATER = 0, 1, 2
 ICMP4_ERRORS = (3, 4, 5, 11, 12)  # unreachable, source quench, redirect, time exceeded, parameter problem
 ICMP6_ERRORS = (1, 2, 3, 4)  # unreachable, packet too big, time exceeded, parameter problem
 ICMP_HEADER = 8  # type, code, checksum, 4 bytes of unused / MTU / pointer: the quote follows
+MAV_V1_MAGIC, MAV_V2_MAGIC = 0xFE, 0xFD  # MAVLink frame start markers (mavlink.io, serialization)
+MAV_V2_SIGNED = 0x01  # MAVLINK_IFLAG_SIGNED, the only incompat flag MAVLink 2 defines
 
 
 @dataclass(frozen=True)
@@ -149,6 +162,27 @@ def _icmp_quotes(g: _Gather, l4: np.ndarray, end: np.ndarray, proto: np.ndarray,
     tcp = first & (qproto == 6)
     if tcp.any():
         out["q_tcp_seq"][tcp] = g.be(ql4[tcp] + 4, 4)
+    return out
+
+
+def _mavlink_msgid(g: _Gather, l4: np.ndarray, end: np.ndarray, udp: np.ndarray) -> np.ndarray:
+    """`mav_msgid` (module docstring): the first frame's message id, -1 where there is none."""
+    out = np.full(l4.shape[0], -1, dtype=np.int32)
+    q = l4 + 8  # the UDP payload
+    cand = udp & (q + 6 <= end)
+    if not cand.any():
+        return out
+    idx = np.flatnonzero(cand)
+    p = q[idx]
+    room = g.be(l4[idx] + 4, 2).astype(np.int64) - 8  # the datagram's payload, from the UDP length
+    magic, plen = g.u8(p), g.u8(p + 1).astype(np.int64)
+    v1 = (magic == MAV_V1_MAGIC) & (6 + plen + 2 <= room)
+    flags = g.u8(p + 2).astype(np.int64)
+    v2 = ((magic == MAV_V2_MAGIC) & (p + 10 <= end[idx]) & ((flags & ~MAV_V2_SIGNED) == 0)
+          & (10 + plen + 2 + np.where(flags & MAV_V2_SIGNED, 13, 0) <= room))
+    out[idx[v1]] = g.u8(p[v1] + 5)
+    out[idx[v2]] = (g.u8(p[v2] + 7).astype(np.int32) | (g.u8(p[v2] + 8).astype(np.int32) << 8)
+                    | (g.u8(p[v2] + 9).astype(np.int32) << 16))
     return out
 
 
@@ -323,6 +357,7 @@ def decode(raw: RawCapture) -> tuple[dict[str, np.ndarray], DecodeStats]:
         "l4_hdr_len": l4_hdr,
         "frame_index": idx.astype(np.int64) + raw.first_record,
         **quote,
+        "mav_msgid": _mavlink_msgid(g, l4, end, udp),
         "frag": frag,
     }
     if cut.any():

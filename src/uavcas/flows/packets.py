@@ -13,7 +13,9 @@ Columns (all numpy arrays of equal length):
   l4 0 for later fragments), frame_index int64 (record number in its file), point int16 (index
   into `points`); for ICMP errors the packet they quote (`QUOTE_COLUMNS`, 0 for other packets,
   `uavcas.flows.decode`): q_proto uint8, q_src_lo/q_dst_lo uint64 (the low address words),
-  q_sport/q_dport uint16, q_ip_id uint32, q_ttl uint8, q_tcp_seq uint32.
+  q_sport/q_dport uint16, q_ip_id uint32, q_ttl uint8, q_tcp_seq uint32; mav_msgid int32 (the
+  message id of the MAVLink frame a UDP datagram starts with, -1 for any other packet: the
+  header is decoded and validated in `uavcas.flows.decode`).
 `table["ts_s"]` gives float64 seconds for convenience (derived, rounded to ~0.2 us at today's
 epoch); computations that need exact time use `ts_ns`.
 
@@ -39,9 +41,12 @@ COLUMNS: tuple[str, ...] = (
     "ts_ns", "frame_len", "cap_len", "ip_version", "src_hi", "src_lo", "dst_hi", "dst_lo",
     "sport", "dport", "proto", "tcp_flags", "ttl", "ip_id", "tcp_seq", "tcp_ack", "ip_len", "ip_hdr_len",
     "l4_hdr_len", "frame_index", "point",
-    "q_proto", "q_src_lo", "q_dst_lo", "q_sport", "q_dport", "q_ip_id", "q_ttl", "q_tcp_seq",
+    "q_proto", "q_src_lo", "q_dst_lo", "q_sport", "q_dport", "q_ip_id", "q_ttl", "q_tcp_seq", "mav_msgid",
 )  # fmt: skip
-QUOTE_COLUMNS: tuple[str, ...] = COLUMNS[COLUMNS.index("q_proto"):]
+QUOTE_COLUMNS: tuple[str, ...] = COLUMNS[COLUMNS.index("q_proto"):COLUMNS.index("mav_msgid")]
+NO_MAVLINK = -1  # mav_msgid of a packet that carries no MAVLink frame (0 is HEARTBEAT's id)
+# what a column a hand-built row leaves out holds (0 unless 0 means something)
+_ABSENT: dict[str, int] = {"mav_msgid": NO_MAVLINK}
 ETHERNET_HEADER = 14
 
 
@@ -147,18 +152,19 @@ def empty_columns() -> dict[str, np.ndarray]:
               "ip_id": np.uint32, "tcp_seq": np.uint32, "tcp_ack": np.uint32, "ip_len": np.uint32, "ip_hdr_len": np.uint16,
               "l4_hdr_len": np.uint16, "frame_index": np.int64, "point": np.int16,
               "q_proto": np.uint8, "q_src_lo": np.uint64, "q_dst_lo": np.uint64, "q_sport": np.uint16,
-              "q_dport": np.uint16, "q_ip_id": np.uint32, "q_ttl": np.uint8, "q_tcp_seq": np.uint32}  # fmt: skip
+              "q_dport": np.uint16, "q_ip_id": np.uint32, "q_ttl": np.uint8, "q_tcp_seq": np.uint32,
+              "mav_msgid": np.int32}  # fmt: skip
     return {c: np.zeros(0, dtype=dtypes[c]) for c in COLUMNS}
 
 
 def table_from_rows(rows: Sequence[dict], points: Sequence[str]) -> "PacketTable":
-    """A packet table from one dict per packet (column -> value); a column a row leaves out is 0.
-    For tests and generated traffic: captures are read with `read_packets`."""
+    """A packet table from one dict per packet (column -> value); a column a row leaves out is 0
+    (mav_msgid: -1, no MAVLink). For tests and generated traffic: captures are read with `read_packets`."""
     empty = empty_columns()
     unknown = {k for r in rows for k in r} - set(COLUMNS)
     if unknown:
         raise ValueError(f"unknown packet columns {sorted(unknown)}")
-    cols = {c: np.array([r.get(c, 0) for r in rows], dtype=empty[c].dtype) for c in COLUMNS}
+    cols = {c: np.array([r.get(c, _ABSENT.get(c, 0)) for r in rows], dtype=empty[c].dtype) for c in COLUMNS}
     return PacketTable(cols, tuple(points))
 
 

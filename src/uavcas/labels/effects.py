@@ -117,6 +117,18 @@ class TruthContext:
         return self._cache["last"]
 
     @property
+    def is_first(self) -> np.ndarray:
+        """Rows that are their transmission's first observation (its sender's switch: the
+        capture nearest its sending)."""
+        if "first" not in self._cache:
+            f = self.followed
+            first = np.zeros(self.n, dtype=bool)
+            if f.n_packets:
+                first[f.order[f.offsets[:-1]]] = True
+            self._cache["first"] = first
+        return self._cache["first"]
+
+    @property
     def window(self) -> np.ndarray:
         """Plan window of each row (by capture time; clipped to the plan's windows)."""
         if "window" not in self._cache:

@@ -43,7 +43,7 @@ PAPER_SOURCE = "ip-membership"
 # Order of the parts of a label_source value (fixed: datasets compare across versions).
 # New sources go before PAPER_SOURCE (never combined with another), so stored values keep their form.
 SOURCES: tuple[str, ...] = ("flood-packets", "replay-injections", "blackhole-drops", "wormhole-detour",
-                            "jamming-links", "mavlink-injections", PAPER_SOURCE)
+                            "jamming-links", "mavlink-injections", "gps-spoof-reports", PAPER_SOURCE)
 assert {f.label_source for f in families()} <= set(SOURCES), "a family's label_source is missing from SOURCES"
 
 

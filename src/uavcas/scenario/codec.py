@@ -170,11 +170,12 @@ def parse(text: str) -> Scenario:
         if n_uav < need:
             raise ScenarioError(f"field 'n_uav': {a.family} needs at least {need} UAVs (attackers + victim)")
     payload = choice("payload", raw["payload"], PAYLOADS)
-    for a in attacks:
-        acts_on = family(a.family).payloads
-        if acts_on is not None and payload not in acts_on:
-            raise ScenarioError(f"field 'payload': {a.family} acts on traffic that payload {payload!r} does not "
-                                f"carry (use {', '.join(acts_on)})")
+    for a in attacks:  # a family acts only on the traffic of some payloads (AttackFamily.payloads)
+        fam = family(a.family)
+        if payload not in fam.payloads:
+            why = f" ({fam.payloads_why})" if fam.payloads_why else ""
+            raise ScenarioError(f"field 'payload': {a.family} needs payload {' or '.join(fam.payloads)}{why}, "
+                                f"got {payload!r}")
     sc = Scenario(
         attacks=attacks,
         n_uav=n_uav,

@@ -55,15 +55,16 @@ def schedule_attacks(
     attacks = []
     for k, spec in enumerate(scenario.attacks):
         fam = family(spec.family)
+        attackers = fam.attackers(spec, draw)
         attacks.append(
             Attack(
                 attack_id=f"{spec.family}-{k}",
                 family=spec.family,
-                attackers=fam.attackers(spec, draw),
+                attackers=attackers,
                 victims=[victim],
                 start_s=start,
                 stop_s=stop,
-                params=fam.params(spec),
+                params={**fam.params(spec), **fam.drawn_params(spec, draw)},
                 spec=spec,
             )
         )

@@ -58,6 +58,25 @@ class Relay(threading.Thread):
                 self.sock.sendto(data, self.gcs)
 
 
+def run_endpoints(tmp_path, gspec, uspec, relay: Relay, at_t0=lambda t0: None) -> float:
+    """Both endpoints as processes until their deadline: they load, bind and say "ready" before t0
+    (as in a run), then t0 is published and `at_t0(t0)` runs meanwhile. Returns t0."""
+    (tmp_path / "g.json").write_text(gspec.model_dump_json())
+    (tmp_path / "u.json").write_text(uspec.model_dump_json())
+    run = [sys.executable, "-m", "uavcas.emulation.apps.mavlink"]
+    procs = [subprocess.Popen(run + [role, str(tmp_path / f"{role[0]}.json")], stdout=subprocess.PIPE,
+                              stderr=subprocess.PIPE, text=True) for role in ("gcs", "uav")]
+    try:
+        assert [proc.stdout.readline().strip() for proc in procs] == ["ready", "ready"]
+        t0 = time.time()
+        mv.write_t0(uspec.t0_path, t0)
+        at_t0(t0)
+        wait_all(procs, uspec.duration_s + 10)
+    finally:
+        stop_all(relay, procs)
+    return t0
+
+
 def _type_of(data: bytes) -> str:
     from pymavlink.dialects.v20 import common
 
@@ -111,18 +130,7 @@ def test_gcs_and_uav_exchange_mission_commands_and_streams_over_udp(tmp_path):
                        duration_s=dur, log_path=tmp_path / "mavlink-bs0.jsonl")
     uspec = mv.uav_spec(p, "uav0", "127.0.0.1", None, dur, tmp_path / "mavlink-uav0.jsonl", gcs_port=relay.port,
                         bind_port=0, t0_path=t0_path)
-    (tmp_path / "g.json").write_text(gspec.model_dump_json())
-    (tmp_path / "u.json").write_text(uspec.model_dump_json())
-    run = [sys.executable, "-m", "uavcas.emulation.apps.mavlink"]
-    procs = [subprocess.Popen(run + [role, str(tmp_path / f"{role[0]}.json")], stdout=subprocess.PIPE,
-                              stderr=subprocess.PIPE, text=True) for role in ("gcs", "uav")]
-    try:
-        # both load, bind and say "ready" before t0 (as in a run); t0 is then published
-        assert [proc.stdout.readline().strip() for proc in procs] == ["ready", "ready"]
-        mv.write_t0(t0_path, time.time())
-        wait_all(procs, dur + 10)
-    finally:
-        stop_all(relay, procs)
+    run_endpoints(tmp_path, gspec, uspec, relay)
 
     glog, ulog = mv.read_log(gspec.log_path), mv.read_log(uspec.log_path)
     uploads = [e for e in glog if e["event"] == "mission_upload"]

@@ -158,7 +158,7 @@ class BenignTraffic:
         for bs, uav in pairs:
             spec = mavlink.uav_spec(self.plan, uav, self.plan.node(bs).ip, None, app_s,
                                     self.log_dir / f"mavlink-{uav}.jsonl", t0_path=self.t0_path,
-                                    signing=self.signing)
+                                    signing=self.signing, gps_path=mavlink.gps.control_path(self.work, uav))
             path = spec_dir / f"{uav}.json"
             path.write_text(spec.model_dump_json())
             self.mavlink_procs.append(spawn(self._start(uav), f"mavlink-{uav}", run + ["uav", str(path)],

@@ -43,15 +43,19 @@ frame received unsigned or wrongly signed is dropped unanswered (and logged `rej
 
 Modules: `specs` (the typed specs and what the plan gives them), `link` (what both endpoints
 share: t0, the UDP peer, the log), `autopilot` (the UAV end), `commands` (what a command does to
-the autopilot's state), `signing` (MAVLink 2 signing and the run's key), `ground` (the GCS end).
+the autopilot's state), `signing` (MAVLink 2 signing and the run's key), `gps` (the UAV's GPS
+receiver: true fixes, or a spoofer's that the `gps_spoof` attack publishes at run time), `ground`
+(the GCS end).
 
 Run: python -m uavcas.emulation.apps.mavlink {uav|gcs} SPEC.json
 """
 
+from . import gps
 from .link import T0_WAIT_S, read_log, write_t0
 from .signing import SigningSpec, signing_key, signing_spec
 from .specs import (GCS_PORT, UAV_PORT, BatterySpec, GcsSpec, GcsTarget, RetrySpec, StreamRates, UavSpec,
                     gcs_target, uav_spec)
 
-__all__ = ["GCS_PORT", "T0_WAIT_S", "UAV_PORT", "BatterySpec", "GcsSpec", "GcsTarget", "RetrySpec", "SigningSpec",
-           "StreamRates", "UavSpec", "gcs_target", "read_log", "signing_key", "signing_spec", "uav_spec", "write_t0"]
+__all__ = ["gps", "GCS_PORT", "T0_WAIT_S", "UAV_PORT", "BatterySpec", "GcsSpec", "GcsTarget", "RetrySpec",
+           "SigningSpec", "StreamRates", "UavSpec", "gcs_target", "read_log", "signing_key", "signing_spec", "uav_spec",
+           "write_t0"]

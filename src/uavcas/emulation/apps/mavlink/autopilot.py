@@ -11,6 +11,7 @@ from uavcas.twin.track import local_to_geodetic
 
 from . import signing
 from .commands import VehicleState
+from .gps import POSITION_MESSAGES, GpsReceiver, course_deg
 from .link import Log, Peer, Periodic, Stop, await_t0, recv_all
 from .specs import COMPONENT_AUTOPILOT, GPS_FIX_3D, GPS_SATELLITES, STREAM_MESSAGES, UavSpec, _mavlink
 
@@ -27,6 +28,7 @@ def run_uav(spec: UavSpec) -> dict:
     track = spec.track()
     spec = spec.model_copy(update={"t0_unix": await_t0(spec, stop)})
     log = Log(spec.log_path, spec.t0_unix)
+    gps = GpsReceiver(spec.gps_path, log)  # true fixes unless the attack executor publishes a spoofer
     deadline = spec.t0_unix + spec.duration_s
     now = time.time()
     heartbeat = Periodic(1.0, now)
@@ -85,10 +87,13 @@ def run_uav(spec: UavSpec) -> dict:
         for sid, per in streams.items():
             if per.due(now):
                 for typ in STREAM_MESSAGES[sid]:
-                    gcs.send(_telemetry(m, typ, spec, p, t))
+                    if typ in POSITION_MESSAGES:  # a GPS fix, of this instant (gps.py: spoofing decided then)
+                        gps.report(track, spec.t0_unix, lambda q, tq: gcs.send(_telemetry(m, typ, spec, q, tq)))
+                    else:
+                        gcs.send(_telemetry(m, typ, spec, p, t))
     summary = {"node": spec.name, "sysid": spec.sysid, "sent": dict(sent), "received": dict(received),
                "mission_items": len(mission["items"]), "last_speed_mps": vehicle.speed_mps,
-               "custom_mode": vehicle.custom_mode}
+               "custom_mode": vehicle.custom_mode, "gps": gps.summary()}
     log("summary", **summary)
     return summary
 
@@ -127,7 +132,7 @@ def _telemetry(m, typ: str, spec: UavSpec, p, t: float):
     if typ == "GPS_RAW_INT":
         return m.MAVLink_gps_raw_int_message(
             boot_ms * 1000, GPS_FIX_3D, round(lat * 1e7), round(lon * 1e7), round(alt * 1000), 100, 100,
-            round(gs * 100), round(p.heading_deg * 100) % 36000, GPS_SATELLITES)
+            round(gs * 100), round(course_deg(p) * 100) % 36000, GPS_SATELLITES)
     if typ == "ATTITUDE":
         yaw = math.radians(p.heading_deg)
         return m.MAVLink_attitude_message(boot_ms, 0.0, 0.0, math.atan2(math.sin(yaw), math.cos(yaw)), 0.0, 0.0, 0.0)

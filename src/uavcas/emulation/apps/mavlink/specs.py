@@ -109,6 +109,7 @@ class UavSpec(_Frozen):
     battery: BatterySpec = BatterySpec()
     retry: RetrySpec = RetrySpec()
     log_path: Path
+    gps_path: Path | None = None  # where an attack may publish a GPS spoofer (gps.control_path)
 
     def track(self) -> Track:
         return Track(tuple(self.times_s), tuple(tuple(p) for p in self.positions_m))
