@@ -42,7 +42,7 @@ def test_bad_tokens_are_one_line_errors(text, match):
 
 
 def test_refused_on_a_payload_without_mavlink():
-    with pytest.raises(ScenarioError, match="payload 'image'") as e:
+    with pytest.raises(ScenarioError, match="needs payload telemetry or video or mixed .*got 'image'") as e:
         parse("mavlink_inject=rtl-6-2-image-logdist-adaptive-random-30-95")
     assert "\n" not in str(e.value)
     for payload in ("telemetry", "video", "mixed"):
