@@ -45,7 +45,7 @@ def test_runs_carry_verdict_and_failed_checks_with_value_and_limit(flagged_ds):
     assert runs[1].failed[0] == "delay_error_p50_ms 2 (limit <= 0.1)" and runs[1].rows == 6
     assert sum(runs[1].classes.values()) == 6
     lines = flagged_lines(runs)
-    assert len(lines) == 2 and lines[0].startswith("run run00001 (dos=1000-5-2-image") and "delay_error_p99_ms 2" in lines[0]
+    assert len(lines) == 2 and lines[0].startswith("run run00001 (dos=1000-5-2-mixed") and "delay_error_p99_ms 2" in lines[0]
     assert lines[1].endswith("error: audit error: no captures")
 
 
@@ -60,5 +60,5 @@ def test_info_shows_runs_fidelity_and_flagged(flagged_ds):
     out = r.output
     assert "fidelity: 1 pass, 1 fail, 1 error, 1 unaudited; 2 run(s) kept flagged" in out
     assert "fail: delay_error_p50_ms 2 (limit <= 0.1)" in out and "error: audit error: no captures" in out
-    assert "dos=1000-5-2-image-logdist-adaptive-spiral-30-95" in out
+    assert "dos=1000-5-2-mixed-logdist-adaptive-spiral-30-95" in out
     assert "0.0%" in out and not re.search(r"[1-9]\d*\s+│\s+0\.0%", out)  # 0.0% only for a class with no flow

@@ -21,8 +21,9 @@ def test_paper_preset_has_1024_distinct_round_tripping_configs():
 
 
 def test_medium_preset_every_composition_in_four_channel_settings(tmp_path):
-    """64 runs of 12 windows: the 16 compositions x 4 settings covering path loss, mission, TX
-    power and swarm size (path loss x TX power as a full 2 x 2), via the CLI's manifest."""
+    """100 runs of 12 windows: the paper's 16 compositions and the new families' 9 (each alone and
+    in two compositions) x 4 settings covering path loss, mission, TX power and swarm size (path
+    loss x TX power as a full 2 x 2), on payload mixed, via the CLI's manifest."""
     from collections import Counter
 
     out = tmp_path / "m.jsonl"
@@ -30,10 +31,14 @@ def test_medium_preset_every_composition_in_four_channel_settings(tmp_path):
                         "--out", str(out)], capture_output=True, text=True)
     assert r.returncode == 0, r.stderr
     entries = [json.loads(line) for line in out.read_text().splitlines()]
-    assert len(entries) == 64 and {(e["windows"], e["window_s"]) for e in entries} == {(12, 5.0)}
+    assert len(entries) == 100 and {(e["windows"], e["window_s"]) for e in entries} == {(12, 5.0)}
     scen = [parse(e["config"]) for e in entries]
+    assert {s.payload for s in scen} == {"mixed"}
     comps = Counter(s.axes()["attacks"] for s in scen)
-    assert len(comps) == 16 and min(comps.values()) >= 4
+    assert len(comps) == 25 and min(comps.values()) >= 4
+    for new in ("jamming", "gps_spoof", "mavlink_inject"):  # alone and in two compositions with the paper's
+        with_it = [c for c in comps if new in {t.split("=")[0] for t in c.split("+")}]
+        assert len(with_it) == 3 and sum("+" in c for c in with_it) == 2, (new, with_it)
     settings = {(s.n_uav, s.pathloss, s.mission, s.tx_dbm) for s in scen}
     assert len(settings) == 4
     assert {s.pathloss for s in scen} == {"logdist", "3gpp"} and {s.tx_dbm for s in scen} == {10, 30}

@@ -1,8 +1,8 @@
 """Synthetic uavcas datasets with a known class structure, for trying the benchmark without root
 and for tests (`uavcas dataset synth`).
 
-Runs take the `medium` campaign preset's configurations in order (16 compositions in each of 4
-channel settings, cycling), so a synthetic dataset has the same runs, axes and classes as the
+Runs take the `medium` campaign preset's configurations of the paper's compositions in order (16
+compositions in each of 4 channel settings, cycling), so a synthetic dataset has the same runs, axes and classes as the
 benchmark's real one. Each run has benign flows and, in attack runs, flows of its attack class.
 The structure is chosen so expected outcomes are known:
 - DoS / DDoS (and every flood-bearing pair): SYN floods, ~1,000-2,000 pps, 54-74 B, separable;
@@ -29,10 +29,9 @@ import numpy as np
 import pandas as pd
 
 from uavcas import schema
-from uavcas.scenario.campaign import PRESETS, run_seed
+from uavcas.scenario.campaign import MEDIUM_PAPER_CONFIGS, run_seed
 from uavcas.scenario.codec import parse
 
-PRESET = "medium"
 FLOODS = {"dos", "ddos"}
 _SERVER_IP, _SERVER_PORT = "10.0.0.100", 80
 FLAG = {"FIN": 0x01, "SYN": 0x02, "RST": 0x04, "PSH": 0x08, "ACK": 0x10, "URG": 0x20, "ECE": 0x40, "CWE": 0x80}
@@ -173,7 +172,7 @@ def make_flows(runs: int = 48, flows_per_run: int = 60, seed: int = 0, sequences
     >= 16 runs hold all 15 classes and 64 runs are the whole medium design."""
     if runs < 1 or flows_per_run < 1:
         raise ValueError(f"need at least one run and one flow per run, got runs={runs}, flows_per_run={flows_per_run}")
-    configs = PRESETS[PRESET].configs
+    configs = MEDIUM_PAPER_CONFIGS
     rng = np.random.default_rng(seed)
     rows, seqs, src_ips, src_ports = [], [], [], []
     base_ip = int(ipaddress.IPv4Address("10.1.0.0"))

@@ -94,31 +94,54 @@ QUICK_CONFIGS: tuple[str, ...] = (
     "blackhole+dos=1000-6-2-mixed-3gpp-adaptive-random-10-95",
 )
 
-# The medium preset is the benchmark's dataset: all 16 compositions in each of 4 channel settings
-# (64 runs of 12 windows, about 75 min on the 2-core dev machine). Path loss x TX power is a full
-# 2 x 2 design over the settings; mission and swarm size take one value per setting (4 settings
-# cannot cross two 4-valued axes), so each is confounded with the setting, which
+# The families added after the paper (issue 24), each alone and in two compositions with the
+# paper's families. jamming: a 20 dBm ground jammer beside the victim's route; gps_spoof: the
+# victim's position reports drift 3 m/s towards a lure; mavlink_inject: forged RTL commands.
+NEW_FAMILY_COMPOSITIONS: tuple[str, ...] = (
+    "jamming=20",
+    "blackhole+jamming=20",
+    "dos=1000+jamming=20",
+    "gps_spoof=3",
+    "gps_spoof=3+wormhole",
+    "ddos=1000+gps_spoof=3",
+    "mavlink_inject=rtl",
+    "blackhole+mavlink_inject=rtl",
+    f"mavlink_inject=rtl+{REPLAY_CONSERVATIVE}",
+)
+
+# The medium preset is the benchmark's dataset: the paper's 16 compositions and the 9 of the new
+# families, each in 4 channel settings (100 runs of 12 windows), on UAV traffic (payload `mixed`:
+# MAVLink, video and images; gps_spoof and mavlink_inject act on MAVLink). Path loss x TX power
+# is a full 2 x 2 design over the settings; mission and swarm size take one value per setting
+# (4 settings cannot cross two 4-valued axes), so each is confounded with the setting, which
 # `uavcas analyze axes` reports. Holding out one setting (e.g. mission=random) leaves every
-# composition in 3 seen settings for the cross-condition protocol.
+# composition in 3 seen settings for the cross-condition protocol. The paper's compositions come
+# first (runs 0-63), the new families' after them.
 MEDIUM_SETTINGS: tuple[tuple[int, str, str, int], ...] = (  # (n_uav, pathloss, mission, tx_dbm)
     (5, "logdist", "spiral", 30),
     (6, "3gpp", "grid", 10),
     (8, "3gpp", "hover_transit", 30),
     (10, "logdist", "random", 10),
 )
+MEDIUM_PAYLOAD = "mixed"
 
 
-def _medium_configs() -> tuple[str, ...]:
+def _medium_configs(compositions: tuple[str, ...]) -> tuple[str, ...]:
     return tuple(
-        f"{comp}-{n}-2-image-{pl}-adaptive-{mission}-{tx}-95"
+        f"{comp}-{n}-2-{MEDIUM_PAYLOAD}-{pl}-adaptive-{mission}-{tx}-95"
         for n, pl, mission, tx in MEDIUM_SETTINGS
-        for comp in PAPER_COMPOSITIONS
+        for comp in compositions
     )
+
+
+# the medium design's runs over the paper's 16 compositions (`uavcas dataset synth` cycles them)
+MEDIUM_PAPER_CONFIGS = _medium_configs(PAPER_COMPOSITIONS)
 
 
 PRESETS: dict[str, Preset] = {
     "paper": Preset("paper", _paper_configs(), windows=12, window_s=5.0),
-    "medium": Preset("medium", _medium_configs(), windows=12, window_s=5.0),
+    "medium": Preset("medium", MEDIUM_PAPER_CONFIGS + _medium_configs(NEW_FAMILY_COMPOSITIONS), windows=12,
+                     window_s=5.0),
     "quick": Preset("quick", QUICK_CONFIGS, windows=3, window_s=5.0),
 }
 
