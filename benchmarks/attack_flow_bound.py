@@ -1,6 +1,7 @@
 """How many flows could an attack's class hold at most? Labelled flows against that bound.
 
-A flow can hold a packet of an attack on victim V in [start, stop) only if it touches V and its
+For a family that acts on its victim's traffic (all but jamming, which acts on every link its jammer
+reaches), a flow can hold a packet of an attack on victim V in [start, stop) only if it touches V and its
 time span overlaps [start, stop). That count bounds the class from above, whatever the truth rule,
 under the flow definition (`uavcas.flows.termination`). Issue 23 used it to show that a payload
 with more packets cannot give a stealth class more flows than its victim has connections and
