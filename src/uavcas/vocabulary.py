@@ -43,6 +43,9 @@ LABEL_MODES: tuple[str, ...] = get_args(LabelMode)
 # What a campaign does with a run whose fidelity audit failed: keep it flagged, or retry it
 FidelityPolicy = Literal["flag", "retry"]
 FIDELITY_POLICIES: tuple[str, ...] = get_args(FidelityPolicy)
+# Where the torch baselines train: auto = CUDA when torch sees a GPU, else the CPU
+TorchDevice = Literal["auto", "cpu", "cuda"]
+TORCH_DEVICES: tuple[str, ...] = get_args(TorchDevice)
 SeqMode = Literal["inc", "rand", "zero"]  # how a replayer rewrites TCP sequence numbers
 SEQ_MODES: tuple[str, ...] = get_args(SeqMode)
 

@@ -67,6 +67,23 @@ def test_deep_early_stopping_uses_given_validation(name):
     assert 1 <= est.n_epochs_ <= 3 and all("val_loss" in h for h in est.history_)
 
 
+@NEEDS_TORCH
+def test_device_auto_trains_where_torch_has_a_gpu_and_cpu_forces_the_cpu():
+    torch = import_torch()
+    x, y = _data(seed=3)
+    auto = TorchClassifier(arch="cnn1d", epochs=2, n_threads=1).fit(x, y)
+    assert auto.device_ == ("cuda" if torch.cuda.is_available() else "cpu")
+    cpu = TorchClassifier(arch="cnn1d", epochs=2, n_threads=1, device="cpu").fit(x, y)
+    assert cpu.device_ == "cpu" and cpu.predict_proba(x[:5]).shape == (5, 3)
+    with pytest.raises(ValueError, match="device 'tpu'"):
+        TorchClassifier(arch="cnn1d", device="tpu").fit(x, y)
+    if not torch.cuda.is_available():
+        with pytest.raises(ValueError, match="sees no CUDA GPU"):
+            TorchClassifier(arch="cnn1d", epochs=1, device="cuda").fit(x, y)
+    assert make_model("lstm", device="cpu").get_params()["device"] == "cpu"
+    assert "device" not in make_model("rf").get_params()
+
+
 def test_clear_error_without_torch(monkeypatch):
     monkeypatch.setitem(sys.modules, "torch", None)  # import torch -> ImportError
     with pytest.raises(ImportError, match="uavcas\\[dl\\]"):

@@ -10,10 +10,12 @@ import typer
 
 from uavcas.dataset.read import FORMATS
 from uavcas.flows.assemble import VIEWS
+from uavcas.vocabulary import TORCH_DEVICES
 
 from .common import atomic_write_text, check_output, dataset_argument, err_console, fail, one_of, path_fail
 
 BenchFormat = one_of(("auto", *FORMATS))
+TorchDevice = one_of(TORCH_DEVICES)
 bench_app = typer.Typer(help="Benchmarks on a dataset.", no_args_is_help=True)
 
 
@@ -68,6 +70,8 @@ def ids_cmd(
     train_cap: int = typer.Option(0, "--train-cap", min=0, help="At most N training (and validation) flows per run and class, seeded (0: all); test flows are never capped."),
     min_class_runs: int = typer.Option(0, "--min-class-runs", min=0, help="Leave out the flows of classes held by fewer than N runs, listed in the notes (0: refuse such a class, naming it)."),
     threads: int = typer.Option(0, "--threads", min=0, help="Threads per model (0: cores available)."),
+    device: TorchDevice = typer.Option("auto", "--device", help="Where the torch models train: auto (CUDA when torch "
+                                                                "sees a GPU, else the CPU), cpu or cuda. Recorded per fit."),
     fmt: BenchFormat = typer.Option("auto", "--format", help="What DATASET is (auto: by its files)."),
     view: one_of(VIEWS) | None = typer.Option(None, "--view", help="Flow view when the dataset holds several."),
 ) -> None:
@@ -96,7 +100,8 @@ def ids_cmd(
         feats = features.strip() if "," not in features else tuple(f.strip() for f in features.split(",") if f.strip())
     cfg = BenchConfig(models=names, scaler=scaler, epochs=epochs, seeds=_parse_seeds(seeds),
                       holdout=_parse_holdout(holdout), features=feats, importance=importance,
-                      train_cap=train_cap or None, min_class_runs=min_class_runs, n_threads=threads or None)
+                      train_cap=train_cap or None, min_class_runs=min_class_runs, n_threads=threads or None,
+                      device=device)
     try:
         df = load_any(dataset, None if fmt == "auto" else fmt, view=view)
         prepared = [prepare(df, p, cfg) for p in protocols]  # refuse bad input before any fit
@@ -106,7 +111,7 @@ def ids_cmd(
     for prep in prepared:
         cfg.progress = lambda msg, p=prep.protocol: err_console.print(f"[dim]{p}[/] {msg}", highlight=False)
         res = execute(prep, cfg)
-        meta = {"dataset": str(dataset), "scaler": scaler, "epochs": epochs, "seeds": list(cfg.seeds),
+        meta = {"dataset": str(dataset), "scaler": scaler, "epochs": epochs, "seeds": list(cfg.seeds), "device": device,
                 "train_cap": cfg.train_cap, "min_class_runs": cfg.min_class_runs,
                 "models": list(names), "holdout": [f"{a}={v}" for a, v in cfg.holdout],
                 "absent_features": df.attrs.get("absent_features", [])}

@@ -74,7 +74,9 @@ def check_output(path: Path, kind: Literal["file", "dir"], option: str = "--out"
     """Check an output the user named before any work starts (a one-line error, exit 2, if bad).
 
     A file must be absent or a regular file, a directory absent or a directory (`uavcas.atomic`'s
-    rules); either way its parent folder must exist: uavcas creates no folder the user did not name."""
+    rules). A file's folder must exist: uavcas creates no folder the user did not name (`plan --out
+    /no/such/dir/plan.json` is refused). An output directory is named as one: it is created, like
+    `mkdir -p`, with any missing parents, once the command has work to write."""
     from uavcas.atomic import UnsafeOutput, check_out_dir, check_target
 
     try:
@@ -82,7 +84,7 @@ def check_output(path: Path, kind: Literal["file", "dir"], option: str = "--out"
     except UnsafeOutput as e:
         raise fail(f"{option}: {e}") from None
     parent = path.parent if str(path.parent) else Path(".")
-    if not os.path.lexists(path) and not parent.is_dir():
+    if kind == "file" and not os.path.lexists(path) and not parent.is_dir():
         raise fail(f"{option} {path}: its folder {parent} does not exist (create it first)")
     return path
 

@@ -80,9 +80,13 @@ def baseline(name: str, **params) -> BaseEstimator:
     return _FACTORIES[key]().set_params(**params)
 
 
-def make_model(name: str, random_state: int = 0, epochs: int = 50, n_threads: int | None = None) -> BaseEstimator:
-    """`baseline(name)` with the benchmark's common knobs mapped to each model's own parameter."""
+def make_model(name: str, random_state: int = 0, epochs: int = 50, n_threads: int | None = None,
+               device: str = "auto") -> BaseEstimator:
+    """`baseline(name)` with the benchmark's common knobs mapped to each model's own parameter
+    (`device` reaches the torch models only: the others run on the CPU)."""
     params: dict[str, object] = {"random_state": random_state}
+    if name in DEEP:
+        params["device"] = device
     if name in EPOCH_PARAM:
         params[EPOCH_PARAM[name]] = epochs
     if name in THREAD_PARAM:

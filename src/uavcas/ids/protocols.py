@@ -58,6 +58,7 @@ class BenchConfig:
     # class makes the split degenerate and is refused
     min_class_runs: int = 0
     n_threads: int | None = None
+    device: str = "auto"  # the torch models' (TorchClassifier.device): auto = CUDA when torch sees a GPU
     progress: Callable[[str], None] | None = None  # told "<seed> <model>: <seconds>" after each fit
 
 
@@ -84,6 +85,7 @@ class Fit:
     model: str
     seconds: float
     epochs: int | None
+    device: str = "cpu"  # where the model trained (a torch model's resolved device, else the CPU)
 
 
 @dataclass(frozen=True)
@@ -274,7 +276,7 @@ def _fit_one(res: ProtocolResult, task: Task, sp: Split, name: str, seed: int, c
     def tf(rows):
         z = np.clip(scaler.transform(x[rows]), -1e6, 1e6).astype(np.float32)
         return z if names is None else pd.DataFrame(z, columns=names)
-    est = make_model(name, random_state=seed, epochs=cfg.epochs, n_threads=cfg.n_threads)
+    est = make_model(name, random_state=seed, epochs=cfg.epochs, n_threads=cfg.n_threads, device=cfg.device)
     model = DISPLAY[name]
     # why: BLAS/OpenMP pools default to all cores and busy-wait; on a shared 2-core machine
     # oversubscription makes a 1-second fit take 10
@@ -288,7 +290,7 @@ def _fit_one(res: ProtocolResult, task: Task, sp: Split, name: str, seed: int, c
         if cfg.importance and name in TREES:
             res.importance += _importance(est, tf, task, main, seed, model, cfg, names or res.features)
     epochs = getattr(est, "n_iter_", None) if name in ("mlp",) + DEEP else None
-    res.fits.append(Fit(seed, model, seconds, None if epochs is None else int(epochs)))
+    res.fits.append(Fit(seed, model, seconds, None if epochs is None else int(epochs), getattr(est, "device_", "cpu")))
     res.add(seed, model, [("fit_s", "", seconds)] + ([("epochs", "", epochs)] if epochs is not None else []))
     if cfg.progress:
         cfg.progress(f"seed {seed} {model}: {seconds:.1f} s" + (f", {epochs} epochs" if epochs is not None else ""))

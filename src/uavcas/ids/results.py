@@ -84,7 +84,8 @@ def markdown(res: ProtocolResult, meta: dict) -> str:
     seeds = sorted(res.sizes)
     parts = [leaderboard_markdown(summary, f"IDS benchmark: {res.protocol}", res.notes),
              f"dataset: `{meta.get('dataset')}`, scaler: {meta.get('scaler')}, epochs: {meta.get('epochs')}, "
-             f"seeds: {', '.join(map(str, seeds))}, features: {len(res.features)}", "",
+             f"seeds: {', '.join(map(str, seeds))}, features: {len(res.features)}, "
+             f"devices: {', '.join(sorted({f.device for f in res.fits})) or 'none'}", "",
              f"Declared classes ({len(res.declared)}): {', '.join(res.declared)}", "",
              "Flows per split: " + "; ".join(f"seed {s}: " + ", ".join(f"{k} {v}" for k, v in res.sizes[s].items())
                                            for s in seeds), ""]

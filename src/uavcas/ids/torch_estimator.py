@@ -7,6 +7,11 @@ grouped one (`fit(X, y, X_val=..., y_val=...)`); input checks, the fallback hold
 one-class case are `EarlyStoppingClassifier`'s. Seeded (torch.manual_seed, deterministic
 algorithms, numpy-driven batch order); torch is imported lazily so the classical baselines work
 without the `dl` extra.
+
+`device`: "auto" trains on CUDA when torch sees a GPU and on the CPU otherwise ("cpu" and "cuda"
+force one); `device_` records where the model was fitted. Deterministic CUDA matrix products need
+cuBLAS's fixed workspace (CUBLAS_WORKSPACE_CONFIG, set here when the caller did not); the seeded
+results of a GPU fit are reproducible on that GPU, not bit-equal to a CPU fit.
 """
 
 from __future__ import annotations
@@ -16,9 +21,12 @@ import os
 
 import numpy as np
 
+from uavcas.vocabulary import TORCH_DEVICES
+
 from .base import EarlyStoppingClassifier
 
 DL_MISSING = "the deep baselines need PyTorch: pip install 'uavcas[dl]' (torch==2.13.0)"
+DEVICES = TORCH_DEVICES
 PREDICT_BATCH = 8192
 
 
@@ -51,7 +59,7 @@ class TorchClassifier(EarlyStoppingClassifier):
     def __init__(
         self, arch: str = "cnn1d", epochs: int = 50, batch_size: int = 128, lr: float = 1e-3,
         patience: int = 5, validation_fraction: float = 0.1, random_state: int | None = 0,
-        n_threads: int | None = None, verbose: int = 0,
+        n_threads: int | None = None, device: str = "auto", verbose: int = 0,
     ) -> None:
         self.arch = arch
         self.epochs = epochs
@@ -61,6 +69,7 @@ class TorchClassifier(EarlyStoppingClassifier):
         self.validation_fraction = validation_fraction
         self.random_state = random_state
         self.n_threads = n_threads
+        self.device = device
         self.verbose = verbose
 
     def _torch(self):
@@ -68,11 +77,23 @@ class TorchClassifier(EarlyStoppingClassifier):
         torch.set_num_threads(self.n_threads or default_threads())
         return torch
 
+    def _device(self, torch) -> str:
+        if self.device not in DEVICES:
+            raise ValueError(f"device {self.device!r}: expected one of {', '.join(DEVICES)}")
+        if self.device == "cuda" and not torch.cuda.is_available():
+            raise ValueError("device 'cuda': torch sees no CUDA GPU (use auto or cpu)")
+        dev = "cuda" if self.device == "cuda" or (self.device == "auto" and torch.cuda.is_available()) else "cpu"
+        if dev == "cuda":
+            os.environ.setdefault("CUBLAS_WORKSPACE_CONFIG", ":4096:8")
+        return dev
+
     def fit(self, X, y, X_val=None, y_val=None):
         from .nets import ARCHITECTURES
 
         if self.arch not in ARCHITECTURES:
             raise ValueError(f"unknown architecture {self.arch!r}; known: {sorted(ARCHITECTURES)}")
+        if self.device not in DEVICES:
+            raise ValueError(f"device {self.device!r}: expected one of {', '.join(DEVICES)}")
         return super().fit(X, y, X_val=X_val, y_val=y_val)
 
     def _fit_core(self, X, yi, X_val, yv, rng) -> None:
@@ -88,20 +109,21 @@ class TorchClassifier(EarlyStoppingClassifier):
     def _train(self, torch, X, yi, X_val, yv, rng) -> None:
         from .nets import ARCHITECTURES
 
-        model = ARCHITECTURES[self.arch](X.shape[1], len(self.classes_))
+        dev = self.device_ = self._device(torch)
+        model = ARCHITECTURES[self.arch](X.shape[1], len(self.classes_)).to(dev)
         opt = torch.optim.Adam(model.parameters(), lr=self.lr)
         loss_fn = torch.nn.CrossEntropyLoss()
-        # copies: the caller's array may be read-only (memory-mapped)
-        xt, yt = torch.tensor(X), torch.tensor(yi.astype(np.int64))
+        # copies: the caller's array may be read-only (memory-mapped); on the device once, not per batch
+        xt, yt = torch.tensor(X, device=dev), torch.tensor(yi.astype(np.int64), device=dev)
         has_val = X_val is not None
         if has_val:
-            xv, yvt = torch.tensor(X_val), torch.tensor(yv.astype(np.int64))
+            xv, yvt = torch.tensor(X_val, device=dev), torch.tensor(yv.astype(np.int64), device=dev)
         best, best_state, bad = np.inf, None, 0
         self.history_: list[dict[str, float]] = []
         for epoch in range(self.epochs):
             model.train()
-            order = torch.from_numpy(rng.permutation(len(X)))
-            total = 0.0
+            order = torch.from_numpy(rng.permutation(len(X))).to(dev)
+            total = torch.zeros((), dtype=torch.float64, device=dev)  # summed on the device: no sync per batch
             for start in range(0, len(X), self.batch_size):
                 idx = order[start : start + self.batch_size]
                 if len(idx) < 2:
@@ -110,8 +132,8 @@ class TorchClassifier(EarlyStoppingClassifier):
                 loss = loss_fn(model(xt[idx]), yt[idx])
                 loss.backward()
                 opt.step()
-                total += float(loss.detach()) * len(idx)
-            rec = {"epoch": epoch + 1, "train_loss": total / len(X)}
+                total += loss.detach().double() * len(idx)
+            rec = {"epoch": epoch + 1, "train_loss": float(total) / len(X)}
             if has_val:
                 model.eval()
                 with torch.no_grad():
@@ -137,6 +159,6 @@ class TorchClassifier(EarlyStoppingClassifier):
         out = []
         with torch.no_grad():
             for start in range(0, len(X), PREDICT_BATCH):
-                logits = self.model_(torch.tensor(X[start : start + PREDICT_BATCH]))
-                out.append(torch.softmax(logits, dim=1).numpy().astype(np.float64))
+                logits = self.model_(torch.tensor(X[start : start + PREDICT_BATCH], device=self.device_))
+                out.append(torch.softmax(logits, dim=1).cpu().numpy().astype(np.float64))
         return np.concatenate(out)
