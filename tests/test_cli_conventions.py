@@ -102,3 +102,19 @@ def test_output_to_a_pipe_is_not_cut_to_a_terminals_width():
     assert r.returncode == 0, r.stderr
     assert "…" not in r.stdout and "..." not in r.stdout
     assert "disconnected" in r.stdout
+
+
+def test_each_bad_input_of_the_review_names_the_argument(tmp_path):
+    """Issue 27's list: each exits 2 with one line naming what is wrong with the user's argument."""
+    (tmp_path / "notrun").mkdir()
+    (tmp_path / "existing.txt").write_text("mine")
+    _one_line_error(runner.invoke(app, ["extract", str(tmp_path / "notrun"), "--out", str(tmp_path / "ds")]),
+                    "not a run directory")
+    _one_line_error(runner.invoke(app, ["info", str(tmp_path / "missing")]), f"{tmp_path / 'missing'} does not exist")
+    _one_line_error(runner.invoke(app, ["report", str(tmp_path), "--out", str(tmp_path / "existing.txt")]),
+                    "--out", "it is a regular file")
+    r = runner.invoke(app, ["bench", "ids", str(tmp_path / "nope"), "--out", str(tmp_path / "b")])
+    _one_line_error(r, "nope does not exist")
+    assert r.output.count(str(tmp_path / "nope")) == 1  # named once
+    assert (tmp_path / "existing.txt").read_text() == "mine"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["existing.txt", "notrun"]

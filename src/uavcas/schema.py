@@ -18,7 +18,7 @@ from __future__ import annotations
 
 from uavcas import vocabulary as _v
 
-SCHEMA_VERSION = 4  # 2: feature standards, first_ts_ns; 3: context columns (ctx_*); 4: provoked effect, provoked_packets
+SCHEMA_VERSION = 5  # 2: feature standards, first_ts_ns; 3: context columns (ctx_*); 4: provoked effect, provoked_packets; 5: families jamming, gps_spoof, mavlink_inject (their columns and effects), the card's column dictionary and fidelity_failed
 
 # Direction-independent statistics over all packets of the flow.
 FLOW_FEATURES: tuple[str, ...] = (

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import typer
 
-from .common import console, dataset_argument, fail
+from .common import check_output, console, dataset_argument, fail
 
 
 def report_cmd(
@@ -17,6 +17,7 @@ def report_cmd(
     from uavcas.dataset.store import DatasetError
     from uavcas.report.dataset_report import ReportError, write_report
 
+    check_output(out, "dir")
     try:
         index = write_report(dataset, out)
     except (DatasetError, ReportError) as e:

@@ -181,6 +181,8 @@ def feature_card(standard: str, episodes: bool = False) -> dict:
 
 def read_card(dataset_dir: Path) -> dict:
     path = Path(dataset_dir) / "dataset.json"
+    if not Path(dataset_dir).exists():
+        raise DatasetError(f"{dataset_dir} does not exist")
     if not path.exists():
         raise DatasetError(f"{dataset_dir}: no dataset.json (not a dataset directory)")
     try:
