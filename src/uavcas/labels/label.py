@@ -66,6 +66,14 @@ def rule_text(mode: str, min_attack_fraction: float = 0.0) -> str:
             + " | ".join(parts))
 
 
+def rule_summary(rules: list[str]) -> tuple[list[str], list[str]]:
+    """The card's rule texts (`rule_text`, `dataset.json: label_rules`) for people: each text's
+    first sentence (its policy), and every part of every text (a text joins its families' rules
+    with " | "), for the report and the published card."""
+    headlines = [rule.split(". ", 1)[0].rstrip(".") + "." for rule in rules]
+    return headlines, [part.strip() for rule in rules for part in rule.split(" | ")]
+
+
 def truth_columns(fl: Flows, truth: PacketTruth) -> pd.DataFrame:
     """seq_effect, attack_packets, attack_fraction, provoked_packets and attack_packets_<family>,
     one row per flow."""
