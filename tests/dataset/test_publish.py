@@ -18,6 +18,7 @@ from uavcas.cli import app
 from uavcas.dataset.dictionary import describe
 from uavcas.dataset.parquet import read_flows
 from uavcas.dataset.store import extract_run, read_card
+from uavcas.schema import FAMILIES
 
 runner = CliRunner()
 
@@ -62,7 +63,7 @@ def test_the_publication_holds_the_shards_card_croissant_and_readme(ds, publishe
     assert [f["name"] for f in rs["field"]] == schema.names
     by_name = {f["name"]: f for f in rs["field"]}
     assert by_name["Flow Duration"]["dataType"] == "cr:Float64" and "(unit: us)" in by_name["Flow Duration"]["description"]
-    assert by_name["seq_size"]["isArray"] is True and by_name["seq_size"]["dataType"] == "cr:Int32"
+    assert by_name["seq_size"]["cr:isArray"] is True and by_name["seq_size"]["dataType"] == "cr:Int32"
     assert by_name["label"]["dataType"] == "sc:Text"
 
 
@@ -118,6 +119,9 @@ def test_the_card_has_classes_rules_fidelity_and_the_calibration_licence(ds, pub
     for rule in card["label_rules"]:  # each family's truth and provoked rule, as the card has them
         for part in rule.split(" | ")[1:]:
             assert part.strip() in text
+    for fam in FAMILIES:  # one item per family, the first one's split from the policy and precedence
+        assert re.search(rf"^- {fam}: .+; provoked: ", text, re.M), fam
+    assert re.search(r"^- ours: .+\(precedence [a-z_ >]+\)$", text, re.M)
     assert "unaudited 2" in text
     assert "MIT, as the re-publication's README states" in text and "AERPAW" in text
     # the synthetic run's plan names a profile this installation does not have
@@ -150,3 +154,15 @@ def test_bad_input_is_one_line_and_writes_nothing(ds, published, tmp_path):
         assert r.exit_code == 2 and r.output.startswith("error: ") and r.output.count("\n") == 1, r.output
         assert needle in r.output, r.output
     assert sorted(p.name for p in tmp_path.iterdir()) == []
+
+
+def test_an_episode_dataset_is_published_as_host_windows(synth_run_dir, tmp_path):
+    mlc = pytest.importorskip("mlcroissant")
+    ep = tmp_path / "ep"
+    extract_run(synth_run_dir, ep, view="window-host")
+    r = _run("publish", ep, "--out", tmp_path / "pub")
+    assert r.exit_code == 0, r.output
+    records = list(mlc.Dataset(jsonld=tmp_path / "pub" / "croissant.json").records("host_windows"))
+    assert len(records) == read_card(ep)["n_flows"] and {r["host_windows/view"] for r in records} == {b"window-host"}
+    text = (tmp_path / "pub" / "README.md").read_text()
+    assert "one per plan node per plan window" in text and "| `packets_out` | int64 | packets |" in text

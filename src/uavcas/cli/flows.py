@@ -233,7 +233,7 @@ def extract_cmd(
 
 CSV_HELP = ("csv: one row per flow, CICIDS2017's column names (Flow ID, Source IP, .., Timestamp, the 47 features, "
             "the other columns, Label last; no seq_* lists); NaN and infinite values written as CICIDS2017's CSVs hold "
-            "them, NaN / Infinity / -Infinity, absent values as empty fields.")
+            "them, NaN / Infinity / -Infinity; other absent values (an import's ports) as empty fields.")
 
 
 def export_cmd(

@@ -26,10 +26,11 @@ def publish_cmd(
     rules, fidelity, every column with its unit, the calibration data's licence)."""
     check_output(out, "dir")
     try:
-        from uavcas.dataset.croissant import CroissantError
-        from uavcas.dataset.publish import publish
+        import mlcroissant  # noqa: F401
     except ImportError as e:  # mlcroissant is a dependency; a partial installation says so in one line
         raise fail(f"publish needs mlcroissant ({e}); pip install mlcroissant") from None
+    from uavcas.dataset.croissant import CroissantError
+    from uavcas.dataset.publish import publish
     from uavcas.dataset.store import DatasetError
 
     if not dataset.is_dir():

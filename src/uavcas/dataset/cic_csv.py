@@ -16,8 +16,9 @@ Left out: the per-packet sequences (`seq_*`: lists do not fit a CSV cell), and `
 NaN and infinity (`NONFINITE_TEXT`): written as CICFlowMeter's Java `Double.toString` writes
 them, so as CICIDS2017's CSVs hold them: `NaN`, `Infinity`, `-Infinity` (a flow with a zero
 duration has `Flow Bytes/s` and `Flow Packets/s` infinite, NaN when it carried no payload; a
-one-packet flow's `Flow IAT *` are NaN). pandas reads them back as nan/inf. A value the dataset
-does not hold (null: an imported file's ports) is an empty field. Strings are quoted only when
+one-packet flow's `Flow IAT *` are NaN). The store keeps a NaN as a Parquet null, so a null
+float is `NaN` too. pandas reads them back as nan/inf. Any other null (an imported file's ports,
+protocol) is an empty field. Strings are quoted only when
 they hold a comma, a quote or a line break (RFC 4180).
 """
 
@@ -55,7 +56,8 @@ def _text(arr: pa.Array) -> pa.Array:
     """A column as its CSV fields (strings), nulls as empty fields."""
     t = arr.type
     if pa.types.is_floating(t):
-        s = pc.cast(arr, pa.string())
+        # the store writes pandas' NaN as a Parquet null (pyarrow from_pandas): a null float is NaN
+        s = pc.fill_null(pc.cast(arr, pa.string()), "nan")
         for raw, text in NONFINITE_TEXT.items():
             s = pc.if_else(pc.equal(s, raw), pa.scalar(text), s)
     elif pa.types.is_string(t) or pa.types.is_large_string(t):

@@ -101,8 +101,8 @@ def metadata_json(info: DatasetInfo, files: list[FileEntry], schema: pa.Schema, 
     for f, col in zip(schema, columns(schema, standard, episodes)):
         data_type, is_array = _data_type(f.type)
         fields.append(mlc.Field(
+            # a list column: isArray, no arrayShape (Croissant's default, one dimension of any length)
             ctx=ctx, id=_field_id(rs, f.name), name=f.name, data_types=[data_type], is_array=is_array or None,
-            array_shape="-1" if is_array else None,
             description=f"{col.meaning} (unit: {col.unit})",
             source=mlc.Source(ctx=ctx, file_set=SHARDS, extract=mlc.Extract(ctx=ctx, column=f.name))))
     unit = "one plan node's traffic in one plan window" if episodes else "one flow"

@@ -22,7 +22,6 @@ leaves nothing.
 from __future__ import annotations
 
 import datetime as dt
-import hashlib
 import json
 import os
 import shutil
@@ -34,6 +33,7 @@ import pyarrow.parquet as pq
 
 from uavcas import __version__
 from uavcas.atomic import atomic_dir
+from uavcas.versions import file_sha256
 
 from .croissant import PARQUET, SHARDS, DatasetInfo, FileEntry, metadata_json, record_set_name, validate
 from .dictionary import columns, markdown_table
@@ -85,14 +85,6 @@ class Published:
     croissant_version: str  # mlcroissant's version that validated it
 
 
-def sha256_file(path: Path) -> str:
-    h = hashlib.sha256()
-    with open(path, "rb") as fh:
-        for block in iter(lambda: fh.read(1 << 20), b""):
-            h.update(block)
-    return h.hexdigest()
-
-
 def _place(src: Path, dst: Path) -> bool:
     """Hard-link `src` at `dst` (True), or copy it where the file system refuses a link."""
     dst.parent.mkdir(parents=True, exist_ok=True)
@@ -132,6 +124,17 @@ def calibration(card: dict) -> list[dict]:
                                   "n_files": len(p.data_files)}
         out.append(entry)
     return out
+
+
+def _origin(card: dict) -> str:
+    """Where the rows come from, in words: emulated runs, the synthetic generator or an import."""
+    runs = card.get("runs") or []
+    if "synthetic" in (card.get("label_modes") or []):
+        return "synthetic runs (uavcas dataset synth: flows built packet by packet, no emulation)"
+    if any(r.get("source") == "uavcas-csv" for r in runs):
+        return "runs imported from the authors' CSV layout (uavcas import)"
+    return ("emulated UAV-swarm runs (a calibrated digital twin run on real Linux TCP/IP stacks, attacked, "
+            "captured at every switch)")
 
 
 def _card_text(card: dict, dataset_dir: Path, info: DatasetInfo, files: list[FileEntry], schema) -> str:
@@ -174,15 +177,14 @@ def publish(dataset_dir: str | Path, out: str | Path, name: str | None = None, l
     schema = pq.read_schema(flows)
     standard = (card.get("features") or {}).get("standard", "cic")
     episodes = card.get("unit") == "host-window"
-    files = [FileEntry(f"{SHARDS}/{s.name}", s.stat().st_size, sha256_file(s), PARQUET) for s in shards]
+    files = [FileEntry(f"{SHARDS}/{s.name}", s.stat().st_size, file_sha256(s), PARQUET) for s in shards]
     files.append(FileEntry("dataset.json", (dataset_dir / "dataset.json").stat().st_size,
-                           sha256_file(dataset_dir / "dataset.json"), "application/json"))
+                           file_sha256(dataset_dir / "dataset.json"), "application/json"))
     unit = "host-window rows" if episodes else "flows"
     info = DatasetInfo(
         name=name or dataset_dir.resolve().name,
-        description=(f"{card.get('n_flows', 0)} labelled {unit} of {card.get('n_runs', 0)} emulated UAV-swarm runs "
-                     f"(uavcas {__version__}: a calibrated digital twin run on real Linux TCP/IP stacks, attacked, "
-                     f"captured at every switch; features: {standard}). A re-implementation of: {PAPER_TITLE}."),
+        description=(f"{card.get('n_flows', 0)} labelled {unit} of {card.get('n_runs', 0)} {_origin(card)} "
+                     f"(features: {standard}; uavcas {__version__}, a re-implementation of: {PAPER_TITLE})."),
         license=license, cite_as=PAPER_BIBTEX, version=version, url=url,
         published=dt.datetime.now(dt.timezone.utc).replace(microsecond=0),
         keywords=("intrusion detection", "UAV swarm", "network flows", "digital twin", "AERPAW"))
