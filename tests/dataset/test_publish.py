@@ -144,16 +144,21 @@ def test_the_calibrated_profile_is_traced_to_its_data():
 
 def test_bad_input_is_one_line_and_writes_nothing(ds, published, tmp_path):
     pytest.importorskip("mlcroissant")
+    (tmp_path / "file").write_text("mine")
     for argv, needle in (
         (["publish", ds, "--out", published], "not empty"),
-        (["publish", ds, "--out", tmp_path / "no" / "pub"], "does not exist"),
-        (["publish", tmp_path / "nothing", "--out", tmp_path / "p1"], "not a dataset directory"),
-        (["publish", published, "--out", tmp_path / "p2"], "no flows.parquet"),
+        (["publish", ds, "--out", tmp_path / "file"], "it is a regular file"),
+        (["publish", tmp_path / "nothing", "--out", tmp_path / "no" / "p1"], "does not exist"),
+        (["publish", tmp_path, "--out", tmp_path / "no" / "p2"], "not a dataset directory"),
+        (["publish", published, "--out", tmp_path / "no" / "p3"], "no flows.parquet"),
     ):
         r = _run(*argv)
         assert r.exit_code == 2 and r.output.startswith("error: ") and r.output.count("\n") == 1, r.output
         assert needle in r.output, r.output
-    assert sorted(p.name for p in tmp_path.iterdir()) == []
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["file"] and (tmp_path / "file").read_text() == "mine"
+    # an output directory is created with its missing parents (mkdir -p), once there is work to write
+    assert _run("publish", ds, "--out", tmp_path / "new" / "pub").exit_code == 0
+    assert (tmp_path / "new" / "pub" / "croissant.json").is_file()
 
 
 def test_an_episode_dataset_is_published_as_host_windows(synth_run_dir, tmp_path):

@@ -33,8 +33,6 @@ def publish_cmd(
     from uavcas.dataset.publish import publish
     from uavcas.dataset.store import DatasetError
 
-    if not dataset.is_dir():
-        raise fail(f"{dataset}: not a dataset directory")
     try:
         p = publish(dataset, out, name=name, license=license, version=version, url=url)
     except (DatasetError, CroissantError, FileExistsError) as e:
