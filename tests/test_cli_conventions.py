@@ -91,7 +91,9 @@ def test_no_folder_is_created_that_the_user_did_not_name(tmp_path):
     _one_line_error(r, "does not exist")
     for argv in (["report", str(tmp_path), "--out", str(tmp_path / "x" / "r")],
                  ["bench", "ids", str(tmp_path), "--out", str(tmp_path / "x" / "b")],
-                 ["extract", str(tmp_path), "--out", str(tmp_path / "x" / "ds")]):
+                 ["extract", str(tmp_path), "--out", str(tmp_path / "x" / "ds")],
+                 ["publish", str(tmp_path), "--out", str(tmp_path / "x" / "pub")],
+                 ["export", str(tmp_path), "--format", "csv", "--out", str(tmp_path / "x" / "f.csv")]):
         r = runner.invoke(app, argv)
         assert r.exit_code == 2 and r.output.count("\n") == 1 and not (tmp_path / "x").exists(), (argv, r.output)
 

@@ -8,6 +8,8 @@ Rules (every writer of the package goes through here):
   file (a symbolic link, a FIFO, a device, a socket, a directory) is refused with `UnsafeOutput`
   before anything is written, and checked again just before the rename. `os.replace` would
   otherwise turn `--out /dev/null` (as root) or a symlink into a regular file.
+- A directory written as a whole (`atomic_dir`) is built in a temporary directory beside it and
+  renamed onto it; the target must not exist or be an empty directory.
 - An output directory (`ensure_out_dir`) must be a directory (a symlink to one is fine: writing
   inside it destroys nothing) or not exist yet; a FIFO, device or regular file in its place, or a
   dangling symlink, is refused the same way.
@@ -17,6 +19,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import shutil
 import stat
 import tempfile
 from collections.abc import Iterator
@@ -101,3 +104,25 @@ def atomic_write_bytes(path: str | os.PathLike, data: bytes) -> Path:
 
 def atomic_write_text(path: str | os.PathLike, text: str) -> Path:
     return atomic_write_bytes(path, text.encode())
+
+
+@contextlib.contextmanager
+def atomic_dir(path: str | os.PathLike) -> Iterator[Path]:
+    """Yield a temporary directory beside `path`; on success it is renamed onto `path`, which must
+    be absent or an empty directory (FileExistsError otherwise, before anything is written). The
+    parent folder is created. On an exception the temporary directory is removed."""
+    path = check_out_dir(path)
+    if path.exists() and any(path.iterdir()):
+        raise FileExistsError(f"{path} exists and is not an empty directory")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = Path(tempfile.mkdtemp(prefix=f".{path.name}.", dir=path.parent))
+    try:
+        yield tmp
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(tmp, 0o777 & ~umask)  # mkdtemp makes it 0700; give it a plain mkdir's mode
+        if path.exists():
+            path.rmdir()  # empty, checked above (rmdir refuses one that filled up meanwhile)
+        os.replace(tmp, path)
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)

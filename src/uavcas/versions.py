@@ -1,10 +1,13 @@
 """Versions of uavcas, Python and the libraries that shaped an output, recorded beside it
-(run.json, dataset.json) so a result can be traced to the code that produced it."""
+(run.json, dataset.json) so a result can be traced to the code that produced it; and the SHA-256
+of a file (the data a profile was fitted on, the files of a publication)."""
 
 from __future__ import annotations
 
+import hashlib
 import importlib
 import sys
+from pathlib import Path
 
 from uavcas import __version__
 
@@ -18,3 +21,12 @@ def package_versions(*modules: str) -> dict[str, str | None]:
         except ImportError:
             out[name] = None
     return out
+
+
+def file_sha256(path: str | Path) -> str:
+    """The SHA-256 of a file's bytes (hex), read 1 MiB at a time."""
+    h = hashlib.sha256()
+    with open(path, "rb") as fh:
+        for block in iter(lambda: fh.read(1 << 20), b""):
+            h.update(block)
+    return h.hexdigest()

@@ -17,13 +17,13 @@ The profile shipped with uavcas (``uavcas/twin/profiles/calibrated.json``) is wr
 from __future__ import annotations
 
 import datetime as _dt
-import hashlib
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from uavcas import __version__
 from uavcas.twin.profile import PAPER_PROFILE, DataFile, Provenance, TwinProfile, save_profile
+from uavcas.versions import file_sha256
 
 from . import figures, report
 from .layer1_pathloss import Layer1Result, layer1_json, run_layer1
@@ -44,14 +44,6 @@ class RunOutput:
     inputs: list[Path] = field(default_factory=list)  # data files read
 
 
-def _sha256(path: Path) -> str:
-    h = hashlib.sha256()
-    with open(path, "rb") as fh:
-        for chunk in iter(lambda: fh.read(1 << 20), b""):
-            h.update(chunk)
-    return h.hexdigest()
-
-
 def provenance(inputs: list[Path], data: Path, seed: int, tool: str) -> Provenance:
     files = []
     for p in sorted(set(inputs)):
@@ -59,7 +51,7 @@ def provenance(inputs: list[Path], data: Path, seed: int, tool: str) -> Provenan
             rel = str(p.resolve().relative_to(data.resolve()))
         except ValueError:
             rel = str(p)
-        files.append(DataFile(path=rel, sha256=_sha256(p), size_bytes=p.stat().st_size))
+        files.append(DataFile(path=rel, sha256=file_sha256(p), size_bytes=p.stat().st_size))
     return Provenance(tool=tool, uavcas_version=__version__, seed=seed, data_files=files,
                       fit_date_utc=_dt.datetime.now(_dt.timezone.utc).replace(microsecond=0).isoformat())
 

@@ -26,6 +26,7 @@ from . import emulate as _emulate
 from . import flows as _flows
 from . import mavlink as _mavlink
 from . import plan as _plan
+from . import publish as _publish
 from . import report as _report
 from . import run as _run
 from .common import fail
@@ -68,7 +69,7 @@ app = typer.Typer(
 )
 
 for _module in (_plan, _campaign, _dataset, _flows, _emulate, _analyze, _bench, _report, _run, _calibrate,
-                _channel, _audit, _mavlink):
+                _channel, _audit, _mavlink, _publish):
     _module.register(app)
 
 

@@ -9,7 +9,7 @@ from pathlib import Path
 import typer
 from rich.table import Table
 
-from uavcas.dataset.read import EXPORT_FORMATS
+from uavcas.dataset.read import EXPORT_FORMATS, IMPORT_FORMATS
 from uavcas.flows.assemble import VIEWS
 from uavcas.flows.features import STANDARDS
 from uavcas.flows.termination import TERMINATIONS
@@ -231,24 +231,42 @@ def extract_cmd(
         console.print(f"{info.impure_dropped} flow(s) left out: attack_fraction below {min_attack_fraction:g}")
 
 
+CSV_HELP = ("csv: one row per flow, CICIDS2017's column names (Flow ID, Source IP, .., Timestamp, the 47 features, "
+            "the other columns, Label last; no seq_* lists); NaN and infinite values written as CICIDS2017's CSVs hold "
+            "them, NaN / Infinity / -Infinity; other absent values (an import's ports) as empty fields.")
+
+
 def export_cmd(
     dataset_dir: Path = dataset_argument(),
-    fmt: one_of(EXPORT_FORMATS) = typer.Option("uavcas-csv", "--format", help="uavcas-csv: the authors' UAV-CAS_stat.csv + UAV-CAS_ts.csv."),
-    out: Path = typer.Option(..., "--out", help="Directory to write the two files to."),
-    embed_config: bool = typer.Option(False, "--embed-config", help="The _cfg variants: Label = <class>|<config>."),
-    include_flags: bool = typer.Option(False, "--include-flags", help="Add the packet_flag list column to the ts file."),
+    fmt: one_of(EXPORT_FORMATS) = typer.Option("uavcas-csv", "--format", help="uavcas-csv: the authors' UAV-CAS_stat.csv + "
+                                                                            "UAV-CAS_ts.csv, one row per host pair. " + CSV_HELP),
+    out: Path = typer.Option(..., "--out", help="uavcas-csv: the directory to write the two files to; csv: the file."),
+    embed_config: bool = typer.Option(False, "--embed-config", help="uavcas-csv: the _cfg variants, Label = <class>|<config>."),
+    include_flags: bool = typer.Option(False, "--include-flags", help="uavcas-csv: add the packet_flag list column to the ts file."),
     view: View | None = typer.Option(None, "--view", help="The flow view to export when the dataset holds several."),
 ) -> None:
-    """Export a dataset in the authors' released layout (one stat and one ts CSV), one row per host
-    pair: 5-tuple flows are merged into host pairs from their packet sequences."""
+    """Export a dataset: in the authors' released layout (one stat and one ts CSV, one row per host
+    pair: 5-tuple flows are merged into host pairs from their packet sequences), or as one plain
+    CSV row per flow for CICIDS2017-style tooling (--format csv)."""
     from uavcas.dataset.parquet import read_flows
     from uavcas.dataset.read import select_view
     from uavcas.dataset.uavcas_csv import layout_rows, write_layout
 
-    check_output(out, "dir")
+    if fmt == "csv" and (embed_config or include_flags):
+        raise fail(f"{'--embed-config' if embed_config else '--include-flags'}: applies to --format uavcas-csv only")
+    check_output(out, "file" if fmt == "csv" else "dir")
     path = dataset_dir / "flows.parquet"
     if not path.is_file():
         raise fail(f"{dataset_dir}: no flows.parquet (not a dataset directory)")
+    if fmt == "csv":
+        from uavcas.dataset.cic_csv import write_flow_csv
+
+        try:
+            n = write_flow_csv(dataset_dir, out, view=view)
+        except _errors() as exc:
+            raise fail(str(exc)) from None
+        console.print(f"wrote {out} ({n} flows)", highlight=False)
+        return
     try:
         df = read_flows(path)  # write_layout creates --out once the rows are known (a refusal writes nothing)
         standard = df.attrs.get("feature_standard")
@@ -264,7 +282,7 @@ def export_cmd(
 
 def import_cmd(
     src: Path = typer.Argument(..., help="Directory with UAV-CAS_stat.csv / UAV-CAS_ts.csv (or _cfg variants), or one of them."),
-    fmt: one_of(EXPORT_FORMATS) = typer.Option("uavcas-csv", "--format", help="uavcas-csv: the authors' released layout."),
+    fmt: one_of(IMPORT_FORMATS) = typer.Option("uavcas-csv", "--format", help="uavcas-csv: the authors' released layout."),
     out: Path = typer.Option(..., "--out", help="New dataset directory to create."),
 ) -> None:
     """Import the authors' CSV layout (theirs as released, or ours) into a dataset directory."""

@@ -244,15 +244,18 @@ def card_columns(arrow_schema, standard: str = s.DEFAULT_STANDARD, episodes: boo
     return {c.name: {"dtype": c.dtype, "unit": c.unit, "meaning": c.meaning} for c in columns(arrow_schema, standard, episodes)}
 
 
+def markdown_table(cols: list[Column]) -> list[str]:
+    """The lines of a Markdown table of columns: name, dtype, unit, meaning."""
+    rows = ["| column | dtype | unit | meaning |", "|---|---|---|---|"]
+    return rows + [f"| `{c.name}` | {c.dtype} | {c.unit} | {c.meaning.replace('|', '/')} |" for c in cols]
+
+
 def markdown() -> str:
     """docs/formats.md's generated section: the columns of a cic flow dataset with context, the
     paper standard's features, and the window-host view's own columns."""
     from .parquet import arrow_schema, episode_arrow_schema
 
-    def table(cols: list[Column]) -> list[str]:
-        rows = ["| column | dtype | unit | meaning |", "|---|---|---|---|"]
-        return rows + [f"| `{c.name}` | {c.dtype} | {c.unit} | {c.meaning.replace('|', '/')} |" for c in cols]
-
+    table = markdown_table
     flows = columns(arrow_schema("cic", context=True), "cic")
     paper = [c for c in columns(arrow_schema("paper"), "paper") if c.name in s.PAPER_FEATURES]
     flow_names = {c.name for c in flows}

@@ -26,7 +26,10 @@ from .parquet import read_flows
 from .uavcas_csv import STAT_CFG_FILE, STAT_FILE, TS_CFG_FILE, TS_FILE, read_layout
 
 FORMATS = ("uavcas", "uavcas-csv", "cicids2017", "unsw-nb15")  # what `read_any` reads
-EXPORT_FORMATS = ("uavcas-csv",)  # what `uavcas export` writes and `uavcas import` reads back
+# what `uavcas export` writes: the authors' layout (`uavcas_csv`), or one CSV row per flow with
+# CICIDS2017's names (`cic_csv`)
+EXPORT_FORMATS = ("uavcas-csv", "csv")
+IMPORT_FORMATS = ("uavcas-csv",)  # what `uavcas import` reads back into a dataset directory
 _BENIGN_NAMES = {"BENIGN": BENIGN, "Benign": BENIGN, "benign": BENIGN, "Normal": BENIGN}
 _LAYOUT_FILES = (STAT_FILE, TS_FILE, STAT_CFG_FILE, TS_CFG_FILE)
 

@@ -1,5 +1,6 @@
 """The runs of a dataset, one row each: configuration, seed, rows per class and the fidelity verdict
-with the checks that failed. `uavcas info`, the campaign's final summary and the report read it.
+with the checks that failed; and the dataset's rows per class and view (`class_table`).
+`uavcas info`, the campaign's final summary, the report and the published card read them.
 
 The card (`dataset.json: runs`) gives the verdict and, for runs extracted since it was recorded,
 the failed checks' names (`fidelity_failed`); a campaign keeps each run's fidelity.json under
@@ -10,6 +11,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
+
+import pandas as pd
 
 from uavcas.schema import CLASSES
 
@@ -68,6 +71,18 @@ def dataset_runs(dataset_dir: str | Path, card: dict) -> list[RunRow]:
             verdict=r.get("fidelity") or UNAUDITED,
             failed=tuple(_check_text(n, checks) for n in failed)))
     return sorted(rows, key=lambda x: (not x.run_id.isdigit(), int(x.run_id) if x.run_id.isdigit() else 0, x.run_id))
+
+
+def class_table(df: pd.DataFrame) -> pd.DataFrame:
+    """Rows per class (vocabulary order, then any other label) of a frame with `label` (and
+    `view`): a `class` column, one count column per view (`rows` without a view column), and
+    `all views` when there are several."""
+    tab = pd.crosstab(df["label"], df["view"]) if "view" in df.columns else df["label"].value_counts().to_frame("rows")
+    order = [c for c in CLASSES if c in tab.index] + sorted(c for c in tab.index if c not in CLASSES)
+    tab = tab.loc[order]
+    if tab.shape[1] > 1:
+        tab["all views"] = tab.sum(axis=1)
+    return tab.rename_axis(None, axis=1).reset_index().rename(columns={"label": "class"})
 
 
 def percent(n: int, total: int) -> str:

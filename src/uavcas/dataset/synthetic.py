@@ -20,15 +20,13 @@ host, window or vantage structure to observe.
 from __future__ import annotations
 
 import ipaddress
-import os
-import shutil
-import tempfile
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
 from uavcas import schema
+from uavcas.atomic import atomic_dir
 from uavcas.scenario.campaign import MEDIUM_PAPER_CONFIGS, run_seed
 from uavcas.scenario.codec import parse
 
@@ -217,27 +215,12 @@ def write_dataset(out_dir: str | Path, df: pd.DataFrame, run_meta: dict[str, dic
     from .store import rebuild
 
     out = Path(out_dir)
-    if out.exists() and (not out.is_dir() or any(out.iterdir())):
-        raise FileExistsError(f"{out} exists and is not an empty directory")
-    out.parent.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.", dir=out.parent))
-    try:
+    with atomic_dir(out) as tmp:
         for run_id, g in df.groupby("run_id", sort=True):
             meta = {"run_id": str(run_id), "config": str(g["config"].iloc[0]), "seed": int(g["seed"].iloc[0]),
                     "view": str(g["view"].iloc[0]), "labels": LABEL_SOURCE, "n_flows": len(g),
                     "class_counts": g["label"].value_counts().to_dict(), **(run_meta or {}).get(str(run_id), {})}
             write_table(to_table(g, meta), tmp / "shards" / f"{run_id}.parquet")
         rebuild(tmp)
-        os.chmod(tmp, 0o777 & ~_umask())
-        if out.exists():
-            out.rmdir()  # empty, checked above
-        os.replace(tmp, out)
-    finally:
-        shutil.rmtree(tmp, ignore_errors=True)
     return out
 
-
-def _umask() -> int:
-    mask = os.umask(0)
-    os.umask(mask)
-    return mask

@@ -66,6 +66,22 @@ def rule_text(mode: str, min_attack_fraction: float = 0.0) -> str:
             + " | ".join(parts))
 
 
+def rule_summary(rules: list[str]) -> tuple[list[str], list[str]]:
+    """The card's rule texts (`rule_text`, `dataset.json: label_rules`) for people: each text's
+    first sentence (its policy), and the parts of every text: its policy with the effect
+    precedence, then each family's rule (a text joins them with " | "), for the report and the
+    published card."""
+    headlines = [rule.split(". ", 1)[0].rstrip(".") + "." for rule in rules]
+    parts = []
+    for rule in rules:
+        first, *rest = (p.strip() for p in rule.split(" | "))
+        # the first part is the policy, the effect precedence, then the first family's rule
+        head, sep, fam = first.partition("): ") if "(precedence " in first else (first, "", "")
+        parts += [head + ")", fam] if sep else [head]
+        parts += rest
+    return headlines, parts
+
+
 def truth_columns(fl: Flows, truth: PacketTruth) -> pd.DataFrame:
     """seq_effect, attack_packets, attack_fraction, provoked_packets and attack_packets_<family>,
     one row per flow."""

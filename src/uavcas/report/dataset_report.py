@@ -20,6 +20,7 @@ import pandas as pd
 import pyarrow.parquet as pq
 
 from uavcas.atomic import atomic_write_text
+from uavcas.labels.label import rule_summary
 from uavcas.schema import CLASSES
 
 from .distributions import SHOWN_EPISODE_FEATURES, SHOWN_FEATURES, counts_frame, feature_figure
@@ -42,25 +43,22 @@ def _styled(df: pd.DataFrame, raw: tuple[str, ...] = ()) -> str:
 
 
 def _class_table(df: pd.DataFrame) -> str:
-    tab = pd.crosstab(df["label"], df["view"]) if "view" in df.columns else df["label"].value_counts().to_frame("rows")
-    order = [c for c in CLASSES if c in tab.index] + sorted(c for c in tab.index if c not in CLASSES)
-    tab = tab.loc[order]
-    if tab.shape[1] > 1:
-        tab["all views"] = tab.sum(axis=1)
-    return _styled(tab.rename_axis(None, axis=1).reset_index().rename(columns={"label": "class"}))
+    from uavcas.dataset.runs import class_table
+
+    return _styled(class_table(df))
 
 
 def _summary(card: dict, df: pd.DataFrame, runs) -> dict:
     rules = card.get("runs") or []
     flow_rules = sorted({json.dumps(r.get("flow_rules") or {}, sort_keys=True) for r in rules} - {"{}"})
+    headlines, parts = rule_summary(card.get("label_rules", []))
     return {
         "rows": len(df), "unit": "host-window row" if card.get("unit") == "host-window" else "flow",
         "runs": card.get("n_runs", len(runs)), "standard": (card.get("features") or {}).get("standard", "cic"),
         "fidelity": card.get("fidelity") or {"unaudited": len(runs)}, "flagged": sum(r.flagged for r in runs),
         "class_table": _class_table(df), "label_modes": card.get("label_modes", []),
-        # each rule's first sentence (the policy), then every family's rule (a rule text joins them with " | ")
-        "label_headlines": [rule.split(". ", 1)[0].rstrip(".") + "." for rule in card.get("label_rules", [])],
-        "label_rules": [part.strip() for rule in card.get("label_rules", []) for part in rule.split(" | ")], "terminations": card.get("terminations", []),
+        # each rule's first sentence (the policy), then every family's rule
+        "label_headlines": headlines, "label_rules": parts, "terminations": card.get("terminations", []),
         "flow_rules": flow_rules,
     }
 
