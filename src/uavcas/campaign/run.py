@@ -13,7 +13,7 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, T
 
 from uavcas.atomic import atomic_write_bytes, atomic_write_text
 from uavcas.scenario import ManifestEntry
-from uavcas.vocabulary import FIDELITY_POLICIES  # noqa: F401  (callers import it from here too)
+from uavcas.vocabulary import FIDELITY_POLICIES
 
 from .executor import run_dask, run_local
 from .layout import CampaignDir, CampaignError

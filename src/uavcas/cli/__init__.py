@@ -92,12 +92,13 @@ def main() -> None:
 
 def _usage_error(exc: "_click_errors.UsageError") -> str:
     """`--view: 'bogus' is not one of ...` from click's exception (the command named for context)."""
-    msg = exc.format_message().replace("Value error, ", "")
+    msg = exc.format_message()
     if (isinstance(exc, _click_errors.BadParameter) and not isinstance(exc, _click_errors.MissingParameter)
             and exc.param is not None):
         is_argument = getattr(exc.param, "param_type_name", "") == "argument"
         hint = (exc.param.metavar or exc.param.name.upper()) if is_argument else "/".join(exc.param.opts)
-        msg = f"{hint}: {exc.message.replace('Value error, ', '')}"
+        msg = f"{hint}: {exc.message}"
+    msg = msg.replace("Value error, ", "")  # typer's pydantic validation prefixes its messages so
     cmd = exc.ctx.command_path if exc.ctx is not None else "uavcas"
     return " ".join(f"{msg} (see {cmd} -h)".split())  # one line, whatever click wrapped
 

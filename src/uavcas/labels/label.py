@@ -34,7 +34,7 @@ import pyarrow as pa
 from uavcas.attacks import families, family
 from uavcas.flows.assemble import Flows
 from uavcas.schema import FAMILIES, class_name
-from uavcas.vocabulary import ATTACK_PACKET_COLUMNS, EFFECT_PRECEDENCE, EFFECTS, LABEL_MODES, LabelMode  # noqa: F401
+from uavcas.vocabulary import ATTACK_PACKET_COLUMNS, EFFECT_PRECEDENCE, EFFECTS, LABEL_MODES, LabelMode
 
 from .attacklog import AttackLog
 from .effects import PacketTruth
