@@ -13,8 +13,8 @@ from uavcas.attacks.blackhole import BlackholeSpec, ruleset, switch_ports, table
 NAMES = [f"uav{i}" for i in range(5)]
 
 
-def _draw(routes0, used=()):
-    d = ScheduleDraw(NAMES, "uav0", ["uav3", "uav1", "uav2", "uav4"], routes0, np.random.default_rng(0))
+def _draw(routes_start, used=()):
+    d = ScheduleDraw(NAMES, "uav0", ["uav3", "uav1", "uav2", "uav4"], routes_start, np.random.default_rng(0))
     d.used.update(used)
     return d
 

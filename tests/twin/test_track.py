@@ -35,7 +35,7 @@ def _exact_enu_to_geodetic(site: Site, e: float, n: float, u: float) -> tuple[fl
 def test_the_plan_records_the_lw1_site_and_mavlink_sysids_bit_for_bit():
     a, b = plan(CFG, seed=14, windows=4), plan(CFG, seed=14, windows=4)
     assert a.to_json() == b.to_json() and Plan.from_json(a.to_json()) == a
-    assert a.schema_version == SCHEMA_VERSION == 3 and a.site == Site() and a.site.name == "AERPAW LW1"
+    assert a.schema_version == SCHEMA_VERSION == 4 and a.site == Site() and a.site.name == "AERPAW LW1"
     assert (a.site.lat_deg, a.site.lon_deg) == (35.727451, -78.695974)
     assert [n.sysid for n in a.nodes] == [1, 2, 3, 4, 5, 6, 255, 254]
     # a plan.json of schema 1 (no site, no sysids) reads with the same defaults

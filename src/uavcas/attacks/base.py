@@ -72,10 +72,10 @@ class ScheduleDraw:
     """The state one schedule draw shares between the families of a composition."""
 
     def __init__(self, uav_names: list[str], victim: str, pool: list[str],
-                 routes0: dict[str, list[str]] | None, rng: np.random.Generator,
+                 routes_start: dict[str, list[str]] | None, rng: np.random.Generator,
                  detours: Callable[[str, str], int] | None = None) -> None:
         self.uav_names, self.victim, self.pool = uav_names, victim, pool  # pool: seeded order
-        self.routes0 = routes0 or {}
+        self.routes_start = routes_start or {}
         self.rng = rng
         # windows of the attack in which a wormhole detour victim -> attacker -> BS exists
         self.detours = detours or (lambda victim, attacker: 1)

@@ -95,7 +95,7 @@ class Blackhole(AttackFamily):
     tools = ("nft",)
 
     def attackers(self, spec: SpecBase, draw: ScheduleDraw) -> list[str]:
-        route = draw.routes0.get(draw.victim, [])
+        route = draw.routes_start.get(draw.victim, [])
         relay = route[1] if len(route) > 1 else None
         if relay in draw.pool and relay not in draw.used:
             draw.used.add(relay)

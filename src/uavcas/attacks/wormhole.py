@@ -52,7 +52,7 @@ class Wormhole(AttackFamily):
     detours_traffic = True
 
     def attackers(self, spec: SpecBase, draw: ScheduleDraw) -> list[str]:
-        on_path = set(draw.routes0.get(draw.victim, ()))
+        on_path = set(draw.routes_start.get(draw.victim, ()))
         off = [u for u in draw.pool if u not in draw.used and u not in on_path]
         # the one with a detour in most of the attack's windows (the first in seeded order on ties)
         attackers = [max(off, key=lambda u: draw.detours(draw.victim, u))] if off else draw.take(1)

@@ -159,6 +159,7 @@ def read_manifest(path: Path) -> list[ManifestEntry]:
                     seed=int(d["seed"]),
                     windows=int(d.get("windows", 12)),
                     window_s=float(d.get("window_s", 5.0)),
+                    episodes=int(d.get("episodes", 1)),
                 )
             )
         except (json.JSONDecodeError, KeyError, TypeError, ValueError) as e:

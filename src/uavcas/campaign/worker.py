@@ -31,6 +31,7 @@ class WorkerRequest(BaseModel):
     seed: int
     windows: int
     window_s: float
+    episodes: int = 1
     out_dir: str
     profile: str | None = None
     mavlink_signing: bool = False  # RunOptions.mavlink_signing
@@ -50,7 +51,8 @@ def realize_request(req: WorkerRequest) -> WorkerResult:
     from uavcas.emulation.runner import RunOptions, realize
     from uavcas.twin import plan
 
-    p = plan(req.config, seed=req.seed, windows=req.windows, window_s=req.window_s, profile=req.profile)
+    p = plan(req.config, seed=req.seed, windows=req.windows, window_s=req.window_s, profile=req.profile,
+             episodes=req.episodes)
     out = Path(req.out_dir)
     reason = preflight(p, out)
     feats = None

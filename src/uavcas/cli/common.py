@@ -65,6 +65,11 @@ def window_s_option() -> Any:
     return typer.Option(5.0, "--window-s", min=MIN_WINDOW_S, help="Window length in seconds.")
 
 
+def episodes_option() -> Any:
+    return typer.Option(1, "--episodes", min=1, help="Attack episodes per run: the composition again on a fresh "
+                                                     "victim, 10-20 s each, >= 5 s apart (the medium preset uses 3).")
+
+
 def profile_option() -> Any:
     return typer.Option(None, "--profile", help="Twin profile (channel and mobility): a name or a JSON path "
                                                 "(default: the calibrated one).")
@@ -104,18 +109,19 @@ def path_fail(path: Path, error: Exception) -> "typer.Exit":
     return fail(msg if str(path) in msg else f"{path}: {msg}")
 
 
-def plan_or_fail(config: str, seed: int, windows: int, window_s: float, profile: str | None):
+def plan_or_fail(config: str, seed: int, windows: int, window_s: float, profile: str | None, episodes: int = 1):
     """The plan of a scenario, or a one-line error naming the bad field / profile (exit 2)."""
     from uavcas.scenario import ScenarioError
     from uavcas.twin import plan as make_plan
     from uavcas.twin.profile import ProfileError
+    from uavcas.twin.schedule import EpisodeError
 
     try:
-        p = make_plan(config, seed=seed, windows=windows, window_s=window_s, profile=profile)
+        p = make_plan(config, seed=seed, windows=windows, window_s=window_s, profile=profile, episodes=episodes)
         if p.config != config:
             err_console.print(f"note: scenario normalised to its canonical form {p.config}", highlight=False)
         return p
-    except ScenarioError as e:
+    except (ScenarioError, EpisodeError) as e:
         raise fail(str(e)) from None
     except ProfileError as e:
         raise fail(f"--profile: {e}") from None

@@ -10,7 +10,7 @@ from rich.table import Table
 
 
 from .common import (atomic_write_text, check_output, config_argument, console, plan_or_fail, profile_option,
-                     seed_option, window_s_option, windows_option)
+                     seed_option, window_s_option, windows_option, episodes_option)
 
 
 def plan_cmd(
@@ -18,6 +18,7 @@ def plan_cmd(
     seed: int = seed_option("Seed: the same seed and config give the same plan."),
     windows: int = windows_option(),
     window_s: float = window_s_option(),
+    episodes: int = episodes_option(),
     profile: str = profile_option(),
     out: Path = typer.Option(None, "--out", help="Write plan.json here."),
     figure: Path = typer.Option(None, "--figure", help="Directory for one topology PNG per window."),
@@ -27,7 +28,7 @@ def plan_cmd(
         check_output(out, "file")
     if figure is not None:
         check_output(figure, "dir", "--figure")
-    p = plan_or_fail(config, seed, windows, window_s, profile)
+    p = plan_or_fail(config, seed, windows, window_s, profile, episodes)
     print_summary(p)
     if out is not None:
         atomic_write_text(out, p.to_json())

@@ -16,7 +16,7 @@ from uavcas.attacks import AttackSpec, family
 from uavcas.scenario.codec import Scenario, ScenarioError
 from uavcas.vocabulary import FAMILIES, Family
 
-SCHEMA_VERSION = 3  # 2: Plan.site and Node.sysid; 3: Window.interferers and link_overrides (jamming); defaults fill both in older plans
+SCHEMA_VERSION = 4  # 2: Plan.site and Node.sysid; 3: Window.interferers and link_overrides (jamming); 4: Plan.episodes; defaults fill them in older plans
 
 NodeKind = Literal["uav", "bs"]
 LinkKind = Literal["air", "backhaul"]
@@ -206,6 +206,7 @@ class Plan(_Frozen):
     scenario: Scenario | None = None
     seed: int
     window_s: float
+    episodes: int = Field(default=1, ge=1)  # attack episodes drawn (`twin.schedule`): with seed, config and windows, it fixes the plan
     profile: str  # channel/mobility profile name the plan was made with
     profile_sha256: str | None = None  # SHA-256 of the profile's JSON (None: plans made before it was recorded)
     area_m: tuple[float, float, float, float]  # x_max, y_max, z_min, z_max

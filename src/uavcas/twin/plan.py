@@ -88,6 +88,7 @@ def plan(
     windows: int = 12,
     window_s: float = 5.0,
     profile: TwinProfile | str | None = None,
+    episodes: int = 1,
 ) -> Plan:
     if isinstance(scenario, str):
         scenario = Scenario.parse(scenario)
@@ -131,8 +132,11 @@ def plan(
 
     # The routing without attacks, per window (attacks only add detours to it).
     bases = [nearest_neighbour_topology(positions[w], is_bs, losses[w]) for w in range(windows)]
-    # Routes of window 0 pick the blackhole relay and an off-path wormhole attacker.
-    routes0 = {names[u]: [names[h] for h in route(bases[0], n, u, bs_of[u]) or []] for u in range(n_uav)}
+    def routes_at(t_s: float) -> dict[str, list[str]]:
+        """The routes of the window holding t_s: they pick the blackhole relay and an off-path
+        wormhole attacker of an episode starting then."""
+        w = min(int(t_s // window_s), windows - 1)
+        return {names[u]: [names[h] for h in route(bases[w], n, u, bs_of[u]) or []] for u in range(n_uav)}
 
     def detour_windows(victim: str, attacker: str, start_s: float, stop_s: float) -> int:
         """Windows of [start_s, stop_s) in which a wormhole detour victim -> attacker -> BS exists."""
@@ -140,9 +144,8 @@ def plan(
         return sum(bool(with_wormholes(bases[w], positions[w], is_bs, [(v, a, bs_of[v])], losses[w]).detours)
                    for w in range(windows) if w * window_s < stop_s and (w + 1) * window_s > start_s)
 
-    attacks = schedule_attacks(
-        scenario, names[:n_uav], windows * window_s, _rng(seed, _ATTACK_STREAM), routes0, detour_windows
-    )
+    attacks = schedule_attacks(scenario, names[:n_uav], windows * window_s, _rng(seed, _ATTACK_STREAM), routes_at,
+                               detour_windows, episodes=episodes)
 
     # Emitters the attacks place (jammers), drawn from their own stream: other draws stay as they were.
     ectx = EmitterContext(names, float(window_s), np.stack(positions),
@@ -183,6 +186,7 @@ def plan(
         scenario=scenario,
         seed=seed,
         window_s=float(window_s),
+        episodes=episodes,
         profile=prof.name,
         profile_sha256=profile_sha256(prof),
         area_m=(area.x_max_m, area.y_max_m, area.z_min_m, area.z_max_m),
