@@ -24,7 +24,7 @@ import numpy as np
 import pandas as pd
 
 from uavcas.flows import VIEWS, FlowConfig, Flows, PacketTable, extract_flows
-from uavcas.flows.context import CONTEXT_WINDOW_S, context_frame
+from uavcas.flows.context import CONTEXT_WINDOW_S, context_frames
 from uavcas.flows.follow import Followed, follow_run
 from uavcas.labels import PacketTruth, TruthContext, label_flows, packet_truth, read_attack_log, rule_text
 from uavcas.rundir import RunDir, RunDirError, RunInfo
@@ -144,13 +144,14 @@ def extract_detailed(
                      min_packets=min_packets, window_t0_unix=t0, window_s=plan.window_s)
     ex = extract_flows(pcaps, cfg, points=[p.stem for p in pcaps], allow_truncated=allow_truncated, standard=features)
     # from the captures and flows only: computed before the attack log is even read
-    ctx = context_frame(ex.packets, ex.flows) if context else None
+    ctx, routes = context_frames(ex.packets, ex.flows) if context else (None, None)
     log, followed, truth = run_truth(rd, ex.packets, plan, t0)
     if episodes:  # the 5-tuple flows first, then their packets and flows per node and window
         ff = ex.frame.reset_index(drop=True)
         if ctx is not None:
             ff = pd.concat([ff, pd.DataFrame(ctx.to_numpy(), columns=list(CONTEXT_FEATURES))], axis=1)
-        df, impure, rule = host_window_frame(ex.packets, ex.flows, ff, truth, plan, t0, standard=features), 0, episode_rule_text()
+        df = host_window_frame(ex.packets, ex.flows, ff, truth, plan, t0, standard=features, routes=routes)
+        impure, rule = 0, episode_rule_text()
     else:
         lab = label_flows(ex.flows, ex.frame, log, truth, mode=labels,  # type: ignore[arg-type]
                           min_attack_fraction=min_attack_fraction)

@@ -18,7 +18,7 @@ from __future__ import annotations
 
 from uavcas import vocabulary as _v
 
-SCHEMA_VERSION = 5  # 2: feature standards, first_ts_ns; 3: context columns (ctx_*); 4: provoked effect, provoked_packets; 5: families jamming, gps_spoof, mavlink_inject (their columns and effects), the card's column dictionary and fidelity_failed
+SCHEMA_VERSION = 6  # 2: feature standards, first_ts_ns; 3: context columns (ctx_*); 4: provoked effect, provoked_packets; 5: families jamming, gps_spoof, mavlink_inject (their columns and effects), the card's column dictionary and fidelity_failed; 6: route context (ctx_route_lonely_frac, ctx_path_len_shift_max, ctx_delay_shift_max_ms; episodes ctx_pkt_*)
 
 # Direction-independent statistics over all packets of the flow.
 FLOW_FEATURES: tuple[str, ...] = (
@@ -129,11 +129,15 @@ CONTEXT_PAIR_FEATURES: tuple[str, ...] = tuple(
 # the flow's own round trip, delay and path length less the median of its pair's earlier windows
 CONTEXT_FLOW_SHIFTS: tuple[str, ...] = ("ctx_rtt_shift_ms", "ctx_delay_shift_ms", "ctx_path_len_shift")
 CONTEXT_NET_FEATURES: tuple[str, ...] = ("ctx_net_lost_frac", "ctx_net_path_len_mean", "ctx_net_unanswered_frac")
+# every window the flow's packets crossed, each packet against its directed pair's earlier windows
+# (`flows.routes`): what a wormhole does to a long stream that began before it
+CONTEXT_ROUTE_FEATURES: tuple[str, ...] = ("ctx_route_lonely_frac", "ctx_path_len_shift_max", "ctx_delay_shift_max_ms")
 CONTEXT_FEATURES: tuple[str, ...] = (
     CONTEXT_FLOW_FEATURES + CONTEXT_HOST_FEATURES + CONTEXT_PAIR_FEATURES + CONTEXT_FLOW_SHIFTS + CONTEXT_NET_FEATURES
+    + CONTEXT_ROUTE_FEATURES
 )
 CONTEXT_PREFIX = "ctx_"
-assert len(set(CONTEXT_FEATURES)) == len(CONTEXT_FEATURES) == 60
+assert len(set(CONTEXT_FEATURES)) == len(CONTEXT_FEATURES) == 63
 assert all(c.startswith(CONTEXT_PREFIX) for c in CONTEXT_FEATURES)
 
 FEATURE_STANDARDS: dict[str, tuple[str, ...]] = {"cic": FEATURES, "paper": PAPER_FEATURES}
@@ -228,7 +232,11 @@ def episode_feature_columns(standard: str = DEFAULT_STANDARD) -> tuple[str, ...]
 
 
 # the flows' context columns summarised per episode (mean and max over the same flows)
-EPISODE_CONTEXT_FEATURES: tuple[str, ...] = tuple(f"{c}_{s}" for c in CONTEXT_FEATURES for s in EPISODE_STATS)
+# the same route measures over the episode's own packets (`flows.routes`), whichever flow they belong to
+EPISODE_ROUTE_FEATURES: tuple[str, ...] = (
+    "ctx_pkt_route_lonely_frac", "ctx_pkt_path_len_shift", "ctx_pkt_delay_shift_ms", "ctx_pkt_route_lonely_max")
+EPISODE_CONTEXT_FEATURES: tuple[str, ...] = tuple(
+    f"{c}_{s}" for c in CONTEXT_FEATURES for s in EPISODE_STATS) + EPISODE_ROUTE_FEATURES
 EPISODE_COUNT_COLUMNS: tuple[str, ...] = ("packets",)  # the host's packets in the window (truth's denominator)
 EPISODE_METADATA_COLUMNS: tuple[str, ...] = (
     EPISODE_ID_COLUMNS + AXIS_COLUMNS + EPISODE_COUNT_COLUMNS + META_LABEL_COLUMNS

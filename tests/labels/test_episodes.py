@@ -27,7 +27,7 @@ def _table(obs: list[dict]) -> PacketTable:
         rows.append({"ts_ns": round(T0) * 10**9 + round(o["t"] * 1e9), "frame_len": length, "cap_len": length,
                      "ip_version": 4, "ip_len": length - 14, "src_hi": shi, "src_lo": slo, "dst_hi": dhi,
                      "dst_lo": dlo, "sport": o["sport"], "dport": o["dport"], "proto": 6, "tcp_flags": o["flags"],
-                     "ttl": 64, "ip_id": k, "tcp_seq": 100, "ip_hdr_len": 20, "l4_hdr_len": 20, "frame_index": k,
+                     "ttl": 64, "ip_id": o.get("id", k), "tcp_seq": 100, "ip_hdr_len": 20, "l4_hdr_len": 20, "frame_index": k,
                      "point": POINTS.index(o["at"])})  # fmt: skip
     return table_from_rows(rows, POINTS)
 
@@ -117,3 +117,40 @@ def test_no_flow_starting_in_the_window_gives_nan_summaries():
     with pytest.raises(ValueError, match="5-tuple"):
         host_window_frame(p, assemble(p, FlowConfig(view="hostpair", min_packets=1)), flow_frame(p, fl), truth,
                           make_plan(), T0)
+
+
+def test_route_columns_summarise_the_episodes_own_packets():
+    """Six streams between bs0 and three UAVs over three windows; uav3 -> bs0 goes through uav1
+    from 10.3 s: 1 of 6 pairs changed, so from the bin of the change its packets are on a lonely
+    route; the episodes carry the route columns, finite, from the context's packet routes."""
+    import pandas as pd
+
+    from uavcas.flows.context import context_frames
+    from uavcas.schema import EPISODE_ROUTE_FEATURES
+
+    obs = []
+    streams = [("uav3", "bs0"), ("bs0", "uav3"), ("uav0", "bs0"), ("bs0", "uav0"), ("uav1", "bs0"), ("bs0", "uav1")]
+    for k in range(150):
+        t = 0.1 * k
+        for j, (src, dst) in enumerate(streams):
+            path = [f"s-{src}", f"s-{dst}"]
+            if (src, dst) == ("uav3", "bs0") and t >= 10.3:
+                path = ["s-uav3", "s-uav1", "s-bs0"]
+            obs += [dict(t=t + 0.01 * j + 0.001 * i, at=at, src=src, dst=dst, sport=6000 + j, dport=80, flags=ACK,
+                         id=1000 * j + k) for i, at in enumerate(path)]  # one IP id per packet, at every switch
+    p = _table(obs)
+    truth = PacketTruth(np.zeros(len(p), dtype=np.int8), np.full(len(p), -1, dtype=np.int8))
+    fl = assemble(p, FlowConfig())
+    ctx, routes = context_frames(p, fl)
+    ff = pd.concat([flow_frame(p, fl), ctx], axis=1)
+    df = host_window_frame(p, fl, ff, truth, make_plan(), T0, routes=routes).set_index(["host", "window"])
+    assert set(EPISODE_ROUTE_FEATURES) <= set(df.columns) and np.isfinite(df[list(EPISODE_ROUTE_FEATURES)]).all().all()
+    # uav3's window 2 holds its 50 packets to bs0 (all lonely: from 10 s) and its 50 from bs0, its one peer
+    v = df.loc[("uav3", 2)]
+    assert (v.ctx_pkt_route_lonely_max, v.ctx_pkt_route_lonely_frac) == (pytest.approx(0.5), pytest.approx(0.5))
+    assert v.ctx_pkt_path_len_shift == pytest.approx(0.47)  # one switch more on the 47 detoured of its 100
+    assert df.loc[("uav3", 0), "ctx_pkt_route_lonely_max"] == 0.0 and df.loc[("uav0", 2), "ctx_pkt_route_lonely_max"] == 0.0
+    b = df.loc[("bs0", 2)]  # of bs0's three peers, uav3's traffic was half detoured
+    assert (b.ctx_pkt_route_lonely_max, b.ctx_pkt_route_lonely_frac) == (pytest.approx(0.5), pytest.approx(50 / 300))
+    with pytest.raises(ValueError, match="routes"):
+        host_window_frame(p, fl, ff, truth, make_plan(), T0)

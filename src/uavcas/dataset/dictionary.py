@@ -113,6 +113,20 @@ _CTX_FLOW: dict[str, tuple[str, str]] = {
     "ctx_retx_frac": ("ratio", "share of packets repeating an earlier data/SYN/FIN packet (retransmissions)"),
     "ctx_seq_regress_frac": ("ratio", "share of data packets whose TCP seq lies below the highest sent before (stale copies)"),
     "ctx_rtt_ms": ("ms", "first SYN entering the network to the first SYN-ACK's last observation (-1: no handshake)"),
+    "ctx_route_lonely_frac": ("ratio", "share of the flow's packets whose directed host pair's last route change "
+                                       "(switch sequence, 1 s bins) came while < 20 % of the network's pairs "
+                                       "changed (that bin or the one before)"),
+    "ctx_path_len_shift_max": ("switches", "over the windows the flow's packets crossed, the largest mean of (switches "
+                                           "that saw a packet less the median of its directed pair's earlier windows)"),
+    "ctx_delay_shift_max_ms": ("ms", "likewise for first-to-last observation time, against the pair's earlier median "
+                                     "delay"),
+    # the window-host view's own route columns, over the episode's packets
+    "ctx_pkt_route_lonely_frac": ("ratio", "share of the episode's packets on a lonely route (as ctx_route_lonely_frac)"),
+    "ctx_pkt_route_lonely_max": ("ratio", "the largest such share over the node's peers (the other end's address)"),
+    "ctx_pkt_path_len_shift": ("switches", "mean over the episode's packets of switches that saw it less its directed "
+                                           "pair's earlier median"),
+    "ctx_pkt_delay_shift_ms": ("ms", "mean over the episode's packets of first-to-last observation time less its "
+                                     "directed pair's earlier median"),
 }
 _CTX_METRIC: dict[str, tuple[str, str]] = {
     "flow_share": ("ratio", "share of the window's flows that have it as an endpoint"),
@@ -206,6 +220,8 @@ def describe(name: str, standard: str = s.DEFAULT_STANDARD, episodes: bool = Fal
         found = _feature(name, standard) or _context(name)
     elif name in _EPISODE:
         found = s.EPISODE_PACKET_UNITS[name], _EPISODE[name]
+    elif name in s.EPISODE_ROUTE_FEATURES:
+        found = _CTX_FLOW[name]
     else:
         found = _episode_summary(name, standard)
     if found is None:
@@ -259,8 +275,10 @@ def markdown() -> str:
     flows = columns(arrow_schema("cic", context=True), "cic")
     paper = [c for c in columns(arrow_schema("paper"), "paper") if c.name in s.PAPER_FEATURES]
     flow_names = {c.name for c in flows}
-    ep_schema = episode_arrow_schema("cic", context=False)
-    episode = [c for c in columns(ep_schema, "cic", episodes=True) if c.name not in flow_names or c.name == "packets"]
+    summaries = set(s.EPISODE_CONTEXT_FEATURES) - set(s.EPISODE_ROUTE_FEATURES)  # said in one sentence below
+    ep_schema = episode_arrow_schema("cic", context=True)
+    episode = [c for c in columns(ep_schema, "cic", episodes=True)
+               if (c.name not in flow_names or c.name == "packets") and c.name not in summaries]
     episode += [c for c in columns(episode_arrow_schema("paper"), "paper", episodes=True)
                 if c.name not in {e.name for e in episode} and c.name not in flow_names]
     out = ["<!-- generated: python -m uavcas.dataset.dictionary docs/formats.md (tests/dataset/test_dictionary.py checks it) -->",

@@ -52,6 +52,7 @@ from uavcas.schema import (
 from .assemble import Flows
 from .follow import KEY_COLUMNS, MAX_HOP_S
 from .packets import PacketTable
+from .routes import RouteShifts, earlier_median, flow_route_context, route_shifts
 
 CONTEXT_WINDOW_S = 5.0
 TCP_FIN, TCP_SYN, TCP_ACK = 0x01, 0x02, 0x10
@@ -253,12 +254,6 @@ def unanswered_requests(p: PacketTable, fl: Flows) -> np.ndarray:
     return request & (np.bincount(fl.flow, weights=~fl.fwd, minlength=fl.n_flows) == 0)
 
 
-def _earlier_median(tab: pd.DataFrame, metric: str) -> pd.Series:
-    """Median of the key's earlier windows that had a value (NaN in its first one). `tab` is
-    sorted by (key, window)."""
-    return tab[metric].groupby(tab["key"]).transform(lambda s: s.expanding().median().shift(1).ffill())
-
-
 @dataclass(frozen=True)
 class Observed:
     """What the windows aggregate. Per flow: `ini`, `res` (address codes of its initiator and
@@ -295,7 +290,7 @@ def _finish(tab: pd.DataFrame, shifts: dict[str, str]) -> pd.DataFrame:
     tab = tab.reset_index().sort_values(["key", "win"], kind="stable").reset_index(drop=True)
     tab[["flow_share", "log_flows"]] = tab[["flow_share", "log_flows"]].fillna(0.0)
     for metric, shift in shifts.items():
-        tab["base_" + metric] = _earlier_median(tab, metric)
+        tab["base_" + metric] = earlier_median(tab, metric)
         tab[shift] = (tab[metric] - tab["base_" + metric]).fillna(0.0)
     for m in ("rtt_ms", "delay_ms"):
         tab[m] = tab[m].fillna(-1.0)
@@ -369,14 +364,30 @@ def _take(tab: pd.DataFrame, key: np.ndarray, win: np.ndarray, cols: list[str]) 
     return tab.reindex(pd.MultiIndex.from_arrays([key, win]))[cols].to_numpy()
 
 
+@dataclass(frozen=True)
+class PacketRoutes:
+    """Per packet-table row, its transmission (`tx`); per transmission, its route shifts
+    (`flows.routes`): what the episode view summarises over a host's own packets."""
+
+    tx: np.ndarray
+    shifts: RouteShifts
+
+
 def context_frame(p: PacketTable, fl: Flows, window_s: float = CONTEXT_WINDOW_S) -> pd.DataFrame:
     """The `schema.CONTEXT_FEATURES` of every flow of `fl` (rows in flow number order), from the
     packet table of all capture points `p` that `fl` was assembled from."""
+    return context_frames(p, fl, window_s)[0]
+
+
+def context_frames(p: PacketTable, fl: Flows, window_s: float = CONTEXT_WINDOW_S) -> tuple[pd.DataFrame, PacketRoutes]:
+    """`context_frame`, and the packets' route shifts (`PacketRoutes`) it was computed with."""
     if not window_s > 0:
         raise ValueError(f"context window must be > 0 s, got {window_s}")
-    if fl.n_flows == 0:
-        return pd.DataFrame({c: np.zeros(0) for c in CONTEXT_FEATURES})
     t = transmissions(p)
+    shifts = route_shifts(p, t, window_s)
+    routes = PacketRoutes(t.tx, shifts)
+    if fl.n_flows == 0:
+        return pd.DataFrame({c: np.zeros(0) for c in CONTEXT_FEATURES}), routes
     per_flow = flow_context(p, fl, t)
     o = Observed.of(p, fl, t, per_flow["ctx_rtt_ms"].to_numpy(), window_s)
     out = [per_flow]
@@ -393,7 +404,8 @@ def context_frame(p: PacketTable, fl: Flows, window_s: float = CONTEXT_WINDOW_S)
                     np.where(per_flow["ctx_path_len_mean"] > 0, per_flow["ctx_path_len_mean"], np.nan)], 1)
     out.append(pd.DataFrame(np.nan_to_num(own - base, nan=0.0), columns=list(CONTEXT_FLOW_SHIFTS)))
     out.append(network_windows(o, t).reindex(o.f_win).fillna(0.0).reset_index(drop=True))
+    out.append(flow_route_context(p, fl, t, shifts, window_s))
     frame = pd.concat(out, axis=1)
     if tuple(frame.columns) != CONTEXT_FEATURES:
         raise AssertionError(f"context columns {list(frame.columns)} differ from schema.CONTEXT_FEATURES")
-    return frame.astype(np.float64)
+    return frame.astype(np.float64), routes

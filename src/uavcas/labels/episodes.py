@@ -24,6 +24,11 @@ Rules (`host_window_frame`):
   every context column (`ctx_*`, when the flow frame has them). A flow is summarised once, in its
   first window, even when its packets continue into later windows (those packets do count in the
   later episodes' packet features).
+- Route context (with the context columns): `ctx_pkt_route_lonely_frac`, `ctx_pkt_path_len_shift`,
+  `ctx_pkt_delay_shift_ms`, the means over the episode's packets of their transmission's route
+  measures (`flows.routes`; 0 where none is defined), and `ctx_pkt_route_lonely_max`, the largest
+  lonely share of one peer's packets. Unlike the flow summaries they see a stream that began in
+  an earlier window.
 - NaN/inf: a flow feature that is inf (a rate over a zero duration) or NaN is left out of the mean
   and max; a summary over no finite value (no flow starts in the window, for instance) is NaN,
   as is `flows`' summaries on such rows. `uavcas.load_dataset` then sets NaN and inf to 0, as for
@@ -46,6 +51,7 @@ from uavcas.attacks import family
 from uavcas.flows.assemble import Flows
 from uavcas.flows.termination import TCP_ACK, TCP_FIN, TCP_RST, TCP_SYN
 from uavcas.flows.packets import PacketTable, address_to_words, ns_to_s
+from uavcas.flows.routes import episode_route_context
 from uavcas.schema import (
     CONTEXT_FEATURES,
     DEFAULT_STANDARD,
@@ -61,6 +67,7 @@ from .effects import PacketTruth
 from .label import SOURCES
 
 if TYPE_CHECKING:
+    from uavcas.flows.context import PacketRoutes
     from uavcas.twin.model import Plan
 
 NS = 1_000_000_000
@@ -117,12 +124,15 @@ def host_window_frame(
     plan: "Plan",
     t0_unix: float,
     standard: str = DEFAULT_STANDARD,
+    routes: "PacketRoutes | None" = None,
 ) -> pd.DataFrame:
     """One row per (plan node, plan window) with at least one packet (module docstring).
 
     `flows` must be 5-tuple flows of `packets` and `flow_frame` their frame (row i = flow i, the
     standard's features, and the `ctx_*` columns when context is wanted); `truth` is per row of
-    `packets`. Rows are ordered by node (plan order), then window.
+    `packets`; `routes` (with the context) the packets' route shifts, summarised over the
+    episode's own packets (`schema.EPISODE_ROUTE_FEATURES`). Rows are ordered by node (plan
+    order), then window.
     """
     if flows.config.view != "5tuple":
         raise ValueError(f"episodes are built from 5-tuple flows, not {flows.config.view!r} ones")
@@ -207,6 +217,10 @@ def host_window_frame(
     if ctx:
         values = pd.concat([values, flow_frame[ctx].iloc[fk].reset_index(drop=True).astype(np.float64)], axis=1)
     cols.update(_summaries(pos, values, n))
+    if ctx:
+        if routes is None:
+            raise ValueError("the flows' context columns come with the packets' routes (flows.context.context_frames)")
+        cols.update(episode_route_context(g, routes.tx[row], peer.ravel(), routes.shifts, n))
     assert set(EPISODE_PACKET_UNITS) <= set(cols)
 
     # truth and labels

@@ -1,0 +1,110 @@
+"""Observed routes (`uavcas.flows.routes`) on hand-built captures: a detour one pair takes alone is
+lonely, a network that re-routes together is not, lost packets change no route, and a long stream
+shows the hop and delay a detour added in a later window."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pytest
+from test_flows_context import HOP_S, send, table
+
+from uavcas.flows.assemble import FlowConfig, assemble
+from uavcas.flows.context import context_frame, context_frames, transmissions
+from uavcas.flows.routes import route_codes
+from uavcas.schema import CONTEXT_FEATURES, CONTEXT_ROUTE_FEATURES
+
+STEP_S = 0.1  # packet spacing of every stream
+
+
+def stream(src: str, dst: str, port: int, paths: list[tuple[float, list[str]]], until: float, id0: int) -> list[dict]:
+    """A UDP stream src -> dst every STEP_S from 0 to `until`; `paths`: (from t, switches) in time order."""
+    out = []
+    for k, t in enumerate(np.arange(0.0, until, STEP_S)):
+        path = [p for since, p in paths if since <= t][-1]
+        out += send(round(float(t), 3), path, src, dst, sport=port, dport=port, proto=17, id=id0 + k, payload=50)
+    return out
+
+
+def frame(obs: list[dict]) -> pd.DataFrame:
+    p = table(obs)
+    fl = assemble(p, FlowConfig())
+    c = context_frame(p, fl)
+    first = fl.first
+    c["src"] = np.asarray(p["src_lo"])[first]
+    c["sport"] = np.asarray(p["sport"])[first]
+    return c.set_index("sport")
+
+
+def network(detour_at: float | None = None, everyone_at: float | None = None, until: float = 10.0) -> list[dict]:
+    """The 12 directed pairs of hosts a, b, r and x, each a stream on its direct link; a -> b and
+    back may take the detour via r at `detour_at` (alone: 2 of 12 pairs), or every pair a route
+    through another host at `everyone_at`."""
+    hosts = ["a", "b", "r", "x"]
+    obs: list[dict] = []
+    pairs = [(s, d) for s in hosts for d in hosts if s != d]
+    for k, (s, d) in enumerate(pairs):
+        paths = [(0.0, [s, d])]
+        if detour_at is not None and {s, d} == {"a", "b"}:
+            paths.append((detour_at, [s, "r", d]))
+        if everyone_at is not None:
+            paths.append((everyone_at, [s, next(h for h in hosts if h not in (s, d)), d]))
+        obs += stream(s, d, PORT[(s, d)], paths, until, id0=10_000 * k)
+    return obs
+
+
+PORT = {(s, d): 1000 + 10 * "abrx".index(s) + "abrx".index(d) for s in "abrx" for d in "abrx" if s != d}
+
+
+def test_a_detour_one_pair_takes_alone_is_lonely():
+    c = frame(network(detour_at=5.3))
+    # the detour began in the 1 s bin [5, 6): that bin's packets and the later ones, 50 of a -> b's
+    # 100, are on a lonely route; the other pairs kept theirs
+    ab, ba = PORT[("a", "b")], PORT[("b", "a")]
+    assert c.loc[ab, "ctx_route_lonely_frac"] == pytest.approx(0.5)
+    assert c.loc[ba, "ctx_route_lonely_frac"] == pytest.approx(0.5)
+    assert (c.drop(index=[ab, ba])["ctx_route_lonely_frac"] == 0).all()
+
+
+def test_a_network_that_re_routes_together_is_not_lonely():
+    c = frame(network(everyone_at=5.3))
+    assert (c["ctx_route_lonely_frac"] == 0).all()
+
+
+def test_lost_packets_change_no_route():
+    obs = network()
+    # every fifth packet a -> b is lost after its first switch: a shorter sequence, not a new route
+    obs = [o for o in obs if not (o["sport"] == PORT[("a", "b")] and o["at"] == "b" and o["id"] % 5 == 0)]
+    assert (frame(obs)["ctx_route_lonely_frac"] == 0).all()
+
+
+def test_a_long_stream_shows_the_hop_and_delay_a_detour_added_later():
+    # a -> b over 15 s: direct in the first two context windows, through r in the third
+    obs = stream("a", "b", 1001, [(0.0, ["a", "b"]), (10.0, ["a", "r", "b"])], 15.0, id0=0)
+    c = frame(obs)
+    assert c.loc[1001, "ctx_path_len_shift_max"] == pytest.approx(1.0)
+    assert c.loc[1001, "ctx_delay_shift_max_ms"] == pytest.approx(HOP_S * 1e3, abs=1e-3)
+    # the flow's first window alone (the older columns) saw nothing
+    assert c.loc[1001, "ctx_path_len_shift"] == 0
+
+
+def test_route_codes_tell_order_and_length_apart():
+    obs = (send(0.0, ["a", "r", "b"], "a", "b", sport=1, dport=1, proto=17, id=1)
+           + send(1.0, ["a", "x", "b"], "a", "b", sport=1, dport=1, proto=17, id=2)
+           + send(2.0, ["a", "r"], "a", "b", sport=1, dport=1, proto=17, id=3)
+           + send(3.0, ["a", "r", "b"], "a", "b", sport=1, dport=1, proto=17, id=4))
+    p = table(obs)
+    t = transmissions(p)
+    codes = route_codes(p, t)[np.argsort(t.t_ns)]
+    assert codes[0] == codes[3] and len({int(c) for c in codes[:3]}) == 3
+
+
+def test_the_route_columns_are_part_of_the_context_and_nothing_else_moves():
+    obs = network(detour_at=5.3)
+    p = table(obs)
+    fl = assemble(p, FlowConfig())
+    c, routes = context_frames(p, fl)
+    assert tuple(c.columns) == CONTEXT_FEATURES and set(CONTEXT_ROUTE_FEATURES) <= set(c.columns)
+    assert routes.tx.shape[0] == len(p) and routes.shifts.lonely.shape[0] == int(routes.tx.max()) + 1
+    # reversed row order: the same columns, flow by flow
+    pd.testing.assert_frame_equal(frame(obs).sort_index(), frame(obs[::-1]).sort_index())
