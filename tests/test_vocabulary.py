@@ -28,8 +28,8 @@ def test_families_are_canonical_and_classes_join_in_that_order():
     assert v.class_name(["dos", "blackhole"]) == "Blackhole+DoS" == v.class_name(("blackhole", "dos"))
     assert v.class_name([]) == v.BENIGN
     assert len(v.CLASSES) == len(set(v.CLASSES)) == 1 + len(v.FAMILIES) + len(v.PAIRS)
-    paper = {"Benign", "Blackhole", "DDoS", "DoS", "Replay", "Wormhole"} | {v.class_name(p) for p in v.PAIRS}
-    assert len(paper) == 15 and paper <= set(v.CLASSES)  # the paper's 15 classes are all there
+    paper = {"Benign", "Blackhole", "DDoS", "DoS", "Replay", "Wormhole"} | {v.class_name(p) for p in v.PAIRS[:9]}
+    assert len(paper) == 15 and paper <= set(v.CLASSES)  # the paper's 15 classes are all there, its pairs first
     assert v.CLASSES[:1] == (v.BENIGN,) and {"GPSSpoofing", "Jamming", "MAVLinkInjection"} <= set(v.CLASSES)
     with pytest.raises(ValueError, match="teleport"):
         v.class_name(["teleport"])

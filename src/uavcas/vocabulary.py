@@ -128,6 +128,13 @@ PAIRS: tuple[tuple[str, str], ...] = (
     ("ddos", "replay"),
     ("dos", "replay"),
     ("replay", "wormhole"),
+    # the medium preset's compositions of the families added since (scenario.campaign.NEW_FAMILY_COMPOSITIONS)
+    ("blackhole", "jamming"),
+    ("dos", "jamming"),
+    ("gps_spoof", "wormhole"),
+    ("ddos", "gps_spoof"),
+    ("blackhole", "mavlink_inject"),
+    ("mavlink_inject", "replay"),
 )
 CLASSES: tuple[str, ...] = (
     (BENIGN,) + tuple(FAMILY_CLASS[f] for f in FAMILIES) + tuple(class_name(p) for p in PAIRS)
@@ -135,7 +142,9 @@ CLASSES: tuple[str, ...] = (
 assert len(CLASSES) == len(set(CLASSES)) == 1 + len(FAMILIES) + len(PAIRS)
 
 # Families that leave a flow's statistics near benign (no flood): the benchmark's "stealth" score
-# is the macro-F1 over the classes holding one of them (3 singles + every pair, 12 classes).
+# is the macro-F1 over the classes holding one of them (3 singles + the 9 paper pairs + 4 of the
+# new families' pairs, 16 classes). The paper's three, kept as they were so that the score stays
+# comparable across versions: gps_spoof and mavlink_inject are quiet too, and are scored per class.
 STEALTH_FAMILIES: tuple[str, ...] = ("blackhole", "replay", "wormhole")
 STEALTH_CLASSES: tuple[str, ...] = tuple(
     class_name(fams) for fams in [(f,) for f in FAMILIES] + list(PAIRS) if set(fams) & set(STEALTH_FAMILIES)

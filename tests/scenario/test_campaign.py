@@ -102,3 +102,24 @@ def test_every_quick_attack_has_something_to_act_on():
             assert a.victims and a.attackers, (e.config, a)
             if a.family == "wormhole":
                 assert any(o.victim in a.victims for w in p.windows for o in w.wormholes), e.config
+
+
+def test_every_medium_composition_is_a_declared_class_and_repeats_on_fresh_victims():
+    """The medium preset's compositions are classes of the vocabulary (pairs included), and its
+    three episodes per run attack three different victims, never overlapping."""
+    from uavcas.scenario import Scenario
+    from uavcas.scenario.campaign import PRESETS
+    from uavcas.twin import plan
+    from uavcas.twin.schedule import EPISODE_GAP_S
+    from uavcas.vocabulary import CLASSES, class_name
+
+    medium = PRESETS["medium"]
+    assert medium.episodes == 3
+    for config in medium.configs:
+        assert class_name(Scenario.parse(config).families) in CLASSES, config
+    p = plan("blackhole+dos=1000-6-2-mixed-3gpp-adaptive-grid-10-95", seed=3, episodes=medium.episodes)
+    by_episode = sorted({(a.start_s, a.stop_s, a.victims[0]) for a in p.attacks})
+    assert len(by_episode) == 3 and len({v for *_, v in by_episode}) == 3
+    for (_, stop, _), (start, _, _) in zip(by_episode, by_episode[1:]):
+        assert start - stop >= EPISODE_GAP_S
+    assert all(10.0 <= b - a <= 20.0 for a, b, _ in by_episode) and p.episodes == 3
