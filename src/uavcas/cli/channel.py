@@ -1,6 +1,8 @@
-"""`uavcas channel predict`: the twin's path-loss models and link chain on a user's geometry.
+"""`uavcas channel predict`: the twin's path-loss models and link chain on a user's geometry;
+`uavcas channel models`: the registered models with their standards.
 
     uavcas channel predict --model M [--profile P] --in GEOM.csv --out OUT.csv [--tx-dbm T]
+    uavcas channel models
 
 GEOM.csv has one row per link (or flight-log sample) with columns d3d_m, d2d_m, h_uav_m,
 h_bs_m (metres) and optionally fc_ghz (default: the profile's carrier); any other column is
@@ -112,7 +114,8 @@ def predict_frame(df, model_name: str, profile, tx_dbm: float, noise_dbm: float)
 
 @app.command("predict")
 def predict_cmd(
-    model: one_of(pathloss_names()) = typer.Option(..., "--model", help=f"The path-loss model: {pathloss_help()}."),
+    model: one_of(pathloss_names()) = typer.Option(
+        ..., "--model", help=f"The path-loss model (registry uavcas.channel.pathloss): {pathloss_help()}."),
     geom: Path = typer.Option(..., "--in", help="CSV with d3d_m, d2d_m, h_uav_m, h_bs_m (fc_ghz optional)."),
     out: Path = typer.Option(..., "--out", help="Output CSV: the input plus pathloss_db, snr_db, mcs, rate_mbps, loss."),
     profile: str = profile_option(),
@@ -133,6 +136,21 @@ def predict_cmd(
     res.to_csv(buf, index=False, float_format="%.10g")
     atomic_write_text(out, buf.getvalue())
     console.print(f"{len(res)} rows, model {model}, profile {prof.name}: written to {out}", highlight=False)
+
+
+@app.command("models")
+def models_cmd() -> None:
+    """The registered path-loss models: name, standard and version, LOS state, calibration fit."""
+    from rich.table import Table
+
+    from uavcas.channel.pathloss import specs
+
+    t = Table(title="path-loss models (uavcas.channel.pathloss)", title_justify="left")
+    for col in ("name", "model", "standard", "LOS state", "calibration fit"):
+        t.add_column(col, overflow="fold")
+    for s in specs():
+        t.add_row(s.name, s.summary, s.standard, "sampled" if s.samples_los else "-", s.fit or "-")
+    console.print(t)
 
 
 def register(root: typer.Typer) -> None:

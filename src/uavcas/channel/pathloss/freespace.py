@@ -3,7 +3,7 @@
     PL = 20 log10(4 pi d f / c),   d = 3-D distance (floored at 1 m), f = carrier
 
 (H. T. Friis, "A note on a simple transmission formula", Proc. IRE 34(5), 1946; the same law as
-ITU-R P.525-4 eq. (4)). Deterministic: `sigma_db` (default 0) adds shadowing if wanted.
+ITU-R P.525-4). Deterministic: `sigma_db` (default 0) adds shadowing if wanted.
 """
 
 from __future__ import annotations
@@ -46,7 +46,7 @@ class FreeSpace:
 
 register(PathLossSpec(
     name="freespace", model=FreeSpace,
-    standard="Friis 1946 (= ITU-R P.525-4 eq. 4), on the 3-D distance",
+    standard="Friis 1946 (= ITU-R P.525-4), on the 3-D distance",
     summary="free space (Friis), deterministic",
     build=lambda o: FreeSpace(fc_ghz=o.carrier_ghz),
 ))

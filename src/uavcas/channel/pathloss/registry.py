@@ -68,5 +68,5 @@ def make_pathloss(name: str, profile=None, fc_ghz: float | None = None, h_bs_m: 
 
 
 def help_text() -> str:
-    """One line per model (name: summary [standard]) for the CLI's help."""
+    """The models as "name: summary; ..." for the CLI's help (the standards are in `specs()`)."""
     return "; ".join(f"{s.name}: {s.summary}" for s in _REGISTRY.values())
