@@ -15,12 +15,25 @@ def test_codec_literals_and_dataset_columns_derive_from_the_vocabulary():
     assert FIELD_NAMES is v.FIELD_NAMES
     fields = Scenario.model_fields
     assert typing.get_args(fields["payload"].annotation) == v.PAYLOADS
-    assert typing.get_args(fields["pathloss"].annotation) == v.PATHLOSS_MODELS
     assert typing.get_args(fields["mission"].annotation) == v.MISSIONS
     assert schema.FAMILIES is v.FAMILIES and schema.CLASSES is v.CLASSES and schema.AXIS_COLUMNS is v.AXIS_COLUMNS
     assert schema.LABEL_COLUMNS == tuple(f"label_{f}" for f in v.FAMILIES)
     sc = parse("blackhole+dos=1000-5-2-image-logdist-adaptive-grid-30-95")
     assert tuple(sc.axes()) == v.AXIS_COLUMNS
+
+
+def test_pathloss_names_come_from_the_registry_alone():
+    # The vocabulary holds no list of path-loss names: Scenario.pathloss is checked against the registry.
+    from pydantic import ValidationError
+
+    from uavcas.channel.pathloss import names
+
+    assert not any(n.upper().startswith("PATHLOSS") for n in dir(v))
+    assert set(names()) >= {"logdist", "3gpp", "tworay", "freespace"}
+    for n in names():
+        assert Scenario(n_uav=3, n_bs=1, pathloss=n).pathloss == n
+    with pytest.raises(ValidationError, match="unknown path-loss model 'okumura'; registered: "):
+        Scenario(n_uav=3, n_bs=1, pathloss="okumura")
 
 
 def test_families_are_canonical_and_classes_join_in_that_order():

@@ -32,8 +32,8 @@ BENIGN_TOKEN = "benign"  # the scenario's attacks field of a run without attacks
 Payload = Literal["image", "telemetry", "video", "mixed"]
 PAYLOADS: tuple[str, ...] = get_args(Payload)
 MAVLINK_PAYLOADS: tuple[str, ...] = ("telemetry", "video", "mixed")  # the payloads that carry MAVLink
-Pathloss = Literal["logdist", "3gpp", "uma", "rma", "umi", "tworay", "freespace"]
-PATHLOSS_MODELS: tuple[str, ...] = get_args(Pathloss)
+# Path-loss models are not listed here: their names are the registry's (uavcas.channel.pathloss),
+# one module per model; the codec's Scenario.pathloss is checked against it.
 Mission = Literal["spiral", "grid", "hover_transit", "random"]
 MISSIONS: tuple[str, ...] = get_args(Mission)
 # How flows are labelled: ours (from each packet's effect, uavcas.labels) or paper (the authors' IP

@@ -125,7 +125,7 @@ def test_k_factor_and_decorrelation(groups):
 def test_two_ray_pattern_weight_one_is_the_twins_two_ray():
     m = TwoRay(eps_r=12.0, conductivity_s_m=0.01)
     d2 = np.linspace(5, 600, 200)
-    np.testing.assert_allclose(two_ray_pattern_loss_db(m, d2, 10.0, 50.0, 1.0), m.loss_db(d2, 10.0, 50.0), atol=1e-9)
+    np.testing.assert_allclose(two_ray_pattern_loss_db(m, d2, 10.0, 50.0, 1.0), m.loss_at_db(d2, 10.0, 50.0), atol=1e-9)
 
 
 def test_run_layer1_json_shape_and_scores(synth):

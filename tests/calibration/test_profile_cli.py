@@ -88,8 +88,8 @@ def test_fitted_pathloss_changes_the_links_as_its_numbers_say(tmp_path):
         (lb, h), lc = links_b[k], links_c[k][0]
         # Same seed -> same unit shadowing Z; each profile scales it by its own sigma(h).
         d = lb.distance_m
-        z = (lb.pathloss_db - LogDistance(PAPER_ANCHORED_PROFILE).loss_db(d, h)) / PAPER_ANCHORED_PROFILE.at(h)[2]
-        expected = LogDistance(fitted).loss_db(d, h) + fitted.at(h)[2] * z
+        z = (lb.pathloss_db - LogDistance(PAPER_ANCHORED_PROFILE).loss_at_db(d, h)) / PAPER_ANCHORED_PROFILE.at(h)[2]
+        expected = LogDistance(fitted).loss_at_db(d, h) + fitted.at(h)[2] * z
         assert lc.pathloss_db == pytest.approx(float(expected), abs=0.02)
         diffs.append(lc.snr_db - lb.snr_db)
     assert np.max(np.abs(diffs)) > 1.0  # the link parameters really moved

@@ -143,7 +143,7 @@ def test_los_state_frequency_matches_probability_and_persists():
     pairs = np.c_[np.arange(n), np.full(n, n)]
     ch = Channel(n_nodes=n + 1, pathloss="3gpp", seed=2)
     states = [ch.evaluate(pos, pairs, is_bs).los for _ in range(3)]
-    p = float(UMaAV().p_los(600.0, 30.0))
+    p = float(UMaAV().p_los_at(600.0, 30.0))
     assert states[0].mean() == pytest.approx(p, abs=0.07)
     np.testing.assert_array_equal(states[0], states[2])  # nodes did not move: state kept
 

@@ -31,17 +31,17 @@ def test_uma_av_spec_vectors_h30():
     m = UMaAV(fc_ghz=3.51, h_bs_m=25.0)
     d3d = np.hypot(500.0, 30.0 - 25.0)
     assert d3d == pytest.approx(500.02, abs=0.01)
-    assert m.p_los(np.array([500.0]), np.array([30.0]))[0] == pytest.approx(0.828456, abs=1e-5)
+    assert m.p_los_at(np.array([500.0]), np.array([30.0]))[0] == pytest.approx(0.828456, abs=1e-5)
     assert m.loss_los_db(np.array([d3d]), np.array([30.0]))[0] == pytest.approx(98.2840, abs=1e-3)
     assert m.loss_nlos_db(np.array([d3d]), np.array([30.0]))[0] == pytest.approx(122.0944, abs=1e-3)
 
 
 def test_uma_av_spec_vectors_h70_h110():
     m = UMaAV(fc_ghz=3.51, h_bs_m=25.0)
-    assert float(m.p_los(500.0, 70.0)) == pytest.approx(0.919969, abs=1e-5)
+    assert float(m.p_los_at(500.0, 70.0)) == pytest.approx(0.919969, abs=1e-5)
     assert float(m.loss_los_db(m.d3d_m(500.0, 70.0), 70.0)) == pytest.approx(98.3220, abs=1e-3)
-    assert float(m.p_los(500.0, 110.0)) == 1.0
-    assert np.all(m.p_los(np.array([20.0, 500.0, 4000.0]), 110.0) == 1.0)
+    assert float(m.p_los_at(500.0, 110.0)) == 1.0
+    assert np.all(m.p_los_at(np.array([20.0, 500.0, 4000.0]), 110.0) == 1.0)
 
 
 def test_uma_av_sigma_and_arrays_broadcast():
@@ -49,7 +49,7 @@ def test_uma_av_sigma_and_arrays_broadcast():
     sig = m.sigma_los_db(np.array([30.0, 110.0]))
     np.testing.assert_allclose(sig, 4.64 * np.exp(-0.0066 * np.array([30.0, 110.0])))
     assert m.sigma_nlos_db(np.array([30.0, 70.0])).tolist() == [6.0, 6.0]
-    p = m.p_los(np.array([10.0, 500.0, 1000.0]), np.array([[30.0], [70.0]]))
+    p = m.p_los_at(np.array([10.0, 500.0, 1000.0]), np.array([[30.0], [70.0]]))
     assert p.shape == (2, 3)
     assert m.loss_los_db(np.array([100.0, 200.0]), np.array([30.0, 60.0])).shape == (2,)
 
@@ -61,8 +61,8 @@ def test_rma_av_values():
     assert float(m.loss_los_db(1000.0, 50.0)) == pytest.approx(100.988, abs=1e-3)
     m = RMaAV(fc_ghz=3.51)
     # P_LOS h 30 m, d2D 2 km: d1 = 393.30, p1 = 6134.84 -> 0.776508
-    assert float(m.p_los(2000.0, 30.0)) == pytest.approx(0.776508, abs=1e-5)
-    assert float(m.p_los(2000.0, 41.0)) == 1.0  # h > 40 m: always LOS
+    assert float(m.p_los_at(2000.0, 30.0)) == pytest.approx(0.776508, abs=1e-5)
+    assert float(m.p_los_at(2000.0, 41.0)) == 1.0  # h > 40 m: always LOS
     # NLOS h 30 m, d3D 2 km = max(113.466, 121.041)
     assert float(m.loss_nlos_db(2000.0, 30.0)) == pytest.approx(121.041, abs=1e-3)
     assert float(m.sigma_los_db(30.0)) == pytest.approx(3.6586, abs=1e-4)
@@ -71,7 +71,7 @@ def test_rma_av_values():
 def test_umi_av_values():
     m = UMiAV(fc_ghz=3.51, h_bs_m=10.0)
     # P_LOS h 50 m, d2D 500 m: d1 = 66.642, p1 = 396.575 -> 0.378936
-    assert float(m.p_los(500.0, 50.0)) == pytest.approx(0.378936, abs=1e-5)
+    assert float(m.p_los_at(500.0, 50.0)) == pytest.approx(0.378936, abs=1e-5)
     d3d = float(m.d3d_m(500.0, 50.0))
     assert float(m.loss_los_db(d3d, 50.0)) == pytest.approx(99.5951, abs=1e-3)  # > free space 97.31
     assert float(m.loss_nlos_db(d3d, 50.0)) == pytest.approx(125.0940, abs=1e-3)
@@ -93,7 +93,7 @@ def test_expected_loss_and_sampling(cls):
     assert np.all(exp >= los - 1e-9) and np.all(exp <= nlos + 1e-9)
     u = np.random.default_rng(3).random(20000)
     s = m.sample(d2d, d3d, h, u)
-    p = float(m.p_los(800.0, 30.0))
+    p = float(m.p_los_at(800.0, 30.0))
     assert s.los.mean() == pytest.approx(p, abs=0.015)
     np.testing.assert_allclose(s.loss_db[s.los], los[s.los])
     np.testing.assert_allclose(s.loss_db[~s.los], nlos[~s.los])
@@ -124,8 +124,8 @@ def test_evaluate_on_ground_to_air_geometry():
 def test_aerial_monotone_in_distance(h, d1, d2, name):
     m = make_pathloss(name)
     lo, hi = sorted((d1, d2))
-    assert m.p_los(hi, h) <= m.p_los(lo, h) + 1e-12
-    assert 0.0 < m.p_los(hi, h) <= 1.0
+    assert m.p_los_at(hi, h) <= m.p_los_at(lo, h) + 1e-12
+    assert 0.0 < m.p_los_at(hi, h) <= 1.0
     assert m.loss_los_db(hi, h) >= m.loss_los_db(lo, h)
     assert m.loss_nlos_db(hi, h) >= m.loss_nlos_db(lo, h)
 
@@ -169,10 +169,10 @@ def test_profile_interpolates_and_clamps():
 def test_logdistance_formula_and_monotone():
     m = LogDistance()
     d = np.array([1.0, 10.0, 100.0, 700.0])
-    loss = m.loss_db(d, 70.0)
+    loss = m.loss_at_db(d, 70.0)
     np.testing.assert_allclose(loss, PAPER_ANCHORED_PROFILE.pl0_db[2] + 18.49 * np.log10(d))
-    assert np.all(np.diff(m.loss_db(np.geomspace(1, 2000, 100), 55.0)) > 0)
-    assert float(m.loss_db(0.2, 70.0)) == float(m.loss_db(1.0, 70.0))  # floored at d0
+    assert np.all(np.diff(m.loss_at_db(np.geomspace(1, 2000, 100), 55.0)) > 0)
+    assert float(m.loss_at_db(0.2, 70.0)) == float(m.loss_at_db(1.0, 70.0))  # floored at d0
 
 
 def test_profile_json_round_trip_and_validation():
@@ -190,8 +190,8 @@ def test_profile_json_round_trip_and_validation():
 
 def test_free_space_friis():
     # 1 km at 3.51 GHz: 20 log10(4 pi 1000 / 0.085410) = 103.3539 dB
-    assert float(FreeSpace().loss_db(1000.0)) == pytest.approx(103.354, abs=1e-3)
-    assert float(FreeSpace(fc_ghz=2.4).loss_db(100.0)) == pytest.approx(80.05, abs=0.01)
+    assert float(FreeSpace().loss_at_db(1000.0)) == pytest.approx(103.354, abs=1e-3)
+    assert float(FreeSpace(fc_ghz=2.4).loss_at_db(100.0)) == pytest.approx(80.05, abs=0.01)
 
 
 @pytest.mark.parametrize("pol", ["vertical", "horizontal"])
@@ -200,12 +200,12 @@ def test_two_ray_limits(pol):
     assert abs(complex(m.reflection_coefficient(1e-6)) + 1.0) < 1e-3  # grazing: Gamma -> -1
     # Far beyond the crossover distance 4 ht hr / lambda (35 km here), PL -> 40 log d - 20 log(ht hr).
     d = np.array([4e5, 8e5])
-    far = m.loss_db(d, 25.0, 30.0)
+    far = m.loss_at_db(d, 25.0, 30.0)
     np.testing.assert_allclose(far, 40 * np.log10(d) - 20 * np.log10(25.0 * 30.0), atol=0.3)
     # Coherent sum stays within [-6 dB, +inf) of free space; it oscillates around it up close.
     near = np.linspace(20.0, 600.0, 400)
     fs = free_space_loss_db(np.hypot(near, 5.0))
-    two = m.loss_db(near, 25.0, 30.0)
+    two = m.loss_at_db(near, 25.0, 30.0)
     assert np.all(two >= fs - 6.03) and np.ptp(two - fs) > 6.0
 
 
@@ -227,9 +227,9 @@ def test_logdistance_carrier_anchor_moves_the_curve_by_friis():
     # moves by 20 log10(3.3 / 3.51) = -0.5359 dB (hand-computed), the slope unchanged.
     p = PathLossProfile(name="ci", altitude_m=(50.0,), n=(2.1,), pl0_db=(43.3539,), sigma_db=(4.0,), fc_ghz=3.51)
     d = np.array([10.0, 100.0, 500.0])
-    at_351 = LogDistance(p).loss_db(d, 50.0)
+    at_351 = LogDistance(p).loss_at_db(d, 50.0)
     np.testing.assert_allclose(at_351, 43.3539 + 21.0 * np.log10(d))
-    at_33 = LogDistance(p, fc_ghz=3.3).loss_db(d, 50.0)
+    at_33 = LogDistance(p, fc_ghz=3.3).loss_at_db(d, 50.0)
     np.testing.assert_allclose(at_33 - at_351, -0.53586, atol=1e-4)
     assert make_pathloss("logdist", profile=p, fc_ghz=3.3).carrier_shift_db == pytest.approx(-0.53586, abs=1e-4)
     assert make_pathloss("logdist", profile=p).carrier_shift_db == 0.0  # None: the profile's own carrier

@@ -4,7 +4,8 @@ from hypothesis import strategies as st
 
 from uavcas.scenario import Scenario, ScenarioError, parse
 from uavcas.scenario import canonical
-from uavcas.vocabulary import MISSIONS, PATHLOSS_MODELS
+from uavcas.channel.pathloss import names as pathloss_names
+from uavcas.vocabulary import MISSIONS
 
 
 def test_paper_example_round_trips_and_is_typed():
@@ -79,7 +80,7 @@ def scenario_strings(draw):
     mod = draw(st.sampled_from(["adaptive"] + [f"mcs{i}" for i in range(7)]))
     return "-".join(
         map(str, (attacks, n_uav, draw(st.integers(1, 16)), draw(st.sampled_from(["image", "telemetry", "mixed"])),
-                  draw(st.sampled_from(PATHLOSS_MODELS)), mod, draw(st.sampled_from(MISSIONS)),
+                  draw(st.sampled_from(pathloss_names())), mod, draw(st.sampled_from(MISSIONS)),
                   draw(st.integers(0, 60)), draw(st.integers(30, 200))))
     )
 

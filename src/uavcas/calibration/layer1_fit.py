@@ -205,7 +205,7 @@ def logdist_loss_db(profile: PathLossProfile, g: Group, mask=slice(None), at_pro
     calibration file) or at the measured heights (another campaign: the twin interpolates)."""
     s = g.samples
     h = profile.altitude_m[at_profile_altitude] if at_profile_altitude is not None else s.height_m[mask]
-    return LogDistance(profile, g.fc_ghz).loss_db(s.d3d_m[mask], h)
+    return LogDistance(profile, g.fc_ghz).loss_at_db(s.d3d_m[mask], h)
 
 
 def fit_decorrelation_m(groups: list[Group], fit: LogDistanceFit, max_lag_m: float = 200.0) -> float:
@@ -261,7 +261,7 @@ def fit_k_db(g: Group) -> float:
 
 
 def two_ray_pattern_loss_db(model: TwoRay, d2d_m, h_tx_m, h_rx_m, amplitude_ratio=1.0) -> np.ndarray:
-    """The twin's `TwoRay.loss_db` with the reflected ray scaled by the antennas' amplitude
+    """The twin's `TwoRay.loss_at_db` with the reflected ray scaled by the antennas' amplitude
     ratio; identical to it for a ratio of 1 (tested). Fresnel coefficient from the twin's model."""
     lam = SPEED_OF_LIGHT_M_S / (model.fc_ghz * 1e9)
     d2 = np.asarray(d2d_m, dtype=float)

@@ -70,7 +70,7 @@ def sim_over_groups(groups: list[Group], profile: PathLossProfile, fading: KFact
             shadow.step(np.array([[0.0, 0.0, g.tx_height_m], [s.d2d_m[k], 0.0, s.height_m[k]]]))
             z[j] = shadow.unit(np.array([[0, 1]]))[0]
         h = s.height_m[idx]
-        loss = LogDistance(profile, g.fc_ghz).loss_db(s.d3d_m[idx], h) + profile.at(h)[2] * z
+        loss = LogDistance(profile, g.fc_ghz).loss_at_db(s.d3d_m[idx], h) + profile.at(h)[2] * z
         if fading is not None:
             loss = loss - fading_db(fading.at(h), rng)
         out.append(TX_DBM - loss)

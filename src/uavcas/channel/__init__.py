@@ -1,8 +1,7 @@
 """Wireless channel of the twin, vectorised over links with numpy.
 
-positions -> path loss (log-distance per altitude with a carrier anchor, TR 36.777 aerial
-UMa/RMa/UMi, two-ray, free space) -> Gudmundson-correlated shadowing -> SNR (link budget) ->
-802.11a/g MCS -> coded BER/PER (BCC union bound) averaged over Rician fading -> 802.11 ARQ ->
+positions -> path loss (a model of the `pathloss` registry, one module per model) ->
+Gudmundson-correlated shadowing -> SNR (link budget) -> 802.11a/g MCS -> coded BER/PER (BCC union bound) averaged over Rician fading -> 802.11 ARQ ->
 LinkParams(rate_mbps, delay_ms, loss, mac_time_us) -> airtime sharing among links in carrier
 sense range. `Channel` runs the chain once per window; `airtime` shares the rates.
 """
@@ -16,7 +15,6 @@ from .model import Channel, LinkArrays
 from .pathloss import (
     PAPER_ANCHORED_PROFILE,
     PAPER_RELATIVE_PROFILE,
-    PATHLOSS_NAMES,
     PROFILES,
     FreeSpace,
     LogDistance,
@@ -34,7 +32,7 @@ from .shadowing import GudmundsonShadowing
 
 __all__ = [
     "CCA_DBM", "KFactorProfile", "PAPER_ANCHORED_PROFILE", "TR36777_UMA_AV_K", "hears_matrix", "shared_rate_mbps",
-    "MCS_80211AG", "PAPER_RELATIVE_PROFILE", "PATHLOSS_NAMES", "PROFILES",
+    "MCS_80211AG", "PAPER_RELATIVE_PROFILE", "PROFILES",
     "Channel", "FreeSpace", "GudmundsonShadowing", "LinkArrays", "LinkBudget", "LinkGeometry",
     "LinkLayer", "LinkParams", "LogDistance", "McsTable", "PathLossModel", "PathLossProfile",
     "PathLossResult", "RMaAV", "TwoRay", "UMaAV", "UMiAV", "ber", "free_space_loss_db",

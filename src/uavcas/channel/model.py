@@ -12,10 +12,11 @@ model says. Same seed, same node count and same sequence of calls give identical
 Geometry: antenna heights are the node positions' z (the plan puts a BS at z = its profile's
 mast height - 10 m, the AERPAW LW1 tower, in the calibrated profile - and UAVs at their altitude). For the 3GPP models h_UT is the UAV altitude and
 the BS height comes from its position; UAV-UAV links use each model's documented air-to-air
-rule (see `geometry`, `pathloss.LogDistance` and `tr36777`: the aerial end's altitude for
+rule (see `geometry`, `pathloss.logdist` and `pathloss.tr36777`: the aerial end's altitude for
 log-distance, the LOS branch for TR 36.777).
 
-LOS state (3GPP models): sampled per link as LOS iff U < P_LOS with U = Phi(Z), where Z is a
+LOS state (models with `samples_los`, the 3GPP ones): sampled per link as LOS iff U < P_LOS
+with U = Phi(Z), where Z is a
 second Gudmundson process (unit variance; correlation distance `los_corr_m`, by default the
 model's LOS/NLOS-state correlation distance of TR 38.901 Table 7.6.3.1-2: 50 m for UMa and UMi,
 60 m for RMa). This is the spirit of TR 38.901's spatially consistent LOS state (sec. 7.6.3.3)
@@ -41,7 +42,7 @@ from .budget import LinkBudget, LinkLayer, link_chain
 from .fading import KFactorProfile
 from .geometry import LinkGeometry
 from .mcs import DEFAULT_MARGIN_DB, MCS_80211AG, McsTable, parse_modulation
-from .pathloss import AerialModel, PathLossModel, PathLossProfile, make_pathloss
+from .pathloss import PathLossModel, PathLossProfile, make_pathloss
 from .shadowing import DEFAULT_DECORRELATION_M, GudmundsonShadowing
 
 # SeedSequence([seed, stream]) streams; never renumber (it would change every plan).
@@ -82,7 +83,7 @@ class Channel:
     Parameters
     ----------
     node_names / n_nodes: the nodes (indices into `pos` in `evaluate`); give either.
-    pathloss: a scenario name (logdist, 3gpp, uma, rma, umi, tworay, freespace) or a model.
+    pathloss: a registered name (`pathloss.names()`) or a model.
     profile: log-distance profile (object or name; default ``paper-anchored``); ignored by the
         other models.
     seed: seeds the shadowing and LOS-state processes (independent streams).
@@ -143,7 +144,7 @@ class Channel:
             self.n_nodes, d_corr_m, np.random.SeedSequence([self.seed, _SHADOW_STREAM])
         )
         self._los = None
-        if sample_los and isinstance(self.model, AerialModel):
+        if sample_los and self.model.samples_los:  # the model has a LOS state (pathloss.LosPathLossModel)
             corr_m = self.model.los_corr_m if los_corr_m is None else los_corr_m
             self._los = GudmundsonShadowing(
                 self.n_nodes, corr_m, np.random.SeedSequence([self.seed, _LOS_STREAM])

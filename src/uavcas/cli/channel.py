@@ -1,14 +1,17 @@
-"""`uavcas channel predict`: the twin's path-loss models and link chain on a user's geometry.
+"""`uavcas channel predict`: the twin's path-loss models and link chain on a user's geometry;
+`uavcas channel models`: the registered models with their standards.
 
     uavcas channel predict --model M [--profile P] --in GEOM.csv --out OUT.csv [--tx-dbm T]
+    uavcas channel models
 
 GEOM.csv has one row per link (or flight-log sample) with columns d3d_m, d2d_m, h_uav_m,
 h_bs_m (metres) and optionally fc_ghz (default: the profile's carrier); any other column is
 passed through. OUT.csv is GEOM.csv plus:
 
-* pathloss_db - the model's mean loss: no shadowing, no fading; for the 3GPP models the
-  LOS-probability-weighted mean P PL_LOS + (1 - P) PL_NLOS (TR 36.777); log-distance with the
-  profile's n(h), PL0 and carrier anchor; two-ray with its ground; free space.
+* pathloss_db - the model's median loss (`PathLossModel.loss_db`): no shadowing, no fading; for
+  a model with a LOS state the LOS-probability-weighted mean P PL_LOS + (1 - P) PL_NLOS;
+  log-distance with the profile's n(h), PL0 and carrier anchor. The models are those of the
+  registry `uavcas.channel.pathloss` (`--help` lists them).
 * snr_db = tx_dbm + antenna gains (profile) - pathloss_db - noise_dbm.
 * mcs, rate_mbps, loss - the link chain of the plan for one link alone on the channel
   (`uavcas.channel.budget.link_chain`: coded PER, Rician fading with the profile's K(h) at
@@ -23,7 +26,8 @@ from pathlib import Path
 
 import typer
 
-from uavcas.vocabulary import PATHLOSS_MODELS
+from uavcas.channel.pathloss import help_text as pathloss_help
+from uavcas.channel.pathloss import names as pathloss_names
 
 from .common import atomic_write_text, check_output, console, err_console, fail, one_of, profile_option
 
@@ -97,7 +101,7 @@ def predict_frame(df, model_name: str, profile, tx_dbm: float, noise_dbm: float)
     for f in np.unique(fc):
         rows = fc == f
         geom = LinkGeometry(*(getattr(geom_all, k)[rows] for k in ("d3d_m", "d2d_m", "h_ground_m", "h_air_m", "air_to_air")))
-        loss[rows] = make_pathloss(model_name, profile.pathloss, float(f)).evaluate(geom, None).loss_db
+        loss[rows] = make_pathloss(model_name, profile.pathloss, float(f)).loss_db(geom)
     budget = LinkBudget(tx_power_dbm=tx_dbm, tx_gain_dbi=c.tx_gain_dbi, rx_gain_dbi=c.rx_gain_dbi, noise_dbm=noise_dbm)
     snr = budget.snr_db(loss)
     k_db = None if c.fading is None else c.fading.at(geom_all.h_air_m)
@@ -110,7 +114,8 @@ def predict_frame(df, model_name: str, profile, tx_dbm: float, noise_dbm: float)
 
 @app.command("predict")
 def predict_cmd(
-    model: one_of(PATHLOSS_MODELS) = typer.Option(..., "--model", help="The path-loss model."),
+    model: one_of(pathloss_names()) = typer.Option(
+        ..., "--model", help=f"The path-loss model (registry uavcas.channel.pathloss): {pathloss_help()}."),
     geom: Path = typer.Option(..., "--in", help="CSV with d3d_m, d2d_m, h_uav_m, h_bs_m (fc_ghz optional)."),
     out: Path = typer.Option(..., "--out", help="Output CSV: the input plus pathloss_db, snr_db, mcs, rate_mbps, loss."),
     profile: str = profile_option(),
@@ -131,6 +136,21 @@ def predict_cmd(
     res.to_csv(buf, index=False, float_format="%.10g")
     atomic_write_text(out, buf.getvalue())
     console.print(f"{len(res)} rows, model {model}, profile {prof.name}: written to {out}", highlight=False)
+
+
+@app.command("models")
+def models_cmd() -> None:
+    """The registered path-loss models: name, standard and version, LOS state, calibration fit."""
+    from rich.table import Table
+
+    from uavcas.channel.pathloss import specs
+
+    t = Table(title="path-loss models (uavcas.channel.pathloss)", title_justify="left")
+    for col in ("name", "model", "standard", "LOS state", "calibration fit"):
+        t.add_column(col, overflow="fold")
+    for s in specs():
+        t.add_row(s.name, s.summary, s.standard, "sampled" if s.samples_los else "-", s.fit or "-")
+    console.print(t)
 
 
 def register(root: typer.Typer) -> None:

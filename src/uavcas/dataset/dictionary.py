@@ -17,6 +17,7 @@ from dataclasses import dataclass
 
 from uavcas import schema as s
 from uavcas import vocabulary as v
+from uavcas.channel.pathloss import names as pathloss_names
 
 NO_UNIT = "-"
 
@@ -57,7 +58,7 @@ _AXES: dict[str, tuple[str, str]] = {
     "n_uav": ("UAVs", "UAVs in the swarm"),
     "n_bs": ("base stations", "base stations (ground control) of the swarm"),
     "payload": (NO_UNIT, f"the benign traffic: one of {', '.join(v.PAYLOADS)}"),
-    "pathloss": (NO_UNIT, f"the air-to-ground path-loss model: one of {', '.join(v.PATHLOSS_MODELS)}"),
+    "pathloss": (NO_UNIT, f"the air-to-ground path-loss model: one of {', '.join(pathloss_names())}"),
     "modulation": (NO_UNIT, "802.11a/g MCS choice: adaptive, or a fixed level mcs0..mcs6"),
     "mission": (NO_UNIT, f"the UAVs' mission: one of {', '.join(v.MISSIONS)}"),
     "tx_dbm": ("dBm", "transmit power of every radio"),

@@ -17,15 +17,15 @@ from pydantic import BaseModel, ConfigDict, Field, field_validator
 
 from uavcas.attacks import AttackSpec, ScenarioError, family
 from uavcas.attacks.base import choice, int_field
+from uavcas.channel.pathloss import PathlossName
+from uavcas.channel.pathloss import names as pathloss_names
 from uavcas.vocabulary import (
     BENIGN_TOKEN,
     FAMILIES,
     FIELD_NAMES,
     MISSIONS,
-    PATHLOSS_MODELS,
     PAYLOADS,
     Mission,
-    Pathloss,
     Payload,
 )
 
@@ -41,7 +41,7 @@ class Scenario(BaseModel):
     n_uav: int = Field(ge=1, le=250)
     n_bs: int = Field(ge=1, le=16)
     payload: Payload = "image"
-    pathloss: Pathloss = "logdist"
+    pathloss: PathlossName = "logdist"  # a name of the path-loss registry
     modulation: str = "adaptive"  # "adaptive" or a fixed level "mcs0".."mcs6"
     mission: Mission = "random"
     tx_dbm: int = 30
@@ -181,7 +181,7 @@ def parse(text: str) -> Scenario:
         n_uav=n_uav,
         n_bs=int_field("n_bs", raw["n_bs"], 1, 16),
         payload=payload,
-        pathloss=choice("pathloss", raw["pathloss"], PATHLOSS_MODELS),
+        pathloss=choice("pathloss", raw["pathloss"], pathloss_names()),
         modulation=modulation,
         mission=choice("mission", raw["mission"], MISSIONS),
         tx_dbm=int_field("tx_dbm", raw["tx_dbm"], 0, 60),

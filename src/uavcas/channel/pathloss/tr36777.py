@@ -45,11 +45,13 @@ altitude: a near-free-space law (slope 20-22 dB/decade) with the model's own fre
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
-from .geometry import MIN_DISTANCE_M, LinkGeometry, PathLossResult
+from ..geometry import MIN_DISTANCE_M, LinkGeometry, PathLossResult
+from .base import DEFAULT_FC_GHZ, PathLossOptions, PathLossSpec
+from .registry import register
 
 H_UT_MAX_M = 300.0
 
@@ -69,9 +71,10 @@ class AerialModel:
     takes the real antenna heights from the link geometry.
     """
 
-    fc_ghz: float = 3.51
+    fc_ghz: float = DEFAULT_FC_GHZ
     h_bs_m: float = 25.0
     name = "tr36777"
+    samples_los = True
     h_ut_min_m = 22.5  # lower edge of the aerial rows of Tables B-1/B-2
     los_corr_m = 50.0  # LOS/NLOS-state correlation distance, TR 38.901 Table 7.6.3.1-2 (UMa, UMi)
 
@@ -91,7 +94,7 @@ class AerialModel:
         return np.hypot(np.asarray(d2d_m, dtype=float), np.asarray(h_ut_m, dtype=float) - self.h_bs_m)
 
     # Model-specific rows of Tables B-1/B-2 -------------------------------------------------
-    def p_los(self, d2d_m, h_ut_m) -> np.ndarray:
+    def p_los_at(self, d2d_m, h_ut_m) -> np.ndarray:
         raise NotImplementedError
 
     def loss_los_db(self, d3d_m, h_ut_m) -> np.ndarray:
@@ -107,15 +110,22 @@ class AerialModel:
         raise NotImplementedError
 
     # Derived quantities ----------------------------------------------------------------------
+    def p_los(self, geom: LinkGeometry) -> np.ndarray:
+        """P_LOS per link; air-to-air links are LOS (see the module docstring)."""
+        return np.where(geom.air_to_air, 1.0, self.p_los_at(geom.d2d_m, geom.h_air_m))
+
+    def loss_db(self, geom: LinkGeometry) -> np.ndarray:
+        return self.evaluate(geom, None).loss_db
+
     def loss_expected_db(self, d2d_m, d3d_m, h_ut_m) -> np.ndarray:
         """Path loss averaged in dB over the LOS state: P PL_LOS + (1 - P) PL_NLOS."""
-        p = self.p_los(d2d_m, h_ut_m)
+        p = self.p_los_at(d2d_m, h_ut_m)
         return p * self.loss_los_db(d3d_m, h_ut_m) + (1.0 - p) * self.loss_nlos_db(d3d_m, h_ut_m)
 
     def sample(self, d2d_m, d3d_m, h_ut_m, uniform) -> PathLossResult:
         """LOS iff uniform < P_LOS; `uniform` in [0, 1) per link (correlated over time by the
         caller, as TR 38.901 sec. 7.6.3.3 does for the LOS state)."""
-        los = np.asarray(uniform, dtype=float) < self.p_los(d2d_m, h_ut_m)
+        los = np.asarray(uniform, dtype=float) < self.p_los_at(d2d_m, h_ut_m)
         loss = np.where(los, self.loss_los_db(d3d_m, h_ut_m), self.loss_nlos_db(d3d_m, h_ut_m))
         sigma = np.where(los, self.sigma_los_db(h_ut_m), self.sigma_nlos_db(h_ut_m))
         return PathLossResult(loss_db=loss, sigma_db=sigma, los=los)
@@ -125,7 +135,7 @@ class AerialModel:
         the LOS-probability-weighted mean and `los` is None. Air-to-air links are LOS."""
         h = geom.h_air_m
         if los_uniform is None:
-            p = np.where(geom.air_to_air, 1.0, self.p_los(geom.d2d_m, h))
+            p = self.p_los(geom)
             loss = p * self.loss_los_db(geom.d3d_m, h) + (1.0 - p) * self.loss_nlos_db(geom.d3d_m, h)
             # Std of the mixture's Gaussian parts, without the spread between the two means.
             var = p * self.sigma_los_db(h) ** 2 + (1.0 - p) * self.sigma_nlos_db(h) ** 2
@@ -140,7 +150,7 @@ class UMaAV(AerialModel):
 
     name = "uma"
 
-    def p_los(self, d2d_m, h_ut_m) -> np.ndarray:
+    def p_los_at(self, d2d_m, h_ut_m) -> np.ndarray:
         h = self._h(h_ut_m)
         lh = np.log10(h)
         p = _los_probability(d2d_m, np.maximum(460.0 * lh - 700.0, 18.0), 4300.0 * lh - 3800.0)
@@ -171,7 +181,7 @@ class RMaAV(AerialModel):
     h_ut_min_m = 10.0
     los_corr_m = 60.0
 
-    def p_los(self, d2d_m, h_ut_m) -> np.ndarray:
+    def p_los_at(self, d2d_m, h_ut_m) -> np.ndarray:
         h = self._h(h_ut_m)
         lh = np.log10(h)
         d1 = np.maximum(1350.8 * lh - 1602.0, 18.0)
@@ -201,7 +211,7 @@ class UMiAV(AerialModel):
     h_bs_m: float = 10.0
     name = "umi"
 
-    def p_los(self, d2d_m, h_ut_m) -> np.ndarray:
+    def p_los_at(self, d2d_m, h_ut_m) -> np.ndarray:
         lh = np.log10(self._h(h_ut_m))
         return _los_probability(d2d_m, np.maximum(294.05 * lh - 432.94, 18.0), 233.98 * lh - 0.95)
 
@@ -221,3 +231,25 @@ class UMiAV(AerialModel):
 
     def sigma_nlos_db(self, h_ut_m) -> np.ndarray:
         return np.full(np.shape(h_ut_m), 8.0)
+
+
+def _builder(cls: type[AerialModel]):
+    def build(o: PathLossOptions) -> AerialModel:
+        m = cls(fc_ghz=o.carrier_ghz)
+        return m if o.h_bs_m is None else replace(m, h_bs_m=o.h_bs_m)
+    return build
+
+
+_STANDARD = "3GPP TR 36.777 V15.0.0 (2017-12) Annex B, Tables B-1 (P_LOS) and B-2 (PL, sigma_SF), aerial-UE rows"
+for _name, _cls, _what in (
+    ("3gpp", UMaAV, "urban macro (the paper's name for uma)"),
+    ("uma", UMaAV, "urban macro"),
+    ("rma", RMaAV, "rural macro"),
+    ("umi", UMiAV, "urban micro"),
+):
+    register(PathLossSpec(
+        name=_name, model=_cls, standard=f"{_STANDARD}, {_cls.__name__[:-2]}-AV",
+        summary=f"TR 36.777 {_what} with aerial UEs, LOS state sampled", build=_builder(_cls),
+    ))
+
+__all__ = ["AerialModel", "RMaAV", "UMaAV", "UMiAV"]

@@ -1,8 +1,11 @@
-"""Path-loss models: altitude-dependent log-distance, TR 36.777 aerial (re-exported), two-ray,
-free space, and `make_pathloss` for the scenario string's names.
+"""Altitude-dependent close-in log-distance, anchored to the carrier, and its profiles.
 
-Every model has ``evaluate(geom: LinkGeometry, los_uniform=None) -> PathLossResult`` (median loss
-in dB, the shadowing std to apply, and the LOS state where the model has one).
+Standard: the close-in (CI) free-space reference model (T. S. Rappaport et al., "Wideband
+millimeter-wave propagation measurements and channel models for future wireless communication
+system design", IEEE Trans. Commun. 63(9), 2015; Sun et al., IEEE Trans. Veh. Technol. 65(5),
+2016), with the exponent, the 1 m loss and the shadowing spread given per altitude. What the
+code implements is the formula below; the CI fit proper (1 m loss = free space) is the calibrated
+profile's (`uavcas.calibration.layer1_fit.fit_logdistance`), the paper's profiles keep their own PL0.
 
 Log-distance on an absolute scale, anchored to the carrier
 ----------------------------------------------------------
@@ -42,24 +45,14 @@ available as the ``paper-relative`` profile for parity with the authors' data.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Literal
 
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, model_validator
-from scipy.constants import c as SPEED_OF_LIGHT_M_S
 
-from uavcas.vocabulary import PATHLOSS_MODELS
-
-from .geometry import MIN_DISTANCE_M, LinkGeometry, PathLossResult
-from .tr36777 import AerialModel, RMaAV, UMaAV, UMiAV
-
-DEFAULT_FC_GHZ = 3.51  # AERPAW measurement carrier (Maeng et al.)
-
-
-def free_space_loss_db(d_m, fc_ghz: float = DEFAULT_FC_GHZ) -> np.ndarray:
-    """Friis: 20 log10(4 pi d f / c)."""
-    d = np.maximum(np.asarray(d_m, dtype=float), MIN_DISTANCE_M)
-    return 20.0 * np.log10(4.0 * np.pi * d * fc_ghz * 1e9 / SPEED_OF_LIGHT_M_S)
+from ..geometry import LinkGeometry, PathLossResult
+from .base import DEFAULT_FC_GHZ, PathLossOptions, PathLossSpec
+from .freespace import free_space_loss_db
+from .registry import register
 
 
 class PathLossProfile(BaseModel):
@@ -138,13 +131,14 @@ class LogDistance:
     profile: PathLossProfile = PAPER_ANCHORED_PROFILE
     fc_ghz: float | None = None
     name = "logdist"
+    samples_los = False
 
     @property
     def carrier_shift_db(self) -> float:
         fc = self.profile.fc_ghz if self.fc_ghz is None else self.fc_ghz
         return float(20.0 * np.log10(fc / self.profile.fc_ghz))
 
-    def loss_db(self, d3d_m, h_m) -> np.ndarray:
+    def loss_at_db(self, d3d_m, h_m) -> np.ndarray:
         n, pl0, _ = self.profile.at(h_m)
         d = np.maximum(np.asarray(d3d_m, dtype=float), self.profile.d0_m)
         return pl0 + self.carrier_shift_db + 10.0 * n * np.log10(d / self.profile.d0_m)
@@ -152,106 +146,27 @@ class LogDistance:
     def sigma_db(self, h_m) -> np.ndarray:
         return self.profile.at(h_m)[2]
 
-    def evaluate(self, geom: LinkGeometry, los_uniform: np.ndarray | None = None) -> PathLossResult:
-        return PathLossResult(self.loss_db(geom.d3d_m, geom.h_air_m), self.sigma_db(geom.h_air_m), None)
-
-
-@dataclass(frozen=True)
-class FreeSpace:
-    """Friis free-space loss on the 3-D distance; `sigma_db` (default 0: deterministic)."""
-
-    fc_ghz: float = DEFAULT_FC_GHZ
-    sigma_db: float = 0.0
-    name = "freespace"
-
-    def loss_db(self, d3d_m) -> np.ndarray:
-        return free_space_loss_db(d3d_m, self.fc_ghz)
+    def loss_db(self, geom: LinkGeometry) -> np.ndarray:
+        return self.loss_at_db(geom.d3d_m, geom.h_air_m)
 
     def evaluate(self, geom: LinkGeometry, los_uniform: np.ndarray | None = None) -> PathLossResult:
-        loss = self.loss_db(geom.d3d_m)
-        return PathLossResult(loss, np.full(loss.shape, self.sigma_db), None)
+        return PathLossResult(self.loss_db(geom), self.sigma_db(geom.h_air_m), None)
 
 
-@dataclass(frozen=True)
-class TwoRay:
-    """Direct ray plus one ray reflected by flat ground, summed coherently (Rappaport, Wireless
-    Communications, 2nd ed., secs. 4.5-4.6: Fresnel reflection and the two-ray model):
-
-        PL = -20 log10( lambda / (4 pi) * | e^{-jk r1} / r1 + Gamma(psi) e^{-jk r2} / r2 | )
-
-    r1 = sqrt(d2^2 + (ht - hr)^2), r2 = sqrt(d2^2 + (ht + hr)^2), grazing angle sin(psi) =
-    (ht + hr) / r2. Gamma is the Fresnel coefficient of ground with complex permittivity
-    eps = eps_r - j 60 sigma lambda. Default ground: ITU-R P.527 "medium dry ground" (eps_r 15,
-    sigma 1e-3 S/m). Default polarisation: vertical, as for the vertical dipoles/monopoles
-    typical of UAV radios; "horizontal" is available (and Gamma = -1
-    in the grazing limit for both). Antenna heights come from the geometry (BS mast, UAV
-    altitude). The result has the two-ray model's deep interference nulls; `sigma_db`
-    (default 0) adds shadowing on top if wanted.
-    """
-
-    fc_ghz: float = DEFAULT_FC_GHZ
-    eps_r: float = 15.0
-    conductivity_s_m: float = 1e-3
-    polarisation: Literal["vertical", "horizontal"] = "vertical"
-    sigma_db: float = 0.0
-    name = "tworay"
-
-    def reflection_coefficient(self, sin_psi) -> np.ndarray:
-        lam = SPEED_OF_LIGHT_M_S / (self.fc_ghz * 1e9)
-        eps = self.eps_r - 1j * 60.0 * self.conductivity_s_m * lam
-        s = np.asarray(sin_psi, dtype=float)
-        root = np.sqrt(eps - (1.0 - s**2))
-        if self.polarisation == "vertical":
-            return (eps * s - root) / (eps * s + root)
-        return (s - root) / (s + root)
-
-    def loss_db(self, d2d_m, h_tx_m, h_rx_m) -> np.ndarray:
-        lam = SPEED_OF_LIGHT_M_S / (self.fc_ghz * 1e9)
-        d2 = np.asarray(d2d_m, dtype=float)
-        ht, hr = np.asarray(h_tx_m, dtype=float), np.asarray(h_rx_m, dtype=float)
-        r1 = np.maximum(np.hypot(d2, ht - hr), MIN_DISTANCE_M)
-        r2 = np.hypot(d2, ht + hr)
-        gamma = self.reflection_coefficient((ht + hr) / r2)
-        k = 2.0 * np.pi / lam
-        # Phase relative to the direct ray: only the path difference matters (and keeps precision).
-        field = 1.0 / r1 + gamma * np.exp(-1j * k * (r2 - r1)) / r2
-        return -20.0 * np.log10(lam / (4.0 * np.pi) * np.maximum(np.abs(field), 1e-12))
-
-    def evaluate(self, geom: LinkGeometry, los_uniform: np.ndarray | None = None) -> PathLossResult:
-        loss = self.loss_db(geom.d2d_m, geom.h_ground_m, geom.h_air_m)
-        return PathLossResult(loss, np.full(loss.shape, self.sigma_db), None)
+def _build(o: PathLossOptions) -> LogDistance:
+    return LogDistance(get_profile(o.profile), o.fc_ghz)  # fc None: the profile's own carrier
 
 
-PathLossModel = LogDistance | FreeSpace | TwoRay | AerialModel
-PATHLOSS_NAMES = PATHLOSS_MODELS  # the scenario vocabulary's names
+register(PathLossSpec(
+    name="logdist", model=LogDistance,
+    standard="close-in log-distance (Rappaport et al. 2015; Sun et al. 2016) with n, PL0, sigma per altitude "
+             "(uavcas paper tab:pathloss_params, or a calibrated profile) and a Friis carrier anchor",
+    summary="log-distance per altitude (the twin's profile: calibrated by default)",
+    build=_build,
+    fit="uavcas.calibration.layer1_fit:fit_logdistance",
+))
+
+__all__ = ["PAPER_ANCHORED_PROFILE", "PAPER_RELATIVE_PROFILE", "PROFILES", "LogDistance", "PathLossProfile",
+           "get_profile"]
 
 
-def make_pathloss(
-    name: str,
-    profile: PathLossProfile | str | None = None,
-    fc_ghz: float | None = None,
-    h_bs_m: float | None = None,
-) -> PathLossModel:
-    """Model for a scenario-string name: logdist, 3gpp (= UMa-AV), uma, rma, umi, tworay,
-    freespace, at carrier `fc_ghz` (None: 3.51 GHz, or the log-distance profile's own carrier).
-    `profile` applies to logdist only (default ``paper-anchored``); `h_bs_m` overrides the
-    3GPP models' default BS height (used only where no geometry gives one)."""
-    if name == "logdist":
-        return LogDistance(get_profile(profile), fc_ghz)
-    fc_ghz = DEFAULT_FC_GHZ if fc_ghz is None else fc_ghz
-    if name in ("3gpp", "uma", "rma", "umi"):
-        cls = {"3gpp": UMaAV, "uma": UMaAV, "rma": RMaAV, "umi": UMiAV}[name]
-        return cls(fc_ghz=fc_ghz) if h_bs_m is None else cls(fc_ghz=fc_ghz, h_bs_m=h_bs_m)
-    if name == "tworay":
-        return TwoRay(fc_ghz=fc_ghz)
-    if name == "freespace":
-        return FreeSpace(fc_ghz=fc_ghz)
-    raise ValueError(f"unknown path-loss model {name!r}; expected one of {', '.join(PATHLOSS_NAMES)}")
-
-
-__all__ = [
-    "PAPER_ANCHORED_PROFILE", "PAPER_RELATIVE_PROFILE", "PATHLOSS_NAMES", "PROFILES", "AerialModel",
-    "FreeSpace", "LinkGeometry", "LogDistance", "PathLossModel", "PathLossProfile",
-    "PathLossResult", "RMaAV", "TwoRay", "UMaAV", "UMiAV", "free_space_loss_db", "get_profile",
-    "make_pathloss",
-]
