@@ -3,15 +3,11 @@
 It sits at the base of the package (below `flows/`, `labels/` and `dataset/`), next to the
 vocabulary it derives the class and axis columns from.
 
-Feature standards (`FEATURE_STANDARDS`): a dataset's 47 feature columns follow ONE standard, named
-in its card (`dataset.json: features`):
-- `cic` (default, `FEATURES`): CICFlowMeter-4.0's definitions and units exactly (times in
-  microseconds, lengths = TCP/UDP payload bytes; `uavcas.flows.cic`), so they compare with
-  CICIDS2017-style data;
-- `paper` (`PAPER_FEATURES`): the authors' 47 as their generator computes them (times in seconds,
-  lengths = frame bytes; `uavcas.flows.paper`), the columns of their `UAV-CAS_stat.csv`.
-Several names occur in both with different meanings (`Flow Duration` is us in one, s in the
-other): never mix standards; `feature_columns(standard)` gives a standard's columns.
+Feature standards: a dataset's 47 feature columns follow ONE standard, named in its card
+(`dataset.json: features`). The standards, with their columns, units and definitions, are the
+registry `uavcas.flows.standards` (one module each: `cic`, CICFlowMeter-4.0's, the default, and
+`paper`, the authors'); this module holds every other column. Several names occur in two
+standards with different meanings (`Flow Duration` is us in cic, s in paper): never mix standards.
 """
 
 from __future__ import annotations
@@ -19,80 +15,6 @@ from __future__ import annotations
 from uavcas import vocabulary as _v
 
 SCHEMA_VERSION = 6  # 2: feature standards, first_ts_ns; 3: context columns (ctx_*); 4: provoked effect, provoked_packets; 5: families jamming, gps_spoof, mavlink_inject (their columns and effects), the card's column dictionary and fidelity_failed; 6: route context (ctx_route_lonely_frac, ctx_path_len_shift_max, ctx_delay_shift_max_ms; episodes ctx_pkt_*)
-
-# Direction-independent statistics over all packets of the flow.
-FLOW_FEATURES: tuple[str, ...] = (
-    "Flow Duration",
-    "Flow Bytes/s",
-    "Flow Packets/s",
-    "Flow IAT Mean",
-    "Flow IAT Std",
-    "Flow IAT Max",
-    "Flow IAT Min",
-    "Min Packet Length",
-    "Max Packet Length",
-    "Packet Length Mean",
-    "Packet Length Std",
-    "Packet Length Variance",
-    "FIN Flag Count",
-    "SYN Flag Count",
-    "RST Flag Count",
-    "PSH Flag Count",
-    "ACK Flag Count",
-    "URG Flag Count",
-    "CWE Flag Count",
-    "ECE Flag Count",
-    "Down/Up Ratio",
-    "Average Packet Size",
-    "Active Mean",
-    "Idle Mean",
-    "Idle Max",
-)
-
-# Forward = the initiator's direction (first packet; the SYN sender for TCP).
-DIRECTION_FEATURES: tuple[str, ...] = (
-    "Total Fwd Packets",
-    "Total Backward Packets",
-    "Total Length of Fwd Packets",
-    "Total Length of Bwd Packets",
-    "Fwd Packet Length Max",
-    "Fwd Packet Length Min",
-    "Fwd Packet Length Mean",
-    "Fwd Packet Length Std",
-    "Bwd Packet Length Max",
-    "Bwd Packet Length Min",
-    "Bwd Packet Length Mean",
-    "Bwd Packet Length Std",
-    "Fwd IAT Total",
-    "Fwd IAT Mean",
-    "Fwd IAT Std",
-    "Fwd IAT Max",
-    "Bwd IAT Total",
-    "Bwd IAT Mean",
-    "Bwd IAT Std",
-    "Bwd IAT Max",
-    "Fwd Header Length",
-    "Bwd Header Length",
-)
-
-FEATURES: tuple[str, ...] = FLOW_FEATURES + DIRECTION_FEATURES
-assert len(FLOW_FEATURES) == 25 and len(DIRECTION_FEATURES) == 22 and len(set(FEATURES)) == 47
-
-# The authors' 47 (Scripts/6-build_stat_csv.py FEATURE_NAMES): 25 flow-level, then 22 by direction.
-PAPER_FEATURES: tuple[str, ...] = (
-    "Flow Duration", "Total Packets", "Total Length of Packets", "Flow Bytes/s", "Flow Packets/s",
-    "Flow IAT Total", "Flow IAT Mean", "Flow IAT Std", "Flow IAT Max", "Flow IAT Min",
-    "Min Packet Length", "Max Packet Length", "Packet Length Mean", "Packet Length Std",
-    "Packet Length Variance", "FIN Flag Count", "SYN Flag Count", "RST Flag Count", "PSH Flag Count",
-    "ACK Flag Count", "URG Flag Count", "CWE Flag Count", "ECE Flag Count", "Header Length",
-    "Average Packet Size",
-    "Total Fwd Packets", "Total Bwd Packets", "Total Length of Fwd Packets", "Total Length of Bwd Packets",
-    "Fwd Packets/s", "Bwd Packets/s", "Fwd Packet Length Max", "Fwd Packet Length Min",
-    "Fwd Packet Length Mean", "Fwd Packet Length Std", "Bwd Packet Length Max", "Bwd Packet Length Min",
-    "Bwd Packet Length Mean", "Bwd Packet Length Std", "Fwd IAT Total", "Fwd IAT Mean", "Fwd IAT Std",
-    "Bwd IAT Total", "Bwd IAT Mean", "Bwd IAT Std", "Fwd Header Length", "Bwd Header Length",
-)  # fmt: skip
-assert len(PAPER_FEATURES) == 47 and len(set(PAPER_FEATURES)) == 47
 
 # Context features (`ctx_*`): what switch monitors observe around a flow, computed from the run's
 # captures at extraction time (`uavcas.flows.context`; definitions and what a deployed node must
@@ -139,18 +61,6 @@ CONTEXT_FEATURES: tuple[str, ...] = (
 CONTEXT_PREFIX = "ctx_"
 assert len(set(CONTEXT_FEATURES)) == len(CONTEXT_FEATURES) == 63
 assert all(c.startswith(CONTEXT_PREFIX) for c in CONTEXT_FEATURES)
-
-FEATURE_STANDARDS: dict[str, tuple[str, ...]] = {"cic": FEATURES, "paper": PAPER_FEATURES}
-DEFAULT_STANDARD = "cic"
-
-
-def feature_columns(standard: str = DEFAULT_STANDARD) -> tuple[str, ...]:
-    """The 47 feature columns of a feature standard ('cic' or 'paper')."""
-    try:
-        return FEATURE_STANDARDS[standard]
-    except KeyError:
-        raise ValueError(f"unknown feature standard {standard!r}; known: {', '.join(FEATURE_STANDARDS)}") from None
-
 
 # The vocabulary's words, re-exported: the dataset's class and label columns derive from them.
 BENIGN, CLASSES, FAMILIES, FAMILY_CLASS, PAIRS = _v.BENIGN, _v.CLASSES, _v.FAMILIES, _v.FAMILY_CLASS, _v.PAIRS
@@ -203,33 +113,10 @@ EPISODE_PACKET_UNITS: dict[str, str] = {
     "udp_share": "ratio", "icmp_share": "ratio",
     "flows": "flows", "flows_out": "flows", "flows_in": "flows",
 }  # fmt: skip
-# The summarised subset of a standard's 47 flow features: feature -> column stem (unit in the
-# stem; each gives <stem>_mean and <stem>_max over the 5-tuple flows that start in the window and
-# have the host as an endpoint). cic lengths are payload bytes, paper lengths frame bytes.
-EPISODE_FLOW_SUBSETS: dict[str, dict[str, str]] = {
-    "cic": {
-        "Flow Duration": "flow_duration_us", "Total Fwd Packets": "fwd_packets", "Total Backward Packets": "bwd_packets",
-        "Total Length of Fwd Packets": "fwd_payload_bytes", "Total Length of Bwd Packets": "bwd_payload_bytes",
-        "Flow Bytes/s": "flow_payload_bytes_per_s", "Flow Packets/s": "flow_packets_per_s",
-        "Flow IAT Mean": "flow_iat_mean_us", "Packet Length Mean": "payload_length_mean_bytes",
-    },
-    "paper": {
-        "Flow Duration": "flow_duration_s", "Total Fwd Packets": "fwd_packets", "Total Bwd Packets": "bwd_packets",
-        "Total Length of Fwd Packets": "fwd_frame_bytes", "Total Length of Bwd Packets": "bwd_frame_bytes",
-        "Flow Bytes/s": "flow_frame_bytes_per_s", "Flow Packets/s": "flow_packets_per_s",
-        "Flow IAT Mean": "flow_iat_mean_s", "Packet Length Mean": "frame_length_mean_bytes",
-    },
-}  # fmt: skip
+# Each standard summarises a subset of its flow features per episode (`FeatureStandard.
+# episode_summary`: feature -> column stem with its unit), as <stem>_mean and <stem>_max over the
+# 5-tuple flows that start in the window and have the host as an endpoint.
 EPISODE_STATS: tuple[str, ...] = ("mean", "max")
-
-
-def episode_feature_columns(standard: str = DEFAULT_STANDARD) -> tuple[str, ...]:
-    """The episode view's feature columns when its flows follow `standard`."""
-    feature_columns(standard)  # refuses an unknown standard
-    return tuple(EPISODE_PACKET_UNITS) + tuple(
-        f"{stem}_{s}" for stem in EPISODE_FLOW_SUBSETS[standard].values() for s in EPISODE_STATS
-    )
-
 
 # the flows' context columns summarised per episode (mean and max over the same flows)
 # the same route measures over the episode's own packets (`flows.routes`), whichever flow they belong to
@@ -241,7 +128,3 @@ EPISODE_COUNT_COLUMNS: tuple[str, ...] = ("packets",)  # the host's packets in t
 EPISODE_METADATA_COLUMNS: tuple[str, ...] = (
     EPISODE_ID_COLUMNS + AXIS_COLUMNS + EPISODE_COUNT_COLUMNS + META_LABEL_COLUMNS
 )
-# feature sets of the episode view, by the standard of its flows (`ids.features.feature_sets`)
-EPISODE_FEATURE_SETS: dict[str, tuple[str, ...]] = {
-    f"{EPISODE_VIEW}-{s}": episode_feature_columns(s) for s in FEATURE_STANDARDS
-}

@@ -17,7 +17,8 @@ from uavcas.dataset.parquet import read_flows
 from uavcas.dataset.read import detect_format
 from uavcas.dataset.store import extract_run
 from uavcas.dataset.synthetic import make_flows, write_dataset
-from uavcas.schema import FEATURES, SEQUENCE_COLUMNS
+from uavcas.flows.standards.cic import FEATURES
+from uavcas.schema import SEQUENCE_COLUMNS
 
 runner = CliRunner()
 HEAD = ["Flow ID", "Source IP", "Source Port", "Destination IP", "Destination Port", "Protocol", "Timestamp"]

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from uavcas.dataset.external import MAPPED_CICIDS2017, MAPPED_UNSW_NB15, ExternalFormatError, load_cicids2017, load_unsw_nb15
-from uavcas.schema import FEATURES
+from uavcas.flows.standards.cic import FEATURES
 
 
 def test_original_cic_header_with_spaces(tmp_path):

@@ -11,7 +11,9 @@ from typer.testing import CliRunner
 
 from uavcas.cli import app
 from uavcas.dataset.parquet import COLUMNS, arrow_schema, read_flows
-from uavcas.schema import CLASSES, CONTEXT_FEATURES, FEATURES, METADATA_COLUMNS, PAPER_FEATURES, SEQUENCE_COLUMNS
+from uavcas.flows.standards.cic import FEATURES
+from uavcas.flows.standards.paper import PAPER_FEATURES
+from uavcas.schema import CLASSES, CONTEXT_FEATURES, METADATA_COLUMNS, SEQUENCE_COLUMNS
 
 runner = CliRunner()
 

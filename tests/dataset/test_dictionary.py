@@ -10,11 +10,12 @@ import pyarrow.parquet as pq
 import pytest
 from typer.testing import CliRunner
 
-from uavcas import schema, vocabulary
+from uavcas import vocabulary
 from uavcas.cli import app
 from uavcas.dataset import dictionary
 from uavcas.dataset.parquet import arrow_schema, episode_arrow_schema
 from uavcas.dataset.store import extract_run
+from uavcas.flows.standards import names
 
 DOCS = Path(__file__).resolve().parents[2] / "docs" / "formats.md"
 
@@ -38,7 +39,7 @@ def test_every_column_of_an_extracted_dataset_is_described(synth_run_dir, tmp_pa
 
 
 def test_every_schema_column_of_every_standard_and_view_is_described():
-    for std in schema.FEATURE_STANDARDS:
+    for std in names():
         for sch, episodes in ((arrow_schema(std, context=True), False), (episode_arrow_schema(std, context=True), True)):
             cols = dictionary.columns(sch, std, episodes)
             assert [c.name for c in cols] == sch.names and all(c.meaning and c.unit for c in cols)

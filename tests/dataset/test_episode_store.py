@@ -14,7 +14,8 @@ from uavcas.cli import app
 from uavcas.dataset.load import load_dataset
 from uavcas.dataset.store import DatasetError, extract_run
 from uavcas.dataset.uavcas_csv import STAT_MIN_PACKETS, read_layout
-from uavcas.schema import EPISODE_CONTEXT_FEATURES, EPISODE_PACKET_UNITS, episode_feature_columns
+from uavcas.flows.standards import episode_feature_columns
+from uavcas.schema import EPISODE_CONTEXT_FEATURES, EPISODE_PACKET_UNITS
 
 runner = CliRunner()
 

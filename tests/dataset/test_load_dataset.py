@@ -7,13 +7,14 @@ import pytest
 
 import uavcas
 from uavcas import schema
+from uavcas.flows.standards.cic import FEATURES
 from uavcas.ids.features import feature_sets
 
 
 def test_features_labels_groups_meta_consistent(synth_dir, synth_df):
     X, y, groups, meta = uavcas.load_dataset(synth_dir)
     assert len(X) == len(y) == len(groups) == len(meta) == len(synth_df)
-    assert list(X.columns) == list(schema.FEATURES) and np.isfinite(X.to_numpy()).all()
+    assert list(X.columns) == list(FEATURES) and np.isfinite(X.to_numpy()).all()
     # no metadata among the features; nothing lost either
     never = set(schema.METADATA_COLUMNS) | set(schema.SEQUENCE_COLUMNS) | set(schema.COUNT_COLUMNS)
     assert not never & set(X.columns)
@@ -62,7 +63,7 @@ def test_context_columns_on_request(synth_dir, synth_df, tmp_path):
     from uavcas.dataset.synthetic import write_dataset
 
     X = uavcas.load_dataset(synth_dir, context=True).X
-    assert list(X.columns) == list(schema.FEATURES) + list(schema.CONTEXT_FEATURES)
+    assert list(X.columns) == list(FEATURES) + list(schema.CONTEXT_FEATURES)
     assert not any(c.startswith("ctx_") for c in uavcas.load_dataset(synth_dir).X.columns)
     bare = write_dataset(tmp_path / "bare", synth_df.drop(columns=list(schema.CONTEXT_FEATURES)))
     with pytest.raises(ValueError, match="no context columns"):
@@ -77,7 +78,7 @@ def test_nonfinite_policy_is_applied_and_recorded(tmp_path):
     df.loc[::7, "Flow Packets/s"] = np.inf
     df.loc[::5, "Flow IAT Mean"] = np.nan
     ds = write_dataset(tmp_path / "ds", df)
-    raw = df[list(schema.FEATURES)].to_numpy(dtype=float)
+    raw = df[list(FEATURES)].to_numpy(dtype=float)
     bad_values, bad_rows = int((~np.isfinite(raw)).sum()), int((~np.isfinite(raw)).any(axis=1).sum())
     assert bad_values and bad_rows < len(df)
     zero = uavcas.load_dataset(ds)

@@ -12,7 +12,8 @@ from typer.testing import CliRunner
 from uavcas.cli import app
 from uavcas.dataset.read import FORMATS, detect_format, load_any, select_view
 from uavcas.dataset.uavcas_csv import layout_rows
-from uavcas.schema import FEATURES, PAPER_FEATURES
+from uavcas.flows.standards.cic import FEATURES
+from uavcas.flows.standards.paper import PAPER_FEATURES
 
 runner = CliRunner()
 

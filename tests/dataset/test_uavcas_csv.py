@@ -16,7 +16,8 @@ from typer.testing import CliRunner
 from uavcas.cli import app
 from uavcas.dataset.parquet import read_flows
 from uavcas.dataset.uavcas_csv import STAT_COLUMNS, read_layout, write_layout
-from uavcas.schema import FAMILIES, PAPER_FEATURES
+from uavcas.flows.standards.paper import PAPER_FEATURES
+from uavcas.schema import FAMILIES
 
 runner = CliRunner()
 T = 1_795_558_508_949_186_000  # ns

@@ -5,7 +5,7 @@ A deliberately literal, per-packet, plain-Python re-statement of CICFlowMeter-4.
 - `read_packets`: PacketReader.getIpv4Info (what a packet carries into the flow generator),
 - `FlowGenerator.add_packet`: FlowGenerator.addPacket (where flows start and end),
 - `BasicFlow`: BasicFlow.firstPacket / addPacket / updateActiveIdleTime / detectUpdateSubflows and
-  the getters behind the 47 columns of `uavcas.schema.FEATURES`,
+  the getters behind the 47 columns of `uavcas.flows.standards.cic.FEATURES`,
 - `SummaryStatistics`: Apache commons-math3 SummaryStatistics (mean, sample variance).
 It shares no code with `uavcas.flows` on purpose; it is slow and meant for small captures.
 
@@ -329,7 +329,7 @@ class BasicFlow:
         return len(self.forward) + len(self.backward)
 
     def features(self) -> dict[str, float]:
-        """The 47 columns of uavcas.schema.FEATURES from BasicFlow's getters (dumpFlowBasedFeaturesEx)."""
+        """The 47 columns of uavcas.flows.standards.cic.FEATURES from BasicFlow's getters (dumpFlowBasedFeaturesEx)."""
         duration = self.flow_last_seen - self.flow_start_time  # getFlowDuration
         any_pkt = len(self.forward) > 0 or len(self.backward) > 0
         fwd2, bwd2 = len(self.forward) > 1, len(self.backward) > 1

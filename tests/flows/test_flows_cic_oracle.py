@@ -14,7 +14,7 @@ from scapy.layers.l2 import Ether
 
 from cicflowmeter_oracle import cicflowmeter_flows
 from uavcas.flows import FlowConfig, extract_flows
-from uavcas.schema import FEATURES
+from uavcas.flows.standards.cic import FEATURES
 
 CIC = FlowConfig(termination="cic")
 RTOL, ATOL = 1e-9, 1e-6
@@ -39,7 +39,7 @@ def compare(pcap) -> tuple[int, int]:
 
     Compared: TCP and UDP flows only. CICFlowMeter gives every other IPv4 packet protocol 0 and
     no ports (ICMP and the rest merge per address pair) where uavcas keeps the protocol
-    (`uavcas.flows.cic`, "Deliberate differences"), and it cannot see the transport header of later
+    (`uavcas.flows.standards.cic`, "Deliberate differences"), and it cannot see the transport header of later
     IP fragments where uavcas reassigns them: keys with fragments are left out as well (none of
     the captures here has any). Direction: CICFlowMeter compares source addresses, uavcas
     endpoints (`uavcas.flows.termination`, "Known difference"); both are the same unless the two

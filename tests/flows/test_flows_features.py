@@ -13,7 +13,8 @@ from scapy.layers.l2 import Ether
 from scapy.packet import Raw
 
 from uavcas.flows import FlowConfig, extract_flows
-from uavcas.schema import FEATURES, PAPER_FEATURES
+from uavcas.flows.standards.cic import FEATURES
+from uavcas.flows.standards.paper import PAPER_FEATURES
 
 US = 1e6
 CIC_RULES = FlowConfig(termination="cic")  # CICFlowMeter's segmentation exactly

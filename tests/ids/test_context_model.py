@@ -10,9 +10,10 @@ from typer.testing import CliRunner
 
 from uavcas.cli import app
 from uavcas.dataset.synthetic import write_dataset
+from uavcas.flows.standards.cic import FEATURES
 from uavcas.ids import CONTEXT_MODELS, baseline
 from uavcas.ids.context import select_columns
-from uavcas.schema import CONTEXT_FEATURES, FEATURES
+from uavcas.schema import CONTEXT_FEATURES
 
 runner = CliRunner()
 

@@ -8,6 +8,8 @@ import pandas as pd
 import pytest
 
 from uavcas import schema
+from uavcas.flows.standards import names, standards
+from uavcas.flows.standards.cic import FEATURES
 from uavcas.ids import protocols
 from uavcas.ids.features import MetadataLeakError, check_feature_columns, feature_matrix, feature_sets, resolve_features
 from uavcas.ids.protocols import BenchConfig, run_protocol
@@ -17,7 +19,7 @@ from uavcas.ids.splits import DegenerateSplitError, grouped_split, runs_per_clas
 @pytest.mark.parametrize("col", schema.METADATA_COLUMNS + schema.SEQUENCE_COLUMNS + schema.COUNT_COLUMNS + ("config_idx",))
 def test_metadata_is_refused(col):
     with pytest.raises(MetadataLeakError):
-        check_feature_columns(list(schema.FEATURES[:3]) + [col])
+        check_feature_columns(list(FEATURES[:3]) + [col])
 
 
 def test_feature_matrix_uses_exactly_the_47_features(synth_df):
@@ -25,12 +27,14 @@ def test_feature_matrix_uses_exactly_the_47_features(synth_df):
     df["config_idx"] = np.arange(len(df))  # the authors' leak: must be ignored
     x = feature_matrix(df)
     assert x.shape == (len(df), 47) and np.isfinite(x).all()
-    np.testing.assert_allclose(x[:, 0], df[schema.FEATURES[0]].to_numpy(np.float32))
+    np.testing.assert_allclose(x[:, 0], df[FEATURES[0]].to_numpy(np.float32))
 
 
-def test_feature_sets_come_from_the_schema(synth_df):
+def test_feature_sets_come_from_the_standards_registry(synth_df):
     sets = feature_sets()
-    assert all(set(cols) <= set(schema.FEATURES) | set().union(*sets.values()) for cols in sets.values())
+    assert {n: sets[n] for n in names()} == {s.name: s.columns for s in standards()}
+    assert {n: sets[f"{schema.EPISODE_VIEW}-{n}"] for n in names()} == {s.name: s.episode_columns for s in standards()}
+    assert len(sets) == 2 * len(names())
     name = next(n for n, cols in sets.items() if set(cols) <= set(synth_df.columns))
     assert resolve_features(synth_df, name) == list(sets[name])
     assert resolve_features(synth_df, ["Flow Duration", "SYN Flag Count"]) == ["Flow Duration", "SYN Flag Count"]

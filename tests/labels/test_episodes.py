@@ -9,9 +9,10 @@ from synth_run import IPS, make_plan
 
 from uavcas.flows import FlowConfig, assemble, flow_frame
 from uavcas.flows.packets import PacketTable, address_to_words, table_from_rows
+from uavcas.flows.standards import episode_feature_columns
 from uavcas.labels.effects import PacketTruth
 from uavcas.labels.episodes import host_window_frame
-from uavcas.schema import EFFECTS, FAMILIES, episode_feature_columns
+from uavcas.schema import EFFECTS, FAMILIES
 
 T0 = 1_700_000_000.0
 POINTS = ("s-uav0", "s-uav1", "s-uav3", "s-bs0")

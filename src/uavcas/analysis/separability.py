@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from uavcas import schema
+from uavcas.flows.standards import DEFAULT_STANDARD, feature_columns
 from uavcas.report.figure import plt, save_png
 
 from .diversity import class_order
@@ -68,7 +68,7 @@ def stratified_sample(labels, n: int, seed: int = 0) -> np.ndarray:
 
 
 def tsne_embedding(df: pd.DataFrame, n_samples: int = 2000, seed: int = 0) -> pd.DataFrame:
-    """2-D t-SNE of the 47 features (signed log, standardised) on a seeded subsample stratified
+    """2-D t-SNE of the dataset standard's features (signed log, standardised) on a seeded subsample stratified
     by class (`stratified_sample`)."""
     from sklearn.manifold import TSNE
     from sklearn.preprocessing import StandardScaler
@@ -76,7 +76,8 @@ def tsne_embedding(df: pd.DataFrame, n_samples: int = 2000, seed: int = 0) -> pd
     sub = df.iloc[stratified_sample(df["label"].astype(str).to_numpy(), n_samples, seed)]
     if len(sub) < 5:
         raise ValueError(f"t-SNE needs at least 5 flows, got {len(sub)}")
-    x = _signed_log(np.nan_to_num(sub[list(schema.FEATURES)].to_numpy(dtype=float)))
+    cols = list(feature_columns(df.attrs.get("feature_standard", DEFAULT_STANDARD)))
+    x = _signed_log(np.nan_to_num(sub[cols].to_numpy(dtype=float)))
     x = StandardScaler().fit_transform(x)
     perplexity = float(min(30, max(2, (len(sub) - 1) // 3)))
     emb = TSNE(n_components=2, perplexity=perplexity, init="pca", random_state=seed).fit_transform(x)

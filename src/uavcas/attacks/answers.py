@@ -41,8 +41,8 @@ def tcp_flags_are(p: "PacketTable", flags: int, mask: int) -> np.ndarray:
 
 
 def payload_len(p: "PacketTable") -> np.ndarray:
-    """TCP/UDP payload bytes of every row (as `flows.cic.payload_and_header`), int64."""
-    from uavcas.flows.cic import payload_and_header
+    """TCP/UDP payload bytes of every row (as `flows.packets.payload_and_header`), int64."""
+    from uavcas.flows.packets import payload_and_header
 
     return payload_and_header(p["proto"], p["ip_len"], p["ip_hdr_len"], p["l4_hdr_len"])[0]
 

@@ -11,7 +11,7 @@ from rich.table import Table
 
 from uavcas.dataset.read import EXPORT_FORMATS, IMPORT_FORMATS
 from uavcas.flows.assemble import VIEWS
-from uavcas.flows.features import STANDARDS
+from uavcas.flows.standards import DEFAULT_STANDARD, names, standards
 from uavcas.flows.termination import TERMINATIONS
 from uavcas.schema import EPISODE_VIEW
 from uavcas.vocabulary import LABEL_MODES
@@ -21,12 +21,12 @@ from .common import (TERMINATION_HELP, atomic_path, check_output, console, datas
 
 View = one_of(VIEWS)
 ExtractView = one_of((*VIEWS, EPISODE_VIEW))
-Standard = one_of(STANDARDS)
+Standard = one_of(names())
 Termination = one_of(TERMINATIONS)
 FlowsFormat = one_of(("table", "csv", "parquet"))
 
 TABLE_ROWS = 50  # the human-readable table shows this many flows; csv/parquet have them all
-FEATURES_HELP = "Feature standard: cic (CICFlowMeter's definitions, us) or paper (the authors' 47, s)."
+FEATURES_HELP = "Feature standard: " + "; ".join(f"{s.name} ({s.summary})" for s in standards()) + "."
 
 
 def _errors():
@@ -87,7 +87,7 @@ def _empty_frame(features: str):
 def flows_cmd(
     pcaps: list[Path] = typer.Argument(..., help="Capture file(s), pcap or pcapng; several = capture points."),
     view: View = typer.Option("5tuple", "--view", help="Flow key: 5tuple or hostpair (the authors')."),
-    features: Standard = typer.Option("cic", "--features", help=FEATURES_HELP),
+    features: Standard = typer.Option(DEFAULT_STANDARD, "--features", help=FEATURES_HELP),
     min_packets: int = typer.Option(None, "--min-packets", help="Drop smaller flows (default 1 for 5tuple, 2 under --termination cic, 10 for hostpair)."),
     fmt: FlowsFormat = typer.Option("table", "--format", help="table, csv or parquet."),
     out: Path = typer.Option(None, "--out", help="Output file (default: standard output; required for parquet)."),
@@ -101,7 +101,7 @@ def flows_cmd(
     from uavcas.atomic import check_target
     from uavcas.dataset.parquet import frame_to_arrow
     from uavcas.flows import FlowConfig, StreamReport, iter_flow_frames
-    from uavcas.schema import feature_columns
+    from uavcas.flows.standards import feature_columns
 
     if fmt == "parquet" and out is None:
         raise fail("--format parquet needs --out FILE")
@@ -198,7 +198,7 @@ def extract_cmd(
     out: Path = typer.Option(..., "--out", help="Dataset directory to add the run's shard to."),
     view: ExtractView = typer.Option("5tuple", "--view", help="Flow key: 5tuple, hostpair or window-hostpair (one flow per host pair per plan window); "
                                                    "or window-host: episodes, one row per node per plan window (collaborative classes)."),
-    features: Standard = typer.Option("cic", "--features", help=FEATURES_HELP),
+    features: Standard = typer.Option(DEFAULT_STANDARD, "--features", help=FEATURES_HELP),
     labels: one_of(LABEL_MODES) = typer.Option("ours", "--labels", help="ours (from each packet's effect) or paper (IP membership)."),
     min_packets: int = typer.Option(None, "--min-packets", help="Drop smaller flows (default by view)."),
     termination: Termination | None = typer.Option(None, "--termination", help=TERMINATION_HELP),
@@ -306,7 +306,7 @@ def info_cmd(
 ) -> None:
     """Class counts, feature standard, views, fidelity and the runs of a dataset (or its columns)."""
     from uavcas.dataset.runs import dataset_runs, percent
-    from uavcas.dataset.store import read_card
+    from uavcas.dataset.store import card_standard, read_card
 
     try:
         card = read_card(dataset_dir)
@@ -323,7 +323,7 @@ def info_cmd(
     table.add_column("share", justify="right")
     for cls, n in card.get("class_counts", {}).items():
         table.add_row(cls, str(n), percent(n, total))
-    std = card.get("features", {}).get("standard", "cic")
+    std = card_standard(card)
     table.caption = (f"features: {std}; views: {', '.join(card.get('views', []))}; "
                      f"labels: {', '.join(card.get('label_modes', []))}; schema v{card.get('schema_version')}")  # fmt: skip
     console.print(table)
@@ -347,12 +347,13 @@ def _print_columns(dataset_dir: Path, card: dict) -> None:
     import pyarrow.parquet as pq
 
     from uavcas.dataset.dictionary import DictionaryError, columns
+    from uavcas.dataset.store import card_standard
 
     path = Path(dataset_dir) / "flows.parquet"
     if not path.is_file():
         raise fail(f"{dataset_dir}: no flows.parquet beside dataset.json")
     try:
-        cols = columns(pq.read_schema(path), card.get("features", {}).get("standard", "cic"),
+        cols = columns(pq.read_schema(path), card_standard(card),
                        episodes=card.get("unit") == "host-window")
     except DictionaryError as exc:
         raise fail(str(exc)) from None

@@ -6,7 +6,7 @@ Columns, in order (`csv_columns`):
   packet's time, ISO 8601 UTC to the microsecond; CICFlowMeter writes local time to the second):
   CICIDS2017's names for our `src_ip` .. `protocol`, `first_ts_ns`;
 - the dataset's 47 features under their own names: the `cic` standard's ARE CICIDS2017's column
-  names and definitions (`uavcas.flows.cic`); a `paper` dataset's are the authors' 47;
+  names and definitions (`uavcas.flows.standards.cic`); a `paper` dataset's are the authors' 47;
 - every other column of the dataset under its uavcas name (run, scenario axes, counts, context
   columns, ground truth, per-family labels; `uavcas info DATASET --columns` explains each);
 - `Label` last: the class (`label`; benign rows are `Benign`).
@@ -31,7 +31,8 @@ import pyarrow.compute as pc
 import pyarrow.parquet as pq
 
 from uavcas.atomic import atomic_path
-from uavcas.schema import EPISODE_VIEW, SEQUENCE_COLUMNS, feature_columns
+from uavcas.flows.standards import feature_columns
+from uavcas.schema import EPISODE_VIEW, SEQUENCE_COLUMNS
 
 ID_NAMES: dict[str, str] = {"src_ip": "Source IP", "src_port": "Source Port", "dst_ip": "Destination IP",
                             "dst_port": "Destination Port", "protocol": "Protocol"}
@@ -101,7 +102,7 @@ def write_flow_csv(dataset_dir: Path, out: Path, view: str | None = None) -> int
     """Write DATASET_DIR's flows (of `view`, needed when it holds several) to the CSV file `out`;
     the number of rows written. Episodes (window-host rows) are refused: they are no flows."""
     from .read import select_view
-    from .store import read_card
+    from .store import card_standard, read_card
 
     card = read_card(dataset_dir)
     path = Path(dataset_dir) / "flows.parquet"
@@ -109,7 +110,7 @@ def write_flow_csv(dataset_dir: Path, out: Path, view: str | None = None) -> int
         raise CicCsvError(f"{dataset_dir}: {EPISODE_VIEW} rows (episodes) are no flows and the csv format holds one row "
                           "per flow; extract the runs with `uavcas extract RUN --view 5tuple` (or hostpair) into "
                           "another dataset and export that")
-    standard = (card.get("features") or {}).get("standard", "cic")
+    standard = card_standard(card)
     names = [n for n in pq.read_schema(path).names if n not in LEFT_OUT]
     if "view" in names:  # one view only: a dataset extracted with several holds the same traffic twice
         views = pq.read_table(path, columns=["view"]).to_pandas()

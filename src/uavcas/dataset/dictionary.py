@@ -4,11 +4,11 @@ one-line meaning, in one registry.
 Everything that describes columns reads it: the card (`dataset.json: columns`, `store.rebuild`),
 the Parquet field metadata (`field_metadata`, set by `uavcas.dataset.parquet`), the generated
 section of docs/formats.md (`markdown`; a test keeps the file equal to it) and
-`uavcas info DATASET --columns`. Feature units are those of the feature standard's module
-(`uavcas.flows.cic.UNITS`, `uavcas.flows.paper.UNITS`); family columns (`attack_packets_<family>`,
-`label_<family>`) and effect words derive from `uavcas.vocabulary`, so a new family or effect is
-described without an edit here. A column with no entry raises `DictionaryError` (a test extracts
-datasets and looks every column up).
+`uavcas info DATASET --columns`. Feature units and meanings are those of the feature standard's
+record (`uavcas.flows.standards`: `FeatureStandard.units`, `.meanings`); family columns
+(`attack_packets_<family>`, `label_<family>`) and effect words derive from `uavcas.vocabulary`, so
+a new standard, family or effect is described without an edit here. A column with no entry raises
+`DictionaryError` (a test extracts datasets and looks every column up).
 """
 
 from __future__ import annotations
@@ -18,6 +18,8 @@ from dataclasses import dataclass
 from uavcas import schema as s
 from uavcas import vocabulary as v
 from uavcas.channel.pathloss import names as pathloss_names
+from uavcas.flows.standards import DEFAULT_STANDARD, standards
+from uavcas.flows.standards import standard as feature_standard
 
 NO_UNIT = "-"
 
@@ -170,48 +172,13 @@ def _context(name: str) -> tuple[str, str] | None:
 
 
 def _feature(name: str, standard: str) -> tuple[str, str] | None:
-    from uavcas.flows import cic, paper
-
-    mod = cic if standard == "cic" else paper
-    if name not in mod.UNITS:
+    std = feature_standard(standard)
+    if name not in std.units:
         return None
-    length = "TCP/UDP payload length" if standard == "cic" else "frame length"
-    fwd = "forward (initiator -> responder)" if standard == "cic" else "forward (sent by the string-smaller address)"
-    words = name.replace("Backward", "Bwd").split()
-    who = f"{fwd} packets" if "Fwd" in words else "backward packets" if "Bwd" in words else "packets of both directions"
-    stat = {"Mean": "mean", "Std": "standard deviation", "Max": "largest", "Min": "smallest", "Total": "sum",
-            "Variance": "variance"}
-    flags = {"CWE": "CWR" if standard == "cic" else "ECE", "ECE": "ECE" if standard == "cic" else "CWR"}
-    if "IAT" in words:
-        what = f"{stat[words[-1]]} of the gaps between consecutive {who}"
-    elif name.endswith("Flag Count"):
-        what = f"packets with the {flags.get(words[0], words[0])} flag set"
-    elif "Header" in words:
-        what = (f"sum of the TCP/UDP header bytes of {who}" if standard == "cic" else f"20 bytes x the number of {who}")
-    elif name in ("Min Packet Length", "Max Packet Length"):
-        what = f"{stat[words[0]]} {length} of all packets"
-    elif "Packet Length" in name:
-        what = f"{stat[words[-1]]} of the {length} of {who}"
-    elif name.startswith("Total Length of"):
-        what = f"sum of the {length} of {who}"
-    elif name.startswith("Total"):
-        what = f"number of {who}"
-    elif name.endswith("/s"):
-        what = (f"{length} summed over all packets per second of Flow Duration" if "Bytes" in name
-                else f"number of {who} per second of Flow Duration") + " (0-duration flows: " + (
-            "NaN or inf, as CICFlowMeter divides)" if standard == "cic" else "0)")
-    else:
-        what = {
-            "Flow Duration": "last packet time - first packet time",
-            "Down/Up Ratio": "backward packets / forward packets, integer division (0 without forward packets)",
-            "Average Packet Size": f"sum of the {length} / number of packets",
-            "Active Mean": "mean length of the active periods (between idle gaps over 5 s)",
-            "Idle Mean": "mean of the idle gaps over 5 s", "Idle Max": "largest idle gap over 5 s",
-        }[name]
-    return mod.UNITS[name], f"{what} [{standard}]"
+    return std.units[name], f"{std.meanings[name]} [{std.name}]"
 
 
-def describe(name: str, standard: str = s.DEFAULT_STANDARD, episodes: bool = False) -> tuple[str, str]:
+def describe(name: str, standard: str = DEFAULT_STANDARD, episodes: bool = False) -> tuple[str, str]:
     """(unit, meaning) of column `name` of a dataset of feature standard `standard` (rows are
     window-host episodes when `episodes`)."""
     for table in (_IDS, _AXES, _COUNTS, _SEQUENCES, _TRUTH):
@@ -235,7 +202,7 @@ def _episode_summary(name: str, standard: str) -> tuple[str, str] | None:
     if stat not in s.EPISODE_STATS:
         return None
     word = "mean" if stat == "mean" else "largest"
-    for feat, feat_stem in s.EPISODE_FLOW_SUBSETS.get(standard, {}).items():
+    for feat, feat_stem in feature_standard(standard).episode_summary.items():
         if feat_stem == stem:
             unit, _ = _feature(feat, standard)
             return unit, f"{word} of the flows' {feat} [{standard}] over the flows starting in the window with the node as an endpoint"
@@ -245,18 +212,18 @@ def _episode_summary(name: str, standard: str) -> tuple[str, str] | None:
     return None
 
 
-def field_metadata(name: str, standard: str = s.DEFAULT_STANDARD, episodes: bool = False) -> dict[bytes, bytes]:
+def field_metadata(name: str, standard: str = DEFAULT_STANDARD, episodes: bool = False) -> dict[bytes, bytes]:
     """The Parquet field metadata of a column: b"unit" and b"meaning"."""
     unit, meaning = describe(name, standard, episodes)
     return {b"unit": unit.encode(), b"meaning": meaning.encode()}
 
 
-def columns(arrow_schema, standard: str = s.DEFAULT_STANDARD, episodes: bool = False) -> list[Column]:
+def columns(arrow_schema, standard: str = DEFAULT_STANDARD, episodes: bool = False) -> list[Column]:
     """Every column of `arrow_schema` (a pyarrow Schema: a dataset's file or a shard's) described."""
     return [Column(f.name, str(f.type), *describe(f.name, standard, episodes)) for f in arrow_schema]
 
 
-def card_columns(arrow_schema, standard: str = s.DEFAULT_STANDARD, episodes: bool = False) -> dict[str, dict]:
+def card_columns(arrow_schema, standard: str = DEFAULT_STANDARD, episodes: bool = False) -> dict[str, dict]:
     """The card's `columns`: name -> {dtype, unit, meaning}, in file order."""
     return {c.name: {"dtype": c.dtype, "unit": c.unit, "meaning": c.meaning} for c in columns(arrow_schema, standard, episodes)}
 
@@ -268,26 +235,28 @@ def markdown_table(cols: list[Column]) -> list[str]:
 
 
 def markdown() -> str:
-    """docs/formats.md's generated section: the columns of a cic flow dataset with context, the
-    paper standard's features, and the window-host view's own columns."""
+    """docs/formats.md's generated section: the columns of a flow dataset of the default standard
+    with context, every other standard's features, and the window-host view's own columns."""
     from .parquet import arrow_schema, episode_arrow_schema
 
-    table = markdown_table
-    flows = columns(arrow_schema("cic", context=True), "cic")
-    paper = [c for c in columns(arrow_schema("paper"), "paper") if c.name in s.PAPER_FEATURES]
+    table, default = markdown_table, DEFAULT_STANDARD
+    others = [std for std in standards() if std.name != default]
+    flows = columns(arrow_schema(default, context=True), default)
     flow_names = {c.name for c in flows}
     summaries = set(s.EPISODE_CONTEXT_FEATURES) - set(s.EPISODE_ROUTE_FEATURES)  # said in one sentence below
-    ep_schema = episode_arrow_schema("cic", context=True)
-    episode = [c for c in columns(ep_schema, "cic", episodes=True)
+    episode = [c for c in columns(episode_arrow_schema(default, context=True), default, episodes=True)
                if (c.name not in flow_names or c.name == "packets") and c.name not in summaries]
-    episode += [c for c in columns(episode_arrow_schema("paper"), "paper", episodes=True)
-                if c.name not in {e.name for e in episode} and c.name not in flow_names]
     out = ["<!-- generated: python -m uavcas.dataset.dictionary docs/formats.md (tests/dataset/test_dictionary.py checks it) -->",
-           "", "Flow datasets (`cic` standard, with the context columns):", "", *table(flows), "",
-           "The `paper` standard's 47 features (in place of the `cic` ones):", "", *table(paper), "",
-           "The window-host view's own columns (identity, axes, truth and labels as for flows; each context column "
-           "`ctx_<name>` as `ctx_<name>_mean` and `ctx_<name>_max` over the episode's flows, same unit):", "",
-           *table(episode)]
+           "", f"Flow datasets (`{default}` standard, with the context columns):", "", *table(flows), ""]
+    for std in others:
+        own = [c for c in columns(arrow_schema(std.name), std.name) if c.name in std.units]
+        out += [f"The `{std.name}` standard's {len(std.columns)} features (in place of the `{default}` ones):", "",
+                *table(own), ""]
+        episode += [c for c in columns(episode_arrow_schema(std.name), std.name, episodes=True)
+                    if c.name not in {e.name for e in episode} and c.name not in flow_names]
+    out += ["The window-host view's own columns (identity, axes, truth and labels as for flows; each context column "
+            "`ctx_<name>` as `ctx_<name>_mean` and `ctx_<name>_max` over the episode's flows, same unit):", "",
+            *table(episode)]
     return "\n".join(out) + "\n"
 
 

@@ -1,6 +1,6 @@
-"""Loaders of external IDS datasets mapped onto our feature names (schema.FEATURES).
+"""Loaders of external IDS datasets mapped onto our feature names (the `cic` standard's).
 
-Each loader returns one row per flow with the 47 `cic` feature columns (schema.FEATURES; NaN
+Each loader returns one row per flow with the 47 `cic` feature columns (`uavcas.flows.standards.cic`; NaN
 where the dataset has no counterpart) in the `cic` standard's units (times in microseconds,
 lengths in TCP/UDP payload bytes), plus `label` (the dataset's own class string), `label_binary`
 (0 benign / 1 attack) and `source`. Which features exist is in `MAPPED_<NAME>`.
@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from uavcas.schema import FEATURES
+from uavcas.flows.standards.cic import FEATURES
 
 US_PER_S = 1e6
 # our name -> (candidate source names after stripping spaces, unit factor)

@@ -2,8 +2,8 @@
 
     X, y, groups, meta = uavcas.load_dataset("ds", view="5tuple", features="cic")
 
-- `X`: DataFrame of the feature columns only (a feature set of `uavcas.schema`: for the window-host
-  view, episodes, its own set `schema.EPISODE_FEATURE_SETS`; or the columns
+- `X`: DataFrame of the feature columns only (a feature set, `uavcas.ids.features.feature_sets`:
+  a feature standard's columns, for the window-host view, episodes, its own set; or the columns
   given; `context=True` adds the dataset's `ctx_*` context columns, what `baseline("context")`
   learns from); NaN and inf (CICFlowMeter's rates and IATs of a flow with a zero duration or one
   packet) handled by the `nonfinite` policy, recorded in `X.attrs["nonfinite"]`;
@@ -42,8 +42,9 @@ def load_dataset(path: str | Path, view: str | None = None, features: str | Iter
     """Read `path` (any format `uavcas.dataset.read.load_any` reads; `fmt` names it when the path
     does not tell) and split it into features, labels, groups and metadata.
 
-    `view` picks one flow view when the dataset holds several; `features` is a feature-set name of
-    the schema (e.g. 'cic', 'paper'), a list of feature columns, or None for the dataset's own;
+    `view` picks one flow view when the dataset holds several; `features` is a feature-set name
+    (`ids.features.feature_sets`: a standard's name, e.g. 'cic'), a list of feature columns, or
+    None for the dataset's own;
     `context` appends the context columns (`schema.CONTEXT_FEATURES`; an error when the dataset
     has none).
 

@@ -6,7 +6,7 @@ duration_s float64; axis columns as Scenario.axes() gives them (n_uav, n_bs, tx_
 noise_dbm float64; attacks, payload, pathloss, modulation, mission string); sequences are list
 columns: seq_time_s list<float64>, seq_size list<int32>, seq_flags list<int16>, seq_dir list<int8>
 (+1 forward, -1 backward), seq_effect list<string> (one of vocabulary.EFFECTS per packet); the
-47 features of the dataset's standard float64 (`schema.feature_columns`); attack_packets, provoked_packets and
+features of the dataset's standard float64 (`uavcas.flows.standards`); attack_packets, provoked_packets and
 attack_packets_<family> int64, attack_fraction float64; label_<family> bool; label, label_source string;
 the context columns (`schema.CONTEXT_FEATURES`, all or none) float64. Every field carries its
 data-dictionary entry (`uavcas.dataset.dictionary`) as field metadata: b"unit", b"meaning". A window-host shard
@@ -28,11 +28,11 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from uavcas.atomic import atomic_path
+from uavcas.flows.standards import DEFAULT_STANDARD, episode_feature_columns, feature_columns
 from uavcas.schema import (
     AXIS_COLUMNS,
     CONTEXT_FEATURES,
     COUNT_COLUMNS,
-    DEFAULT_STANDARD,
     EPISODE_CONTEXT_FEATURES,
     EPISODE_ID_COLUMNS,
     EPISODE_PACKET_UNITS,
@@ -40,8 +40,6 @@ from uavcas.schema import (
     LABEL_COLUMNS,
     SEQUENCE_COLUMNS,
     TRUTH_COLUMNS,
-    episode_feature_columns,
-    feature_columns,
 )
 
 _ID_TYPES = {
@@ -118,7 +116,7 @@ _EPISODE_INT_UNITS = ("packets", "bytes", "hosts", "ports", "flows")
 
 def episode_arrow_schema(standard: str = DEFAULT_STANDARD, context: bool = False) -> pa.Schema:
     """The columns of a window-host shard (`uavcas.labels.episodes`): identity, axes, packets,
-    the episode features (`schema.episode_feature_columns`), the summarised context columns
+    the episode features (`FeatureStandard.episode_columns`), the summarised context columns
     when `context`, then the same truth and label columns as flows."""
     fields = [pa.field(c, _EPISODE_ID_TYPES[c]) for c in EPISODE_ID_COLUMNS]
     fields += [pa.field(c, _AXIS_TYPES[c]) for c in AXIS_COLUMNS]

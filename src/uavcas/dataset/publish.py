@@ -38,7 +38,7 @@ from uavcas.versions import file_sha256
 from .croissant import PARQUET, SHARDS, DatasetInfo, FileEntry, metadata_json, record_set_name, validate
 from .dictionary import columns, markdown_table
 from .runs import class_table, dataset_runs, flagged_lines
-from .store import DatasetError, read_card
+from .store import DatasetError, card_standard, read_card
 
 DEFAULT_LICENSE = "CC-BY-4.0"  # SPDX; the data uavcas generates, not the calibration data (CALIBRATION_DATA)
 PAPER_URL = "https://github.com/Sripathm2/Collaborative-UAV-Dataset"  # the authors' code and data
@@ -141,7 +141,7 @@ def _card_text(card: dict, dataset_dir: Path, info: DatasetInfo, files: list[Fil
     """README.md: the dataset card for people."""
     from uavcas.labels.label import rule_summary
 
-    standard = (card.get("features") or {}).get("standard", "cic")
+    standard = card_standard(card)
     episodes = card.get("unit") == "host-window"
     names = set(schema.names)
     frame = pq.read_table(dataset_dir / "flows.parquet", columns=[c for c in ("label", "view") if c in names]).to_pandas()
@@ -175,7 +175,7 @@ def publish(dataset_dir: str | Path, out: str | Path, name: str | None = None, l
     if out.exists() and any(out.iterdir()):
         raise PublishError(f"{out}: not empty; publish into a new directory")
     schema = pq.read_schema(flows)
-    standard = (card.get("features") or {}).get("standard", "cic")
+    standard = card_standard(card)
     episodes = card.get("unit") == "host-window"
     files = [FileEntry(f"{SHARDS}/{s.name}", s.stat().st_size, file_sha256(s), PARQUET) for s in shards]
     files.append(FileEntry("dataset.json", (dataset_dir / "dataset.json").stat().st_size,

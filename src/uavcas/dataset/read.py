@@ -19,7 +19,8 @@ from pathlib import Path
 
 import pandas as pd
 
-from uavcas.schema import BENIGN, DEFAULT_STANDARD, feature_columns
+from uavcas.flows.standards import DEFAULT_STANDARD, feature_columns
+from uavcas.schema import BENIGN
 
 from .external import LOADERS
 from .parquet import read_flows

@@ -28,14 +28,13 @@ import pyarrow.parquet as pq
 
 from uavcas.atomic import atomic_write_text, ensure_out_dir
 from uavcas.extract import ShardInfo, extract
+from uavcas.flows.standards import DEFAULT_STANDARD
+from uavcas.flows.standards import standard as feature_standard
 from uavcas.schema import (
     CLASSES,
     CONTEXT_FEATURES,
     EFFECTS,
     EPISODE_CONTEXT_FEATURES,
-    EPISODE_FLOW_SUBSETS,
-    EPISODE_PACKET_UNITS,
-    EPISODE_STATS,
     EPISODE_VIEW,
     SCHEMA_VERSION,
 )
@@ -160,23 +159,22 @@ def _effect_counts(runs: list[dict]) -> dict[str, int]:
 
 
 def feature_card(standard: str, episodes: bool = False) -> dict:
-    """The card's record of a feature standard: its name, source and the unit of every column.
+    """The card's record of a feature standard: its name, source and the unit of every column,
+    all from the standard's module (`uavcas.flows.standards`).
 
     `episodes`: the window-host view's columns instead (`uavcas.labels.episodes`): packet counts
     and the mean / max of a subset of the standard's flow features (units of those features)."""
-    from uavcas.flows import cic, paper
-
-    mod = cic if standard == "cic" else paper
-    source = ("CICFlowMeter-4.0 BasicFlow/FlowGenerator (uavcas.flows.cic)" if standard == "cic"
-              else "Sripathm2/Collaborative-UAV-Dataset Scripts/6-build_stat_csv.py (uavcas.flows.paper)")
+    std = feature_standard(standard)
+    source = f"{std.source} ({std.module})"
     if not episodes:
-        return {"standard": standard, "source": source, "units": dict(mod.UNITS)}
-    units = dict(EPISODE_PACKET_UNITS)
-    summarised = EPISODE_FLOW_SUBSETS[standard]
-    for feat, stem in summarised.items():
-        units.update({f"{stem}_{s}": mod.UNITS[feat] for s in EPISODE_STATS})
-    return {"standard": standard, "source": f"{EPISODE_VIEW} episodes (uavcas.labels.episodes) of flows by {source}",
-            "summarised": {stem: feat for feat, stem in summarised.items()}, "units": units}
+        return {"standard": std.name, "source": source, "units": dict(std.units)}
+    return {"standard": std.name, "source": f"{EPISODE_VIEW} episodes (uavcas.labels.episodes) of flows by {source}",
+            "summarised": {stem: feat for feat, stem in std.episode_summary.items()}, "units": std.episode_units}
+
+
+def card_standard(card: dict) -> str:
+    """The feature standard a card names (cards before standards were recorded: the default)."""
+    return (card.get("features") or {}).get("standard", DEFAULT_STANDARD)
 
 
 def read_card(dataset_dir: Path) -> dict:
@@ -206,6 +204,6 @@ def import_layout(src: Path, out_dir: Path) -> tuple[dict, "Imported"]:
     imp = read_layout(Path(src))
     meta = {"run_id": "import", "source": "uavcas-csv", "files": imp.files, "lacks": imp.lacks, "notes": imp.notes}
     with _locked(out_dir):
-        write_table(to_table(imp.frame, meta=meta, standard="paper"), out_dir / "shards" / "import.parquet")
+        write_table(to_table(imp.frame, meta=meta), out_dir / "shards" / "import.parquet")
         card = rebuild(out_dir)
     return card, imp

@@ -5,7 +5,7 @@ and `Scripts/3-build_ts_csv.py`; Python `csv.writer`, QUOTE_MINIMAL, CRLF line e
 
 `UAV-CAS_stat.csv` (`STAT_COLUMNS`, 59): `config_idx, num_drones, num_bs, payload, pathloss,
 modulation, mission, tx_power, noise, src_ip, dst_ip`, the 47 `paper` features
-(`schema.PAPER_FEATURES`, `uavcas.flows.paper`; integer ones written as integers), `Label`; one
+(`uavcas.flows.standards.paper`; integer ones written as integers), `Label`; one
 row per flow of at least `STAT_MIN_PACKETS` (10) packets. `src_ip` is the string-smaller address.
 `UAV-CAS_ts.csv` (`TS_COLUMNS`): `packet_time, packet_size, [packet_flag,] packet_dir, Label`,
 one row per flow of at least `TS_MIN_PACKETS` (2) packets, each list a Python literal: times as
@@ -39,8 +39,9 @@ import pyarrow.compute as pc
 
 from uavcas.atomic import atomic_path, ensure_out_dir
 from uavcas.flows.packets import ns_to_s
-from uavcas.flows.paper import INT_FEATURES, paper_features
-from uavcas.schema import FAMILIES, FAMILY_CLASS, PAPER_FEATURES, TRUTH_COLUMNS
+from uavcas.flows.standards.paper import INT_FEATURES, PAPER_FEATURES, paper_features
+from uavcas.flows.standards.paper import STANDARD as PAPER
+from uavcas.schema import FAMILIES, FAMILY_CLASS, TRUTH_COLUMNS
 
 STAT_FILE, TS_FILE = "UAV-CAS_stat.csv", "UAV-CAS_ts.csv"
 STAT_CFG_FILE, TS_CFG_FILE = "UAV-CAS_stat_cfg.csv", "UAV-CAS_ts_cfg.csv"
@@ -248,7 +249,7 @@ def write_layout(df: pd.DataFrame, out_dir: Path, embed_config: bool = False, in
             row.append(labels[i])
             w.writerow(row)
 
-    if df.attrs.get("feature_standard") == "paper":
+    if df.attrs.get("feature_standard") == PAPER.name:
         feats = {f: df[f].to_numpy(dtype=np.float64, na_value=np.nan) for f in PAPER_FEATURES}
         has = ~np.isnan(feats["Total Packets"])
     else:
@@ -520,7 +521,7 @@ def read_layout(path: Path) -> Imported:
     for fam, hit in _families(label).items():
         out[f"label_{fam}"] = hit
     out["label_source"] = "uavcas-csv"
-    out.attrs["feature_standard"] = "paper"
+    out.attrs["feature_standard"] = PAPER.name
     files = [str(p) for p in (stat_path, ts_path) if p is not None]
     return Imported(out, lacks, notes, files)
 

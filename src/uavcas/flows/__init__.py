@@ -2,10 +2,11 @@
 
 `read_packets` (packets.py) decodes pcap/pcapng captures block by block into numpy columns
 (pcapio.py framing, decode.py protocols, fragments.py IP fragments), `assemble` (assemble.py)
-groups packets into flows (termination.py: the `connection`, `cic` and `timeout` policies), `flow_frame` (features.py) computes one row per flow with the features
-of a standard (cic.py: CICFlowMeter's; paper.py: the authors'). `extract_flows` chains the three
-in memory (the extraction stage needs the packets for its labels); `iter_flow_frames`
-(stream.py) streams one capture with bounded memory.
+groups packets into flows (termination.py: the `connection`, `cic` and `timeout` policies),
+`flow_frame` (features.py) computes one row per flow with the features of a standard
+(`standards`: one module per standard; cic: CICFlowMeter's, paper: the authors'). `extract_flows`
+chains the three in memory (the extraction stage needs the packets for its labels);
+`iter_flow_frames` (stream.py) streams one capture with bounded memory.
 """
 
 from __future__ import annotations
@@ -16,17 +17,16 @@ from pathlib import Path
 
 import pandas as pd
 
-from uavcas.schema import DEFAULT_STANDARD
-
 from .assemble import MAX_PACKETS_PER_FLOW, VIEWS, FlowConfig, Flows, assemble
-from .features import CSV_LEAD_COLUMNS, STANDARDS, flow_frame
+from .features import CSV_LEAD_COLUMNS, flow_frame
 from .packets import CaptureStats, PacketTable, read_packets
 from .pcapio import CaptureError
+from .standards import DEFAULT_STANDARD
 from .stream import StreamReport, iter_flow_frames
 from .termination import TERMINATIONS
 
 __all__ = [
-    "CSV_LEAD_COLUMNS", "MAX_PACKETS_PER_FLOW", "STANDARDS", "TERMINATIONS", "VIEWS", "CaptureError",
+    "CSV_LEAD_COLUMNS", "MAX_PACKETS_PER_FLOW", "TERMINATIONS", "VIEWS", "CaptureError",
     "CaptureStats", "Extraction", "FlowConfig", "Flows", "PacketTable", "StreamReport", "assemble",
     "extract_flows", "flow_frame", "iter_flow_frames", "read_packets",
 ]  # fmt: skip

@@ -40,8 +40,7 @@ from typing import Literal
 import numpy as np
 import pandas as pd
 
-from .cic import payload_and_header
-from .packets import PacketTable
+from .packets import PacketTable, payload_and_header
 from .termination import (
     DEFAULTS, TERMINATIONS, Cuts, KeyPackets, PolicyDefaults, Termination, cic_cuts, connection_cuts, timeout_cuts,
 )

@@ -3,8 +3,8 @@
 Identity: src = the forward endpoint (rule 6 of `uavcas.flows.assemble`), ports and protocol
 (0 in the host-pair view), first_ts/last_ts (float Unix s) and first_ts_ns (exact int ns), the
 capture point. Counts: packets, bytes (frame bytes on the wire), duration_s.
-Features: `standard` 'cic' (`uavcas.flows.cic`, schema.FEATURES) or 'paper'
-(`uavcas.flows.paper`, schema.PAPER_FEATURES); see those modules for every definition and unit.
+Features: the columns of the named feature standard (`uavcas.flows.standards`: one module per
+standard, each with its definitions, units and source).
 
 Sequences (Arrow list columns, one element per packet in flow order, whatever the standard):
 seq_time_s float64 (time since the flow's first packet; first_ts_ns + round(seq_time_s * 1e9)
@@ -18,17 +18,14 @@ import numpy as np
 import pandas as pd
 import pyarrow as pa
 
-from uavcas.schema import DEFAULT_STANDARD, feature_columns
-
 from .assemble import HOST_VIEWS, Flows
-from .cic import cic_features, payload_and_header
 from .packets import PacketTable, addresses_to_str, ns_to_s
-from .paper import paper_features
+from .standards import DEFAULT_STANDARD, FlowPackets
+from .standards import standard as feature_standard
 
 CSV_LEAD_COLUMNS: tuple[str, ...] = (
     "src_ip", "src_port", "dst_ip", "dst_port", "protocol", "packets", "bytes", "duration_s",
 )  # fmt: skip
-STANDARDS: tuple[str, ...] = ("cic", "paper")
 
 
 def _list_column(values: np.ndarray, starts: np.ndarray, pa_type: pa.DataType) -> pd.api.extensions.ExtensionArray:
@@ -36,14 +33,9 @@ def _list_column(values: np.ndarray, starts: np.ndarray, pa_type: pa.DataType) -
     return pd.arrays.ArrowExtensionArray(arr)
 
 
-def string_smaller(src: np.ndarray, dst: np.ndarray) -> np.ndarray:
-    """Per flow: is the src address's text <= the dst's (the authors' direction-0 convention)?"""
-    return np.asarray([a <= b for a, b in zip(src.tolist(), dst.tolist())], dtype=bool)
-
-
 def flow_frame(p: PacketTable, fl: Flows, sequences: bool = True, standard: str = DEFAULT_STANDARD) -> pd.DataFrame:
-    """One row per flow: identity, counts, (optionally) sequences, then the standard's 47 features."""
-    cols_std = feature_columns(standard)
+    """One row per flow: identity, counts, (optionally) sequences, then the standard's features."""
+    std = feature_standard(standard)  # an unknown name fails here, before any work
     n = fl.n_flows
     o, g, fwd, starts = fl.order, fl.flow, fl.fwd, fl.starts
     ts = p["ts_ns"][o]
@@ -91,13 +83,7 @@ def flow_frame(p: PacketTable, fl: Flows, sequences: bool = True, standard: str 
         df["seq_size"] = _list_column(size.astype(np.int32), starts, pa.int32())
         df["seq_flags"] = _list_column(flags.astype(np.int16), starts, pa.int16())
         df["seq_dir"] = _list_column(np.where(fwd, 1, -1).astype(np.int8), starts, pa.int8())
-    if standard == "cic":
-        payload, header = payload_and_header(p["proto"][o], p["ip_len"][o], p["ip_hdr_len"][o], p["l4_hdr_len"][o])
-        feats = cic_features(g, fwd, ts, payload, header, flags, starts)
-    else:
-        smaller = string_smaller(src_ip, dst_ip) if n else np.zeros(0, dtype=bool)
-        feats = paper_features(g, fwd == smaller[g], ns_to_s(ts), size, flags, starts)
-    feat_df = pd.DataFrame({k: np.asarray(feats[k], dtype=np.float64) for k in cols_std})
+    feat_df = pd.DataFrame(std.features(FlowPackets(p, fl, src_ip, dst_ip)))
     out = pd.concat([df, feat_df], axis=1)
-    out.attrs["feature_standard"] = standard
+    out.attrs["feature_standard"] = std.name
     return out

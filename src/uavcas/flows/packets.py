@@ -217,6 +217,16 @@ def read_packets(
     return PacketTable(merged, names, stats, truncs)
 
 
+def payload_and_header(
+    proto: np.ndarray, ip_len: np.ndarray, ip_hdr: np.ndarray, l4_hdr: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Per packet: L4 payload bytes and L4 header bytes as CICFlowMeter counts them
+    (`PacketReader`): TCP/UDP only, 0 for other protocols, whose headers it does not parse."""
+    l4 = (proto == 6) | (proto == 17)
+    payload = ip_len.astype(np.int64) - ip_hdr.astype(np.int64) - l4_hdr.astype(np.int64)
+    return np.where(l4, np.maximum(payload, 0), 0), np.where(l4, l4_hdr.astype(np.int64), 0)
+
+
 def addresses_to_str(hi: np.ndarray, lo: np.ndarray) -> np.ndarray:
     """128-bit addresses -> strings ('10.0.0.1' for IPv4-mapped, compressed IPv6 otherwise).
 

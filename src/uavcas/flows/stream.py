@@ -33,12 +33,11 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from uavcas.schema import DEFAULT_STANDARD
-
 from .assemble import FlowConfig, Flows, assemble, select_flows
 from .features import flow_frame
 from .packets import COLUMNS, CaptureStats, PacketTable, Truncation, empty_columns, iter_packet_blocks, read_packets
 from .pcapio import CHUNK_BYTES
+from .standards import DEFAULT_STANDARD
 
 REORDER_SLACK_NS = 1_000_000_000
 _UNLIMITED = 1 << 62

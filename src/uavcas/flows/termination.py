@@ -96,7 +96,7 @@ class KeyPackets:
     proto: np.ndarray
     seq: np.ndarray
     ack: np.ndarray
-    payload: np.ndarray  # transport payload bytes (`flows.cic.payload_and_header`)
+    payload: np.ndarray  # transport payload bytes (`flows.packets.payload_and_header`)
     key_starts: np.ndarray  # offsets of each key's first packet, closed by n
 
 

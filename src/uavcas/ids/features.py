@@ -4,9 +4,9 @@ Metadata (run id, config, axes, addresses, labels, sequences: schema.METADATA_CO
 column that is no flow feature) must never reach a model — the authors' `config_idx` among the
 features is the defect this module exists to prevent.
 
-Feature lists come from `uavcas.schema` only: its feature standards (`schema.FEATURE_STANDARDS`,
-e.g. 'cic' and 'paper', when the schema defines several) or its one list `schema.FEATURES`, and
-the context columns (`schema.CONTEXT_FEATURES`, observations of the switches around a flow),
+Feature lists come from the feature-standard registry (`uavcas.flows.standards`: each standard's
+columns, and the window-host view's columns of flows of that standard) and the schema's
+context columns (`schema.CONTEXT_FEATURES`, observations of the switches around a flow),
 which only the models that ask for them receive (`context_matrix`).
 """
 
@@ -18,6 +18,7 @@ import numpy as np
 import pandas as pd
 
 from uavcas import schema
+from uavcas.flows.standards import DEFAULT_STANDARD, names, standards
 
 
 class MetadataLeakError(ValueError):
@@ -25,13 +26,14 @@ class MetadataLeakError(ValueError):
 
 
 def feature_sets() -> dict[str, tuple[str, ...]]:
-    """Named feature sets, from the schema (its standards; else its one list, named 'cic'), and
-    the episode view's (`schema.EPISODE_FEATURE_SETS`, 'window-host-cic', 'window-host-paper')."""
-    return {**(getattr(schema, "FEATURE_STANDARDS", None) or {"cic": schema.FEATURES}), **schema.EPISODE_FEATURE_SETS}
+    """Named feature sets: every registered standard's columns under its name ('cic', 'paper'),
+    then the episode view's of each ('window-host-cic', 'window-host-paper')."""
+    return {**{s.name: s.columns for s in standards()},
+            **{f"{schema.EPISODE_VIEW}-{s.name}": s.episode_columns for s in standards()}}
 
 
 def known_features() -> set[str]:
-    return set(schema.FEATURES).union(*feature_sets().values(), schema.CONTEXT_FEATURES, schema.EPISODE_CONTEXT_FEATURES)
+    return set().union(*feature_sets().values(), schema.CONTEXT_FEATURES, schema.EPISODE_CONTEXT_FEATURES)
 
 
 def is_episode_table(df: pd.DataFrame) -> bool:
@@ -62,20 +64,20 @@ def resolve_features(df: pd.DataFrame, spec: str | Iterable[str] | None = None) 
 
     None: the dataset's feature set (episodes: the window-host set of their flows' standard;
     `df.attrs['feature_standard']` when it names one, else the first set whose columns `df` all
-    has, else the schema features `df` has); a name: that set, every
+    has, else the default standard's features `df` has); a name: that set, every
     column of which `df` must have; a list: those columns (checked to be features).
     """
     sets = feature_sets()
     if spec is None:
         named = df.attrs.get("feature_standard", df.attrs.get("features"))
         if is_episode_table(df):
-            named = f"{schema.EPISODE_VIEW}-{named if named in schema.FEATURE_STANDARDS else schema.DEFAULT_STANDARD}"
+            named = f"{schema.EPISODE_VIEW}-{named if named in names() else DEFAULT_STANDARD}"
         if isinstance(named, str) and named in sets:
             spec = named
         else:
             full = [n for n, cols in sets.items() if set(cols) <= set(df.columns)]
             if not full:
-                return check_feature_columns([f for f in schema.FEATURES if f in df.columns])
+                return check_feature_columns([f for f in sets[DEFAULT_STANDARD] if f in df.columns])
             spec = full[0]
     if isinstance(spec, str):
         if spec not in sets:

@@ -20,10 +20,10 @@ Rules (`host_window_frame`):
   (ICMPv6 included) shares of the host's packets.
 - Flow features: the 5-tuple flows that START in window k (window of their first packet) with
   the host as an endpoint: how many (`flows`; `flows_out` when the host initiated them), and the
-  mean and max of a subset of the standard's features (`schema.EPISODE_FLOW_SUBSETS`) and of
-  every context column (`ctx_*`, when the flow frame has them). A flow is summarised once, in its
-  first window, even when its packets continue into later windows (those packets do count in the
-  later episodes' packet features).
+  mean and max of a subset of the standard's features (its `episode_summary`,
+  `uavcas.flows.standards`) and of every context column (`ctx_*`, when the flow frame has them).
+  A flow is summarised once, in its first window, even when its packets continue into later
+  windows (those packets do count in the later episodes' packet features).
 - Route context (with the context columns): `ctx_pkt_route_lonely_frac`, `ctx_pkt_path_len_shift`,
   `ctx_pkt_delay_shift_ms`, the means over the episode's packets of their transmission's route
   measures (`flows.routes`; 0 where none is defined), and `ctx_pkt_route_lonely_max`, the largest
@@ -49,13 +49,13 @@ import pandas as pd
 
 from uavcas.attacks import family
 from uavcas.flows.assemble import Flows
-from uavcas.flows.termination import TCP_ACK, TCP_FIN, TCP_RST, TCP_SYN
 from uavcas.flows.packets import PacketTable, address_to_words, ns_to_s
 from uavcas.flows.routes import episode_route_context
+from uavcas.flows.standards import DEFAULT_STANDARD
+from uavcas.flows.standards import standard as feature_standard
+from uavcas.flows.termination import TCP_ACK, TCP_FIN, TCP_RST, TCP_SYN
 from uavcas.schema import (
     CONTEXT_FEATURES,
-    DEFAULT_STANDARD,
-    EPISODE_FLOW_SUBSETS,
     EPISODE_PACKET_UNITS,
     EPISODE_STATS,
     FAMILIES,
@@ -211,7 +211,7 @@ def host_window_frame(
     cols["flows"] = _count(pos, n)
     cols["flows_out"] = _count(pos, n, ini[fk] == f_host)
     cols["flows_in"] = cols["flows"] - cols["flows_out"]
-    subset = EPISODE_FLOW_SUBSETS[standard]
+    subset = dict(feature_standard(standard).episode_summary)
     values = flow_frame[list(subset)].iloc[fk].rename(columns=subset).reset_index(drop=True).astype(np.float64)
     ctx = [c for c in CONTEXT_FEATURES if c in flow_frame.columns]
     if ctx:

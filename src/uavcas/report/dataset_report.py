@@ -48,13 +48,13 @@ def _class_table(df: pd.DataFrame) -> str:
     return _styled(class_table(df))
 
 
-def _summary(card: dict, df: pd.DataFrame, runs) -> dict:
+def _summary(card: dict, df: pd.DataFrame, runs, standard: str) -> dict:
     rules = card.get("runs") or []
     flow_rules = sorted({json.dumps(r.get("flow_rules") or {}, sort_keys=True) for r in rules} - {"{}"})
     headlines, parts = rule_summary(card.get("label_rules", []))
     return {
         "rows": len(df), "unit": "host-window row" if card.get("unit") == "host-window" else "flow",
-        "runs": card.get("n_runs", len(runs)), "standard": (card.get("features") or {}).get("standard", "cic"),
+        "runs": card.get("n_runs", len(runs)), "standard": standard,
         "fidelity": card.get("fidelity") or {"unaudited": len(runs)}, "flagged": sum(r.flagged for r in runs),
         "class_table": _class_table(df), "label_modes": card.get("label_modes", []),
         # each rule's first sentence (the policy), then every family's rule
@@ -128,7 +128,7 @@ def write_report(dataset_dir: str | Path, out_dir: str | Path) -> Path:
     """Render DATASET_DIR's report into OUT_DIR/index.html (the only file written); returns its path."""
     from uavcas.dataset.parquet import read_flows
     from uavcas.dataset.runs import dataset_runs
-    from uavcas.dataset.store import read_card
+    from uavcas.dataset.store import card_standard, read_card
 
     dataset_dir, out = Path(dataset_dir), Path(out_dir)
     card = read_card(dataset_dir)
@@ -137,11 +137,11 @@ def write_report(dataset_dir: str | Path, out_dir: str | Path) -> Path:
         raise ReportError(f"{dataset_dir}: no flows.parquet")
     episodes = card.get("unit") == "host-window"
     shown = SHOWN_EPISODE_FEATURES if episodes else SHOWN_FEATURES
-    standard = (card.get("features") or {}).get("standard", "cic")
+    standard = card_standard(card)
     names = set(pq.read_schema(flows_path).names)
     df = read_flows(flows_path, columns=[c for c in ("run_id", "label", "view", *shown) if c in names])
     runs = dataset_runs(dataset_dir, card)
-    summary = _summary(card, df, runs)
+    summary = _summary(card, df, runs, standard)
     topologies = _topologies(dataset_dir, runs)
     fid_table, fid_uri = _fidelity(dataset_dir, runs)
     from .fidelity import COLUMNS as FIDELITY_HELP

@@ -1,5 +1,5 @@
-"""Feature standard `paper`: the authors' 47 features (`schema.PAPER_FEATURES`) as their generator
-computes them.
+"""Feature standard `paper`: the authors' 47 features (`PAPER_FEATURES`) as their generator computes
+them.
 
 Source: Sripathm2/Collaborative-UAV-Dataset, `Scripts/6-build_stat_csv.py` (`compute_features`),
 fed by `Network-simulator/process_csvs.py` (tshark fields per packet: frame.time_epoch, frame.len,
@@ -29,9 +29,27 @@ from __future__ import annotations
 
 import numpy as np
 
-from uavcas.schema import PAPER_FEATURES
+from ..groupstats import GroupStats, direction_stats, gaps, length_and_flag_stats
+from ..packets import ns_to_s
+from .base import FeatureStandard, FlowPackets
+from .meanings import Wording, meanings
+from .registry import register
 
-from .groupstats import GroupStats, direction_stats, gaps, length_and_flag_stats
+# The authors' 47 (Scripts/6-build_stat_csv.py FEATURE_NAMES): 25 flow-level, then 22 by direction.
+PAPER_FEATURES: tuple[str, ...] = (
+    "Flow Duration", "Total Packets", "Total Length of Packets", "Flow Bytes/s", "Flow Packets/s",
+    "Flow IAT Total", "Flow IAT Mean", "Flow IAT Std", "Flow IAT Max", "Flow IAT Min",
+    "Min Packet Length", "Max Packet Length", "Packet Length Mean", "Packet Length Std",
+    "Packet Length Variance", "FIN Flag Count", "SYN Flag Count", "RST Flag Count", "PSH Flag Count",
+    "ACK Flag Count", "URG Flag Count", "CWE Flag Count", "ECE Flag Count", "Header Length",
+    "Average Packet Size",
+    "Total Fwd Packets", "Total Bwd Packets", "Total Length of Fwd Packets", "Total Length of Bwd Packets",
+    "Fwd Packets/s", "Bwd Packets/s", "Fwd Packet Length Max", "Fwd Packet Length Min",
+    "Fwd Packet Length Mean", "Fwd Packet Length Std", "Bwd Packet Length Max", "Bwd Packet Length Min",
+    "Bwd Packet Length Mean", "Bwd Packet Length Std", "Fwd IAT Total", "Fwd IAT Mean", "Fwd IAT Std",
+    "Bwd IAT Total", "Bwd IAT Mean", "Bwd IAT Std", "Fwd Header Length", "Bwd Header Length",
+)  # fmt: skip
+assert len(PAPER_FEATURES) == 47 and len(set(PAPER_FEATURES)) == 47
 
 FLAG_BITS: tuple[tuple[str, int], ...] = (
     ("FIN Flag Count", 0x01), ("SYN Flag Count", 0x02), ("RST Flag Count", 0x04), ("PSH Flag Count", 0x08),
@@ -108,3 +126,35 @@ def paper_features(
     if short.any():
         feats = {k: np.where(short, np.nan, v) for k, v in feats.items()}
     return feats
+
+
+def string_smaller(src: np.ndarray, dst: np.ndarray) -> np.ndarray:
+    """Per flow: is the src address's text <= the dst's (the authors' direction-0 convention)?"""
+    return np.asarray([a <= b for a, b in zip(src.tolist(), dst.tolist())], dtype=bool)
+
+
+def compute(fp: FlowPackets) -> dict[str, np.ndarray]:
+    fl = fp.flows
+    smaller = string_smaller(fp.src_ip, fp.dst_ip) if fl.n_flows else np.zeros(0, dtype=bool)
+    return paper_features(fl.flow, fl.fwd == smaller[fl.flow], ns_to_s(fp.ordered("ts_ns")), fp.ordered("frame_len"),
+                          fp.ordered("tcp_flags"), fl.starts)
+
+
+STANDARD = register(FeatureStandard(
+    name="paper",
+    columns=PAPER_FEATURES,
+    units=UNITS,
+    meanings=meanings(PAPER_FEATURES, Wording(
+        length="frame length", forward="forward (sent by the string-smaller address)",
+        header="20 bytes x the number of {who}", zero_duration="0", cwe_flag="ECE", ece_flag="CWR")),
+    source="Sripathm2/Collaborative-UAV-Dataset Scripts/6-build_stat_csv.py",
+    summary="the authors' 47, s",
+    compute=compute,
+    # paper lengths are frame bytes
+    episode_summary={
+        "Flow Duration": "flow_duration_s", "Total Fwd Packets": "fwd_packets", "Total Bwd Packets": "bwd_packets",
+        "Total Length of Fwd Packets": "fwd_frame_bytes", "Total Length of Bwd Packets": "bwd_frame_bytes",
+        "Flow Bytes/s": "flow_frame_bytes_per_s", "Flow Packets/s": "flow_packets_per_s",
+        "Flow IAT Mean": "flow_iat_mean_s", "Packet Length Mean": "frame_length_mean_bytes",
+    },
+))  # fmt: skip

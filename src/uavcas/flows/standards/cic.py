@@ -1,4 +1,4 @@
-"""Feature standard `cic`: the 47 columns of `schema.FEATURES` exactly as CICFlowMeter computes them.
+"""Feature standard `cic` (the default): 47 columns exactly as CICFlowMeter computes them.
 
 Source: CICFlowMeter-4.0 (github.com/ahlashkari/CICFlowMeter), `BasicFlow` (statistics),
 `FlowGenerator` (flow termination, see `uavcas.flows.assemble` rule 4) and `PacketReader`
@@ -32,12 +32,33 @@ from __future__ import annotations
 
 import numpy as np
 
-from uavcas.schema import FEATURES
+from ..groupstats import GroupStats, direction_stats, gaps, length_and_flag_stats
+from ..packets import payload_and_header
+from .base import FeatureStandard, FlowPackets
+from .meanings import Wording, meanings
+from .registry import register
 
-from .groupstats import GroupStats, direction_stats, gaps, length_and_flag_stats
+# Direction-independent statistics over all packets of the flow ...
+FLOW_FEATURES: tuple[str, ...] = (
+    "Flow Duration", "Flow Bytes/s", "Flow Packets/s", "Flow IAT Mean", "Flow IAT Std", "Flow IAT Max",
+    "Flow IAT Min", "Min Packet Length", "Max Packet Length", "Packet Length Mean", "Packet Length Std",
+    "Packet Length Variance", "FIN Flag Count", "SYN Flag Count", "RST Flag Count", "PSH Flag Count",
+    "ACK Flag Count", "URG Flag Count", "CWE Flag Count", "ECE Flag Count", "Down/Up Ratio",
+    "Average Packet Size", "Active Mean", "Idle Mean", "Idle Max",
+)  # fmt: skip
+# ... then by direction. Forward = the initiator's direction (first packet; the SYN sender for TCP).
+DIRECTION_FEATURES: tuple[str, ...] = (
+    "Total Fwd Packets", "Total Backward Packets", "Total Length of Fwd Packets", "Total Length of Bwd Packets",
+    "Fwd Packet Length Max", "Fwd Packet Length Min", "Fwd Packet Length Mean", "Fwd Packet Length Std",
+    "Bwd Packet Length Max", "Bwd Packet Length Min", "Bwd Packet Length Mean", "Bwd Packet Length Std",
+    "Fwd IAT Total", "Fwd IAT Mean", "Fwd IAT Std", "Fwd IAT Max", "Bwd IAT Total", "Bwd IAT Mean", "Bwd IAT Std",
+    "Bwd IAT Max", "Fwd Header Length", "Bwd Header Length",
+)  # fmt: skip
+FEATURES: tuple[str, ...] = FLOW_FEATURES + DIRECTION_FEATURES
+assert len(FLOW_FEATURES) == 25 and len(DIRECTION_FEATURES) == 22 and len(set(FEATURES)) == 47
 
 ACTIVITY_TIMEOUT_US = 5_000_000  # CICFlowMeter's activityTimeout
-# (name, TCP flag bit) in the order of schema.FEATURES; CICFlowMeter's "CWE" is CWR.
+# (name, TCP flag bit) in the order of FEATURES; CICFlowMeter's "CWE" is CWR.
 FLAG_BITS: tuple[tuple[str, int], ...] = (
     ("FIN Flag Count", 0x01), ("SYN Flag Count", 0x02), ("RST Flag Count", 0x04), ("PSH Flag Count", 0x08),
     ("ACK Flag Count", 0x10), ("URG Flag Count", 0x20), ("CWE Flag Count", 0x80), ("ECE Flag Count", 0x40),
@@ -48,13 +69,6 @@ UNITS.update({f: "bytes" for f in FEATURES if "Length" in f or f == "Average Pac
 UNITS.update({"Flow Bytes/s": "bytes/s", "Flow Packets/s": "packets/s", "Down/Up Ratio": "ratio"})
 UNITS.update({f: "packets" for f in ("Total Fwd Packets", "Total Backward Packets")})
 UNITS["Packet Length Variance"] = "bytes^2"  # the square of the length's unit
-
-
-def payload_and_header(proto: np.ndarray, ip_len: np.ndarray, ip_hdr: np.ndarray, l4_hdr: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Per packet: L4 payload bytes and L4 header bytes as CICFlowMeter counts them."""
-    l4 = (proto == 6) | (proto == 17)
-    payload = ip_len.astype(np.int64) - ip_hdr.astype(np.int64) - l4_hdr.astype(np.int64)
-    return np.where(l4, np.maximum(payload, 0), 0), np.where(l4, l4_hdr.astype(np.int64), 0)
 
 
 def _active_idle(t: np.ndarray, g: np.ndarray, n: int) -> tuple[GroupStats, GroupStats]:
@@ -129,3 +143,31 @@ def cic_features(
     assert set(feats) == set(FEATURES), set(feats) ^ set(FEATURES)
     feats = {k: feats[k] for k in FEATURES}
     return feats
+
+
+def compute(fp: FlowPackets) -> dict[str, np.ndarray]:
+    fl = fp.flows
+    payload, header = payload_and_header(fp.ordered("proto"), fp.ordered("ip_len"), fp.ordered("ip_hdr_len"),
+                                         fp.ordered("l4_hdr_len"))
+    return cic_features(fl.flow, fl.fwd, fp.ordered("ts_ns"), payload, header, fp.ordered("tcp_flags"), fl.starts)
+
+
+STANDARD = register(FeatureStandard(
+    name="cic",
+    columns=FEATURES,
+    units=UNITS,
+    meanings=meanings(FEATURES, Wording(
+        length="TCP/UDP payload length", forward="forward (initiator -> responder)",
+        header="sum of the TCP/UDP header bytes of {who}", zero_duration="NaN or inf, as CICFlowMeter divides")),
+    source="CICFlowMeter-4.0 BasicFlow/FlowGenerator",
+    summary="CICFlowMeter's definitions, us",
+    compute=compute,
+    # cic lengths are payload bytes
+    episode_summary={
+        "Flow Duration": "flow_duration_us", "Total Fwd Packets": "fwd_packets",
+        "Total Backward Packets": "bwd_packets",
+        "Total Length of Fwd Packets": "fwd_payload_bytes", "Total Length of Bwd Packets": "bwd_payload_bytes",
+        "Flow Bytes/s": "flow_payload_bytes_per_s", "Flow Packets/s": "flow_packets_per_s",
+        "Flow IAT Mean": "flow_iat_mean_us", "Packet Length Mean": "payload_length_mean_bytes",
+    },
+))  # fmt: skip
