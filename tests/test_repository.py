@@ -4,6 +4,7 @@ benchmarks import no test file, and no build artefact (a wheel) is tracked."""
 from __future__ import annotations
 
 import ast
+import re
 import shutil
 import subprocess
 from pathlib import Path
@@ -73,3 +74,21 @@ def test_no_wheel_is_tracked():
     assert tracked.stdout.split() == []
     ignored = subprocess.run(["git", "check-ignore", "-q", "--no-index", "some-1.0-py3-none-any.whl"], cwd=REPO)
     assert ignored.returncode == 0, ".gitignore must ignore *.whl"
+
+
+def test_benchmarks_run_sh_runs_every_script_or_says_why_not_and_the_readme_agrees():
+    bench = REPO / "benchmarks"
+    scripts = {p.name for p in bench.glob("*.py")}
+    run_sh = (bench / "run.sh").read_text(encoding="utf-8")
+    ran = set(re.findall(r"^\s*run \$PY benchmarks/(\w+\.py)\b", run_sh, flags=re.M))
+    said = {name for line in run_sh.splitlines() if line.lstrip().startswith("#")
+            for name in re.findall(r"\b(\w+\.py)\b", line)}
+    assert ran <= scripts, f"run.sh runs scripts that do not exist: {sorted(ran - scripts)}"
+    assert not scripts - ran - said, f"run.sh neither runs nor explains: {sorted(scripts - ran - said)}"
+    readme = (bench / "README.md").read_text(encoding="utf-8")
+    intro = readme.split("\n|", 1)[0]  # the paragraph before the table: what run.sh leaves out
+    table = {m for m in re.findall(r"^\| `(\w+\.py)", readme, flags=re.M)}
+    assert table == scripts, f"benchmarks/README.md's table vs the scripts: {sorted(table ^ scripts)}"
+    skipped = scripts - ran
+    assert all(name in intro for name in skipped), f"README must say run.sh skips {sorted(skipped)}"
+    assert "run.sh" in intro
