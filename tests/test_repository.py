@@ -92,3 +92,12 @@ def test_benchmarks_run_sh_runs_every_script_or_says_why_not_and_the_readme_agre
     skipped = scripts - ran
     assert all(name in intro for name in skipped), f"README must say run.sh skips {sorted(skipped)}"
     assert "run.sh" in intro
+
+
+def test_ci_runs_exactly_the_readmes_test_command():
+    readme = (REPO / "README.md").read_text(encoding="utf-8")
+    setup = readme.split("## Two commands", 1)[1].split("\n## ", 1)[0]
+    commands = re.findall(r"```bash\n(.+?)\n```", setup)
+    assert len(commands) == 2 and all(c.startswith("bash scripts/setup.sh && ") for c in commands), commands
+    ci = [ln for ln in (REPO / ".ci" / "run").read_text().splitlines() if ln.strip() and not ln.startswith("#")]
+    assert ci[-1] == commands[1], "the last line of .ci/run must be the README's test command, verbatim"
