@@ -53,6 +53,18 @@ def test_no_test_file_edits_sys_path():
     assert not edits, f"import helpers from tests/helpers (`from helpers.x import ...`) instead: {edits}"
 
 
+def test_no_test_module_imports_another():
+    """Shared test code lives in tests/helpers, not in a test module another one imports."""
+    bad = []
+    for p in sorted((REPO / "tests").rglob("*.py")):
+        for node in ast.walk(ast.parse(p.read_text(encoding="utf-8"))):
+            names = ([a.name for a in node.names] if isinstance(node, ast.Import)
+                     else [node.module or ""] if isinstance(node, ast.ImportFrom) else [])
+            bad += [f"{p.relative_to(REPO)}:{node.lineno} {n}" for n in names
+                    if n.split(".")[-1].startswith("test_") or n.split(".")[0].startswith("test_")]
+    assert not bad, bad
+
+
 def test_benchmarks_import_no_test_file():
     """What a benchmark shares with the tests lives in uavcas.testing (or the benchmark itself)."""
     test_modules = {p.stem for p in (REPO / "tests").rglob("*.py")} | {"helpers", "tests"}
