@@ -11,17 +11,14 @@ from __future__ import annotations
 import argparse
 import json
 import statistics
-import sys
 import time
 from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(REPO / "tests" / "emulation"))
-from plans import link, nn_plan, nodes, plan, random_plan, window  # noqa: E402
-
-from uavcas.atomic import atomic_write_text  # noqa: E402
-from uavcas.emulation import Emulation, kernel, selftest  # noqa: E402
-from uavcas.emulation.naming import new_prefix  # noqa: E402
+from uavcas.atomic import atomic_write_text
+from uavcas.emulation import Emulation, kernel, selftest
+from uavcas.emulation.naming import new_prefix
+from uavcas.testing.handmade_plans import link, nn_plan, nodes, plan, random_plan, window
 
 
 def _wait_gone(prefix: str, timeout_s: float = 10.0) -> float:

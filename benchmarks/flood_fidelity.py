@@ -4,7 +4,7 @@
     sudo .venv/bin/uavcas run ddos=1000-20-2-image-logdist-adaptive-random-30-95 --windows 6 \\
         --out /tmp/ddos && .venv/bin/python benchmarks/flood_fidelity.py /tmp/ddos
 
-Read from the pcaps alone (dpkt, `tests/emulation/apps/runcheck.py`), not from the attack
+Read from the pcaps alone (dpkt, `uavcas.testing.runcheck`), not from the attack
 log's own counters: for each flood attacker, SYNs to the victim captured at the attacker's
 switch inside [start, stop) of the logged window, the rate over the logged window and over
 first..last SYN, the slowest and fastest whole second, and SYNs to the victim outside the
@@ -16,11 +16,9 @@ from __future__ import annotations
 
 import argparse
 import json
-import sys
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "emulation" / "apps"))
-import runcheck as rc  # noqa: E402
+from uavcas.testing import runcheck as rc
 
 
 def flood_fidelity(run: Path) -> list[dict]:

@@ -21,8 +21,7 @@ import tempfile
 import time
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "emulation" / "apps"))
-import runcheck as rc  # noqa: E402
+from uavcas.testing import runcheck as rc
 
 UAVCAS = str(Path(sys.executable).parent / "uavcas")
 

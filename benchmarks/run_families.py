@@ -15,12 +15,10 @@ from __future__ import annotations
 import argparse
 import json
 import statistics
-import sys
 import time
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "emulation" / "apps"))
-import runcheck as rc  # noqa: E402
+from uavcas.testing import runcheck as rc
 
 FAMILIES = {"dos": "dos=1000", "ddos": "ddos=1000", "blackhole": "blackhole", "wormhole": "wormhole",
             "replay": "replay=50,200,10,5,inc"}

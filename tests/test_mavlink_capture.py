@@ -11,12 +11,8 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
-sys.path.insert(0, str(Path(__file__).resolve().parent / "labels"))
-from synth_run import (IPS, MAV_BLACKHOLED_T, MAV_LAT, MAV_LON, T0, add_mavlink, build_run,  # noqa: E402
-                       mavlink_datagrams)
-
-from uavcas.mavlink_capture import (ALL_COLUMNS, decode_datagrams, mavlink_table, message_counts,  # noqa: E402
-                                    problems)
+from helpers.synth_run import IPS, MAV_BLACKHOLED_T, MAV_LAT, MAV_LON, T0, add_mavlink, build_run, mavlink_datagrams
+from uavcas.mavlink_capture import ALL_COLUMNS, decode_datagrams, mavlink_table, message_counts, problems
 
 UAVCAS = str(Path(sys.executable).parent / "uavcas")
 

@@ -4,18 +4,14 @@ from __future__ import annotations
 
 import json
 import shutil
-import sys
-from pathlib import Path
 
 import pytest
 
-sys.path.insert(0, str(Path(__file__).resolve().parent / "labels"))
-from synth_run import CONFIG, build_run, run_info  # noqa: E402
-
-from uavcas.extract import extract  # noqa: E402
-from uavcas.rundir import RunDir, RunDirError, RunInfo  # noqa: E402
-from uavcas.twin import plan  # noqa: E402
-from uavcas.twin.model import Plan  # noqa: E402
+from helpers.synth_run import CONFIG, build_run, run_info
+from uavcas.extract import extract
+from uavcas.rundir import RunDir, RunDirError, RunInfo
+from uavcas.twin import plan
+from uavcas.twin.model import Plan
 
 
 @pytest.fixture(scope="module")

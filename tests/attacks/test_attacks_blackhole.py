@@ -5,8 +5,8 @@ from __future__ import annotations
 import dataclasses
 
 import numpy as np
-from synth_run import BLACKHOLE_WINDOW, IPS, T0
 
+from helpers.synth_run import BLACKHOLE_WINDOW, IPS, T0
 from uavcas.attacks import ScheduleDraw, family
 from uavcas.attacks.blackhole import BlackholeSpec, ruleset, switch_ports, table_name
 
@@ -54,8 +54,7 @@ def test_effect_is_a_drop_at_the_victims_switch_inside_the_window(truth_ctx):
 
 def test_udp_datagrams_of_the_victim_are_dropped_like_tcp():
     """The rule is about IP packets, not TCP: MAVLink datagrams to and from the blackholed UAV."""
-    from hand_truth import context, pkt, rows_of, window
-
+    from helpers.hand_truth import context, pkt, rows_of, window
     from uavcas.labels.effects import packet_truth
 
     cmd = pkt(42.0, "bs0", "uav3", 14550, 14555, proto=17, ip_id=0, payload=41)  # reaches s-uav3, no further

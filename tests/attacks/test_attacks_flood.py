@@ -7,8 +7,8 @@ import dataclasses
 import numpy as np
 import pandas as pd
 import pytest
-from synth_run import DOS_WINDOW, IPS, N_FLOOD, T0
 
+from helpers.synth_run import DOS_WINDOW, IPS, N_FLOOD, T0
 from uavcas.attacks import ScenarioError, ScheduleDraw, family
 from uavcas.attacks.flood import FloodSpec
 from uavcas.scenario import parse
@@ -70,9 +70,9 @@ def test_effect_is_packet_exact_inside_the_window(truth_ctx):
     assert not family("dos").effects(truth_ctx, [wrong_way]).any()  # SYN-ACKs alone are no flood
 
 
-# Provoked packets (hand-built tables, tests/labels/hand_truth.py): uav1 floods uav0:80 in [20, 30).
+# Provoked packets (hand-built tables, tests/helpers/hand_truth.py): uav1 floods uav0:80 in [20, 30).
 def _flood_run():
-    from hand_truth import ACK, RST, SYN, icmp_error, pkt
+    from helpers.hand_truth import ACK, RST, SYN, icmp_error, pkt
 
     syn = pkt(21.0, "uav1", "uav0", 1500, 80, SYN, seq=1000, ip_id=1)
     other = pkt(21.5, "uav1", "uav0", 1501, 81, SYN, seq=0xFFFFFFFF, ip_id=2)  # seq + 1 wraps to 0
@@ -103,8 +103,7 @@ def _flood_run():
 
 @pytest.mark.parametrize("fam", ["dos", "ddos"])
 def test_flood_provokes_synacks_their_retransmissions_the_rst_and_icmp_errors(fam):
-    from hand_truth import context, rows_of, window
-
+    from helpers.hand_truth import context, rows_of, window
     from uavcas.labels.effects import packet_truth
     from uavcas.vocabulary import FAMILIES
 
@@ -134,8 +133,7 @@ def test_flood_provokes_synacks_their_retransmissions_the_rst_and_icmp_errors(fa
 
 
 def test_provoked_beyond_the_bound_is_benign():
-    from hand_truth import ACK, SYN, context, pkt, rows_of, window
-
+    from helpers.hand_truth import ACK, SYN, context, pkt, rows_of, window
     from uavcas.attacks.answers import ANSWER_WITHIN_S
     from uavcas.labels.effects import packet_truth
 
@@ -148,8 +146,7 @@ def test_provoked_beyond_the_bound_is_benign():
 def test_a_blackhole_drop_of_a_provoked_synack_shows_the_blackhole_and_the_flow_both_families():
     """Blackhole+DoS on uav0: the blackhole starts at 25 s; a SYN-ACK the victim sends then is
     dropped at its switch: it shows the blackhole, its flow holds the flood SYN too."""
-    from hand_truth import ACK, SYN, context, pkt, rows_of, window
-
+    from helpers.hand_truth import ACK, SYN, context, pkt, rows_of, window
     from uavcas.flows import FlowConfig
     from uavcas.flows.assemble import assemble
     from uavcas.labels.effects import packet_truth

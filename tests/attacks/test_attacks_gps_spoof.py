@@ -7,8 +7,8 @@ import re
 
 import numpy as np
 import pytest
-from hand_truth import HOP_S, IPS, T0, context, pkt
 
+from helpers.hand_truth import HOP_S, IPS, T0, context, pkt
 from uavcas.attacks import ScenarioError, family
 from uavcas.attacks.gps_spoof import DEFAULT_DRIFT_MPS, LURE_MAX_M, LURE_MIN_M, GpsSpoofSpec
 from uavcas.labels.attacklog import AttackWindow

@@ -175,10 +175,9 @@ def test_same_seed_and_config_give_the_same_plan_json():
     assert pa != pb
 
 
-# truth (hand-built packets: tests/labels/hand_truth.py) -------------------------------------------
+# truth (hand-built packets: tests/helpers/hand_truth.py) -------------------------------------------
 def test_truth_rule_on_hand_built_packets():
-    from hand_truth import IPS, PLAN, T0, pkt, table
-
+    from helpers.hand_truth import IPS, PLAN, T0, pkt, table
     from uavcas.flows.follow import Timeline, follow
     from uavcas.labels import TruthContext
     from uavcas.labels.attacklog import AttackLog, AttackWindow

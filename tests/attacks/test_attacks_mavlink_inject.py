@@ -73,9 +73,9 @@ def test_signing_key_is_32_bytes_and_deterministic():
     assert signing_spec(7, "mavlink_inject=rtl" + REST).key == k
 
 
-# Hand-built packets (tests/labels/hand_truth.py): uav1 forges commands to uav0:14550 in [20, 30).
+# Hand-built packets (tests/helpers/hand_truth.py): uav1 forges commands to uav0:14550 in [20, 30).
 def _inject_run():
-    from hand_truth import icmp_error, pkt
+    from helpers.hand_truth import icmp_error, pkt
 
     def udp(t, src, dst, sport, dport, **kw):
         return pkt(t, src, dst, sport, dport, proto=17, ip_id=0, payload=kw.pop("payload", 41), **kw)
@@ -102,8 +102,7 @@ def _inject_run():
 
 
 def test_forged_frames_and_their_acks_are_labelled_packet_exact():
-    from hand_truth import context, rows_of, window
-
+    from helpers.hand_truth import context, rows_of, window
     from uavcas.labels.effects import packet_truth
     from uavcas.vocabulary import FAMILIES
 

@@ -6,8 +6,8 @@ import dataclasses
 
 import numpy as np
 import pytest
-from synth_run import IPS
 
+from helpers.synth_run import IPS
 from uavcas.attacks import ScenarioError, family
 from uavcas.attacks.replay import MATCH_TOLERANCE_S, ReplaySpec, injected_packets, mirror_lines
 from uavcas.labels import AttackLog
@@ -45,10 +45,10 @@ def test_effect_matches_each_injection_within_the_tolerance(truth_ctx):
     assert injected_packets(truth_ctx.packets, other_ttl).sum() == 0
 
 
-# Provoked packets (hand-built tables, tests/labels/hand_truth.py): uav2 replays uav3's traffic in
+# Provoked packets (hand-built tables, tests/helpers/hand_truth.py): uav2 replays uav3's traffic in
 # [10, 20); copies leave uav2's switch with TTL - 5 (and seq + k for TCP).
 def _replay_run():
-    from hand_truth import ACK, PSH, RST, SYN, icmp_error, pkt
+    from helpers.hand_truth import ACK, PSH, RST, SYN, icmp_error, pkt
 
     via = ["uav2", "bs0", "uav3"]  # a copy for uav3 enters at the replayer's switch
     orig_syn = pkt(12.0, "bs0", "uav3", 41000, 80, SYN, seq=5000, ip_id=100)
@@ -92,8 +92,7 @@ def _replay_run():
 
 
 def test_replay_provokes_answers_to_its_copies():
-    from hand_truth import context, injection, rows_of, window
-
+    from helpers.hand_truth import context, injection, rows_of, window
     from uavcas.labels.effects import packet_truth
     from uavcas.vocabulary import FAMILIES
 
@@ -117,8 +116,7 @@ def test_replay_provokes_answers_to_its_copies():
 
 def test_dup_ack_needs_the_copy_to_be_the_nearest_earlier_packet_at_its_capture_point():
     """The genuine segment arriving between the copy and the ACK makes the ACK its answer."""
-    from hand_truth import context, injection, rows_of, window
-
+    from helpers.hand_truth import context, injection, rows_of, window
     from uavcas.labels.effects import packet_truth
 
     p = _replay_run()
@@ -145,7 +143,7 @@ def test_udp_copies_match_on_ports_and_the_nearest_transmission():
     """A MAVLink stream (unconnected UDP: IP id 0) replayed with the TTL left as it was (ttl_dec 0):
     the copies and the originals around them share addresses, ports, IP id and TTL; each record
     marks its own copy only, and a record of another port pair marks nothing of this stream."""
-    from hand_truth import injection, table
+    from helpers.hand_truth import injection, table
 
     stream = [pkt_udp(12.0 + 0.1 * k) for k in range(10)]  # uav3 -> bs0:14550 at 10 Hz
     copies = [pkt_udp(12.25, at=["uav2", "bs0"]), pkt_udp(12.35, at=["uav2", "bs0"])]  # 200 ms + jitter later
@@ -169,8 +167,7 @@ def test_udp_copies_match_on_ports_and_the_nearest_transmission():
 def test_udp_copy_effect_covers_its_transmission():
     """With the paper's TTL decrement the copy is its own transmission: both its observations are
     `replay`, the stream's datagrams stay benign."""
-    from hand_truth import context, injection, rows_of, window
-
+    from helpers.hand_truth import context, injection, rows_of, window
     from uavcas.labels.effects import packet_truth
 
     stream = [pkt_udp(12.0 + 0.1 * k) for k in range(10)]
@@ -184,13 +181,13 @@ def test_udp_copy_effect_covers_its_transmission():
 
 
 def _rows(t, p):
-    from hand_truth import HOP_S, T0
+    from helpers.hand_truth import HOP_S, T0
 
     near = np.abs(t["ts_s"] - (T0 + p["t"])) < 0.5e-3 + len(p["at"]) * HOP_S
     return near & (t["dport"] == p["dport"]) & (t["ttl"] == p["ttl"]) & (t["proto"] == p["proto"])
 
 
 def pkt_udp(t, dport=14550, ttl=64, at=None):
-    from hand_truth import pkt
+    from helpers.hand_truth import pkt
 
     return pkt(t, "uav3", "bs0", 14555, dport, proto=17, ip_id=0, ttl=ttl, payload=40, at=at)

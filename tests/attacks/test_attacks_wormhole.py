@@ -44,13 +44,8 @@ def test_planner_detours_the_victim_through_the_attacker_while_scheduled():
 def test_udp_datagrams_detoured_through_the_attacker_are_wormhole():
     """The rule is about IP packets, not TCP: a MAVLink datagram of the victim detoured through the
     attacker's switch in a planned window, and one after the detour, on the direct link."""
-    import sys
-    from pathlib import Path
-
-    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "labels"))
-    from hand_truth import pkt, rows_of, table, window
-    from synth_run import T0, make_plan
-
+    from helpers.hand_truth import pkt, rows_of, table, window
+    from helpers.synth_run import T0, make_plan
     from uavcas.flows.follow import Timeline, follow
     from uavcas.labels import TruthContext
     from uavcas.labels.attacklog import AttackLog

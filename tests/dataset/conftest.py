@@ -2,13 +2,9 @@
 
 from __future__ import annotations
 
-import sys
-from pathlib import Path
-
 import pytest
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "labels"))
-from synth_run import build_run  # noqa: E402
+from helpers.synth_run import build_run
 
 
 @pytest.fixture(scope="session")

@@ -9,8 +9,8 @@ import shutil
 import numpy as np
 import pandas as pd
 import pytest
-from synth_run import IPS, make_plan
 
+from helpers.synth_run import IPS, make_plan
 from uavcas.extract import extract
 from uavcas.schema import CONTEXT_FEATURES
 

@@ -4,17 +4,13 @@ from __future__ import annotations
 
 import json
 import shutil
-import sys
 from pathlib import Path
 
-from synth_run import build_run
-
+from helpers.fidsynth import Traffic, build, plan
+from helpers.synth_run import build_run
 from uavcas.dataset.store import extract_run
 from uavcas.fidelity import audit, write_fidelity
 from uavcas.rundir import FidelitySummary, RunDir
-
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "fidelity"))
-from fidsynth import Traffic, build, plan  # noqa: E402
 
 
 def _set_verdict(run_dir: Path, verdict: str) -> None:

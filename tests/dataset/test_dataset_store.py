@@ -6,9 +6,9 @@ import json
 import shutil
 
 import pyarrow.parquet as pq
-from synth_run import N_FLOOD, build_run
 from typer.testing import CliRunner
 
+from helpers.synth_run import N_FLOOD, build_run
 from uavcas.cli import app
 from uavcas.dataset.parquet import COLUMNS, arrow_schema, read_flows
 from uavcas.flows.standards.cic import FEATURES

@@ -6,9 +6,9 @@ import shutil
 
 import pandas as pd
 import pytest
-from synth_run import build_run
 from typer.testing import CliRunner
 
+from helpers.synth_run import build_run
 from uavcas.cli import app
 from uavcas.dataset.read import FORMATS, detect_format, load_any, select_view
 from uavcas.dataset.uavcas_csv import layout_rows

@@ -4,20 +4,16 @@ from __future__ import annotations
 
 import re
 import shutil
-import sys
-from pathlib import Path
 
 import pytest
 from typer.testing import CliRunner
 
+from helpers.fidsynth import Traffic, build, plan
 from uavcas.cli import app
 from uavcas.dataset.runs import dataset_runs, flagged_lines, percent
 from uavcas.dataset.store import read_card
 from uavcas.dataset.synthetic import make_flows, write_dataset
 from uavcas.fidelity import write_fidelity
-
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "fidelity"))
-from fidsynth import Traffic, build, plan  # noqa: E402
 
 
 @pytest.fixture(scope="module")

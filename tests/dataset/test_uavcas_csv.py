@@ -10,9 +10,9 @@ import numpy as np
 import pandas as pd
 import pyarrow as pa
 import pytest
-from synth_run import build_run
 from typer.testing import CliRunner
 
+from helpers.synth_run import build_run
 from uavcas.cli import app
 from uavcas.dataset.parquet import read_flows
 from uavcas.dataset.uavcas_csv import STAT_COLUMNS, read_layout, write_layout

@@ -4,12 +4,9 @@ from __future__ import annotations
 
 import sys
 import time
-from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).parent))
-from plans import link, nodes, plan, window  # noqa: E402
-
-from uavcas.emulation import Emulation  # noqa: E402
+from uavcas.emulation import Emulation
+from uavcas.testing.handmade_plans import link, nodes, plan, window
 
 prefix = sys.argv[1]
 p = plan(nodes(3), [window(0, [link("uav0", "uav1", 10, 2, 0.01), link("uav1", "uav2", 10, 2, 0.01)])])

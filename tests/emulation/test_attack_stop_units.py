@@ -6,17 +6,13 @@ tests drive the real floods and replayers through the same path)."""
 
 from __future__ import annotations
 
-import sys
 import threading
-from pathlib import Path
 
 import pytest
 
-sys.path.insert(0, str(Path(__file__).parent / "apps"))
-from runplans import attack, link, make_plan, nodes  # noqa: E402
-
-from uavcas.emulation import attacks as attacks_mod  # noqa: E402
-from uavcas.emulation.attacks import AttackError, AttackExecutor  # noqa: E402
+from helpers.runplans import attack, link, make_plan, nodes
+from uavcas.emulation import attacks as attacks_mod
+from uavcas.emulation.attacks import AttackError, AttackExecutor
 
 
 class _SlowStop:

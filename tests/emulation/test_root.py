@@ -18,14 +18,11 @@ from pathlib import Path
 
 import pytest
 
-sys.path.insert(0, str(Path(__file__).parent))
-from plans import link, nodes, plan, window  # noqa: E402
-
-from uavcas.emulation import Emulation, kernel  # noqa: E402
-from uavcas.emulation import cleanup, selftest  # noqa: E402
-from uavcas.emulation.naming import Naming, new_prefix  # noqa: E402
-from uavcas.emulation.probe import CGROUP_ROOT  # noqa: E402
-from uavcas.emulation.selftest import HopConfig  # noqa: E402
+from uavcas.emulation import Emulation, cleanup, kernel, selftest
+from uavcas.emulation.naming import Naming, new_prefix
+from uavcas.emulation.probe import CGROUP_ROOT
+from uavcas.emulation.selftest import HopConfig
+from uavcas.testing.handmade_plans import link, nodes, plan, window
 
 pytestmark = pytest.mark.root
 REPO = Path(__file__).resolve().parents[2]

@@ -1,7 +1,7 @@
 """Root integration tests of traffic, attacks, capture and `uavcas run` on real namespaces.
 
 Small hand-made plans (3-5 nodes, 2-3 windows of 3-4 s). Skipped with a reason without root.
-The pcaps are read back with dpkt (tests/emulation/apps/runcheck.py), independently of
+The pcaps are read back with dpkt (uavcas.testing.runcheck), independently of
 uavcas.flows.
 """
 
@@ -13,19 +13,16 @@ import re
 import signal
 import socket
 import subprocess
-import sys
 import time
 from pathlib import Path
 
 import pytest
 
-sys.path.insert(0, str(Path(__file__).parent / "apps"))
-import runcheck as rc  # noqa: E402
-from runplans import attack, link, make_plan, nodes  # noqa: E402
-
-from uavcas.emulation import Emulation, kernel  # noqa: E402
-from uavcas.emulation.attacks import AttackExecutor  # noqa: E402
-from uavcas.emulation.runner import realize  # noqa: E402
+from helpers.runplans import attack, link, make_plan, nodes
+from uavcas.emulation import Emulation, kernel
+from uavcas.emulation.attacks import AttackExecutor
+from uavcas.emulation.runner import realize
+from uavcas.testing import runcheck as rc
 
 pytestmark = pytest.mark.root
 REPO = Path(__file__).resolve().parents[2]

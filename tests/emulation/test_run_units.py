@@ -3,23 +3,20 @@
 from __future__ import annotations
 
 import os
-import sys
 from pathlib import Path
 
 import pytest
 from typer.testing import CliRunner
 
-sys.path.insert(0, str(Path(__file__).parent / "apps"))
-from runplans import attack, link, make_plan, nodes  # noqa: E402
-
-from uavcas.cli import app  # noqa: E402
-from uavcas.attacks.blackhole import switch_ports  # noqa: E402
-from uavcas.emulation import preflight as preflight_mod  # noqa: E402
-from uavcas.emulation.attacks import AttackExecutor  # noqa: E402
-from uavcas.emulation.controller import Detour  # noqa: E402
-from uavcas.emulation.naming import check_prefix  # noqa: E402
-from uavcas.emulation.preflight import prepare_out_dir  # noqa: E402
-from uavcas.emulation.runner import schedule  # noqa: E402
+from helpers.runplans import attack, link, make_plan, nodes
+from uavcas.attacks.blackhole import switch_ports
+from uavcas.cli import app
+from uavcas.emulation import preflight as preflight_mod
+from uavcas.emulation.attacks import AttackExecutor
+from uavcas.emulation.controller import Detour
+from uavcas.emulation.naming import check_prefix
+from uavcas.emulation.preflight import prepare_out_dir
+from uavcas.emulation.runner import schedule
 
 CONFIG = "dos=1000-5-2-image-logdist-adaptive-random-30-95"
 

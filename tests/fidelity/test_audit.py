@@ -3,19 +3,14 @@
 from __future__ import annotations
 
 import json
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from fidsynth import T0, Traffic, build, plan, run_info  # noqa: E402
-
-from uavcas.emulation.shaping import queue_limit_pkts  # noqa: E402
-from uavcas.fidelity import Tolerances, audit, read_fidelity, write_fidelity  # noqa: E402
-from uavcas.rundir import RunDir  # noqa: E402
-from uavcas.rundir import WindowApply  # noqa: E402
+from helpers.fidsynth import T0, Traffic, build, plan, run_info
+from uavcas.emulation.shaping import queue_limit_pkts
+from uavcas.fidelity import Tolerances, audit, read_fidelity, write_fidelity
+from uavcas.rundir import RunDir, WindowApply
 
 
 def _steady(n=400, gap_s=0.004, t0=0.1, length=600, sport=5000) -> Traffic:

@@ -2,19 +2,14 @@
 
 from __future__ import annotations
 
-import sys
-from pathlib import Path
-
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from fidsynth import link, plan  # noqa: E402
-
-from uavcas.emulation.shaping import netem_limit_pkts, queue_limit_pkts  # noqa: E402
-from uavcas.fidelity.inforce import port_shaping  # noqa: E402
-from uavcas.flows.follow import Timeline  # noqa: E402
-from uavcas.rundir import ForwardingEpoch  # noqa: E402
-from uavcas.twin.model import Window  # noqa: E402
+from helpers.fidsynth import link, plan
+from uavcas.emulation.shaping import netem_limit_pkts, queue_limit_pkts
+from uavcas.fidelity.inforce import port_shaping
+from uavcas.flows.follow import Timeline
+from uavcas.rundir import ForwardingEpoch
+from uavcas.twin.model import Window
 
 
 def _plan():

@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 import pytest
-from pcapgen import A, B, C, http_session, ipv6_session, syn_flood, tcp, udp, write
 
+from helpers.pcapgen import A, B, C, http_session, ipv6_session, syn_flood, tcp, udp, write
 from uavcas.flows import FlowConfig, StreamReport, extract_flows, iter_flow_frames
 
 # one flow per key: the paper's granularity, used where a test is about keys, not termination

@@ -8,11 +8,11 @@ from collections import Counter
 
 import numpy as np
 import pytest
-from pcapgen import A, B, C, T0, http_session, tcp, udp, write
+from cicflowmeter_oracle import cicflowmeter_flows
 from scapy.layers.inet import ICMP, IP
 from scapy.layers.l2 import Ether
 
-from cicflowmeter_oracle import cicflowmeter_flows
+from helpers.pcapgen import T0, A, B, C, http_session, tcp, udp, write
 from uavcas.flows import FlowConfig, extract_flows
 from uavcas.flows.standards.cic import FEATURES
 

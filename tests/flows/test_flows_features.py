@@ -7,11 +7,11 @@ import subprocess
 
 import numpy as np
 import pytest
-from pcapgen import A, B, C, T0, http_session, tcp, udp, write
 from scapy.layers.inet import IP, UDP, fragment
 from scapy.layers.l2 import Ether
 from scapy.packet import Raw
 
+from helpers.pcapgen import T0, A, B, C, http_session, tcp, udp, write
 from uavcas.flows import FlowConfig, extract_flows
 from uavcas.flows.standards.cic import FEATURES
 from uavcas.flows.standards.paper import PAPER_FEATURES

@@ -8,8 +8,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from pcapgen import T0, udp, write
 
+from helpers.pcapgen import T0, udp, write
 from uavcas.flows.follow import Timeline, follow, follow_run
 from uavcas.flows.packets import COLUMNS, QUOTE_COLUMNS, PacketTable, address_to_words, empty_columns
 from uavcas.rundir import ForwardingEpoch, RunDir

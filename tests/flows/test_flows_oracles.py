@@ -8,8 +8,8 @@ import subprocess
 import numpy as np
 import pandas as pd
 import pytest
-from pcapgen import A, B, C, http_session, syn_flood, udp, write
 
+from helpers.pcapgen import A, B, C, http_session, syn_flood, udp, write
 from uavcas.flows import FlowConfig, extract_flows
 
 # nfstream's defaults: idle_timeout=120 s, active_timeout=1800 s, no FIN/RST or SYN rule.

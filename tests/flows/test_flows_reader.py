@@ -6,13 +6,15 @@ import struct
 
 import numpy as np
 import pytest
-from pcapgen import A, B, T0, http_session, icmp, ipv6_session, sll, tcp, udp, vlan_tcp, write, write_pcapng
 from scapy.layers.inet import IP, TCP
 from scapy.layers.inet6 import IPv6
-from scapy.layers.l2 import Ether
-from scapy.layers.l2 import CookedLinuxV2  # noqa: E402
+from scapy.layers.l2 import (
+    CookedLinuxV2,  # noqa: E402
+    Ether,
+)
 from scapy.packet import Raw
 
+from helpers.pcapgen import T0, A, B, http_session, icmp, ipv6_session, sll, tcp, udp, vlan_tcp, write, write_pcapng
 from uavcas.flows import CaptureError, read_packets
 
 
@@ -185,9 +187,9 @@ def test_fragments_join_their_datagram_and_orphans_are_counted(tmp_path):
 
 
 def test_timestamps_are_exact_integer_nanoseconds(tmp_path):
-    from scapy.utils import wrpcap
-
     from decimal import Decimal
+
+    from scapy.utils import wrpcap
 
     p = tcp(0, A, B, 1, 2, "S")
     p.time = Decimal(int(T0)) + Decimal("0.123456789")  # a float would already have lost the ns

@@ -7,8 +7,8 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 import pytest
-from test_flows_context import HOP_S, send, table
 
+from helpers.capture_tables import HOP_S, send, table
 from uavcas.flows.assemble import FlowConfig, assemble
 from uavcas.flows.context import context_frame, context_frames, transmissions
 from uavcas.flows.routes import route_codes

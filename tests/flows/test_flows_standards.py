@@ -6,9 +6,9 @@ import dataclasses
 
 import numpy as np
 import pytest
-from pcapgen import http_session, syn_flood, write
 from typer.testing import CliRunner
 
+from helpers.pcapgen import http_session, syn_flood, write
 from uavcas.cli import app
 from uavcas.flows import assemble, read_packets
 from uavcas.flows.features import flow_frame

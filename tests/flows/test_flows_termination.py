@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from pcapgen import A, B, C, http_session, tcp, udp, write
 
+from helpers.pcapgen import A, B, C, http_session, tcp, udp, write
 from uavcas.flows import FlowConfig, extract_flows
 from uavcas.flows.termination import CLOSE_GRACE_S
 

@@ -3,7 +3,8 @@
 from __future__ import annotations
 
 import pytest
-from synth_run import build_run
+
+from helpers.synth_run import build_run
 
 
 @pytest.fixture(scope="session")

@@ -5,8 +5,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from synth_run import IPS, make_plan
 
+from helpers.synth_run import IPS, make_plan
 from uavcas.flows import FlowConfig, assemble, flow_frame
 from uavcas.flows.packets import PacketTable, address_to_words, table_from_rows
 from uavcas.flows.standards import episode_feature_columns

@@ -1,16 +1,15 @@
-"""Labels of flows holding provoked packets (hand-built tables: hand_truth.py)."""
+"""Labels of flows holding provoked packets (hand-built tables: tests/helpers/hand_truth.py)."""
 
 from __future__ import annotations
 
 import numpy as np
 import pandas as pd
-from hand_truth import ACK, SYN, context, pkt, window
 
+from helpers.hand_truth import ACK, SYN, context, pkt, window
 from uavcas.flows import FlowConfig
 from uavcas.flows.assemble import assemble
 from uavcas.labels.effects import packet_truth
 from uavcas.labels.label import constructed_truth, label_flows, rule_text
-from uavcas.vocabulary import FAMILIES
 from uavcas.schema import TRUTH_COLUMNS
 from uavcas.vocabulary import EFFECT_PRECEDENCE, FAMILIES
 

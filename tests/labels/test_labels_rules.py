@@ -5,10 +5,9 @@ from __future__ import annotations
 
 import json
 
-import numpy as np
 import pytest
-from synth_run import BLACKHOLE_WINDOW, DOS_WINDOW, IPS, N_FLOOD, T0, add_wormhole, make_plan
 
+from helpers.synth_run import BLACKHOLE_WINDOW, DOS_WINDOW, IPS, N_FLOOD, T0, add_wormhole, make_plan
 from uavcas.events import attack_log_text
 from uavcas.extract import extract
 from uavcas.labels import LabelError, read_attack_log

@@ -5,18 +5,16 @@ non-finite and zero feature values as CICFlowMeter writes them."""
 from __future__ import annotations
 
 import shutil
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 
+from helpers.fidsynth import Traffic, build
+from helpers.fidsynth import plan as fid_plan
 from uavcas.dataset.synthetic import make_flows, write_dataset
 from uavcas.fidelity import write_fidelity
 from uavcas.twin import plan as make_plan
-
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "fidelity"))
-from fidsynth import Traffic, build, plan as fid_plan  # noqa: E402
 
 PLANNED = ("run00000", "run00001", "run00007", "run00009")  # benign, dos, blackhole+dos, dos+wormhole
 AUDITED = {"run00000": 0.0, "run00005": 0.002}  # run -> the emulator's lateness per hop (s): pass, fail

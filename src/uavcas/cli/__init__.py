@@ -7,18 +7,14 @@ from pathlib import Path
 
 import typer
 import typer.core
-
-try:  # typer >= 0.20 carries its own click; older ones use the click package
-    from typer._click import exceptions as _click_errors
-except ImportError:  # pragma: no cover
-    from click import exceptions as _click_errors  # type: ignore[no-redef]
+from typer._click import exceptions as _click_errors  # typer >= 0.20 carries its own click
 
 from uavcas import __version__
 
 from . import analyze as _analyze
 from . import audit as _audit
-from . import calibrate as _calibrate
 from . import bench as _bench
+from . import calibrate as _calibrate
 from . import campaign as _campaign
 from . import channel as _channel
 from . import dataset as _dataset
@@ -30,6 +26,7 @@ from . import publish as _publish
 from . import report as _report
 from . import run as _run
 from .common import fail
+
 
 class _OneLineErrors(typer.core.TyperGroup):
     """The root command: every bad input, click's usage errors included, ends in one line on stderr

@@ -39,8 +39,8 @@ from uavcas.versions import package_versions
 
 from .apps import capture
 from .apps.traffic import BenignTraffic
-from .apps.video import BITRATE_KBPS
 from .apps.versions import tool_versions
+from .apps.video import BITRATE_KBPS
 from .attacks import AttackExecutor
 from .emulation import Emulation
 from .naming import new_prefix
@@ -369,7 +369,7 @@ def _write_outputs(st: _State) -> None:
         config=st.plan.config, seed=st.plan.seed, windows=len(st.plan.windows), window_s=st.plan.window_s,
         prefix=emu.prefix if emu else None, t0_unix=st.t0, t_end_unix=now, wall_s=round(now - st.wall0, 3),
         exit_status=st.exit_status, exit_reason=st.exit_reason,
-        versions=package_versions("scapy", "dpkt", "pydantic", "pymavlink"), tool_versions=tool_versions(),
+        versions=package_versions("scapy", "pydantic", "pymavlink"), tool_versions=tool_versions(),
         kernel=platform.release(),
         kernel_features=emu.features.to_dict() if emu else None, shaper_backend=emu.backend if emu else None,
         timings={**{k: round(v, 4) for k, v in st.timings.items()},

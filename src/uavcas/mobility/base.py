@@ -56,18 +56,6 @@ class MissionBase:
         raise NotImplementedError
 
 
-def ping_pong(s: np.ndarray, length: float) -> np.ndarray:
-    """Map an unbounded arc length onto [0, length] going back and forth (period 2*length).
-
-    Used by path missions so the UAV keeps its ground speed and stays on its footprint forever
-    instead of stopping or jumping at the end of the path.
-    """
-    if length <= 0:
-        return np.zeros_like(s)
-    q = np.mod(s, 2.0 * length)
-    return np.where(q <= length, q, 2.0 * length - q)
-
-
 def seeded_anchors(
     rng: np.random.Generator,
     n: int,

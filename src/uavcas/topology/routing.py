@@ -265,8 +265,3 @@ def with_wormholes(
         disconnected=topo.disconnected,
         detours=tuple(detours),
     )
-
-
-def is_connected_to_bs(topo: Topology, n: int, is_bs: np.ndarray) -> bool:
-    comps = _components(n, topo.edges)
-    return all(any(is_bs[c] for c in comp) for comp in comps)

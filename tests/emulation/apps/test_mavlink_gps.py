@@ -107,8 +107,7 @@ def test_autopilot_reports_the_spoofers_drift_between_the_logged_times(tmp_path)
     """The real endpoints on 127.0.0.1 (as test_mavlink_units), the real executor publishing the
     plan's gps_spoof attack mid-run: the reports decided inside the logged [start, stop) carry the
     drift, the others the track, and the autopilot counts them."""
-    from test_mavlink_units import Relay, _free_port, _parse_each, run_endpoints
-
+    from helpers.mavlink_relay import Relay, free_port, parse_each, run_endpoints
     from uavcas.emulation.apps import mavlink as mv
     from uavcas.emulation.attacks import AttackExecutor
     from uavcas.twin import plan
@@ -118,7 +117,7 @@ def test_autopilot_reports_the_spoofers_drift_between_the_logged_times(tmp_path)
     (att,) = p.attacks
     att = att.model_copy(update={"start_s": 2.0, "stop_s": 4.0})  # inside the 6 s run, after the streams start
     victim = att.victims[0]
-    gcs_port = _free_port()
+    gcs_port = free_port()
     relay = Relay(gcs_port)
     relay.drop_once = set()
     relay.start()
@@ -142,7 +141,7 @@ def test_autopilot_reports_the_spoofers_drift_between_the_logged_times(tmp_path)
 
     b, inside, outside = math.radians(att.params["lure_bearing_deg"]), 0, 0
     track = Track.of(p, victim)
-    for _, m in _parse_each(relay.up):
+    for _, m in parse_each(relay.up):
         if m.get_type() not in ("GLOBAL_POSITION_INT", "GPS_RAW_INT"):
             continue
         ms = m.time_boot_ms if m.get_type() == "GLOBAL_POSITION_INT" else m.time_usec / 1000

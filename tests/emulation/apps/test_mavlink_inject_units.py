@@ -14,8 +14,8 @@ import sys
 import time
 
 import pytest
-from test_mavlink_units import Relay, _free_port, stop_all, wait_all
 
+from helpers.mavlink_relay import Relay, free_port, stop_all, wait_all
 from uavcas.emulation.apps import mavlink as mv
 from uavcas.emulation.apps.mavinject import read_log as read_injector_log
 from uavcas.emulation.apps.mavlink.commands import COPTER_MODE_RTL
@@ -47,7 +47,7 @@ def test_forged_rtl_is_accepted_without_signing_and_dropped_with_it(tmp_path, si
     p = plan(CFG, seed=5, windows=3, window_s=1.5)
     victim, bs = p.attacks[0].victims[0], "bs0"
     key = mv.signing_spec(p.seed, p.config) if signed else None
-    gcs_port, uav_port = _free_port(), _free_port()
+    gcs_port, uav_port = free_port(), free_port()
     relay = Relay(gcs_port)
     relay.drop_once = set()
     relay.start()

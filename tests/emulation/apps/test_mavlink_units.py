@@ -6,15 +6,11 @@ wire: each one is one MAVLink 2 frame that pymavlink parses with a valid CRC.
 
 from __future__ import annotations
 
-import socket
-import subprocess
-import sys
-import threading
-import time
 from collections import Counter
 
 import pytest
 
+from helpers.mavlink_relay import Relay, free_port, parse_each, run_endpoints, type_of
 from uavcas.emulation.apps import mavlink as mv
 from uavcas.twin import plan
 from uavcas.twin.track import Track, geodetic_to_local
@@ -23,105 +19,9 @@ pytestmark = pytest.mark.slow
 CFG = "benign-6-2-telemetry-logdist-adaptive-random-30-95"
 
 
-class Relay(threading.Thread):
-    """UDP middle box: datagrams from the UAV go to the GCS and back; all of them are recorded."""
-
-    def __init__(self, gcs_port: int) -> None:
-        super().__init__(daemon=True)
-        self.sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-        self.sock.bind(("127.0.0.1", 0))
-        self.sock.settimeout(0.1)
-        self.port, self.gcs = self.sock.getsockname()[1], ("127.0.0.1", gcs_port)
-        self.uav = None
-        self.up: list[tuple[float, bytes]] = []  # UAV -> GCS
-        self.down: list[tuple[float, bytes]] = []  # GCS -> UAV
-        self.stop = False
-        self.drop_once = {"MISSION_ITEM_INT", "COMMAND_LONG"}
-
-    def run(self) -> None:
-        while not self.stop:
-            try:
-                data, addr = self.sock.recvfrom(65535)
-            except socket.timeout:
-                continue
-            if addr == self.gcs:
-                self.down.append((time.time(), data))
-                typ = _type_of(data)
-                if typ in self.drop_once:  # lost on the way: the GCS must retry it
-                    self.drop_once.discard(typ)
-                    continue
-                if self.uav:
-                    self.sock.sendto(data, self.uav)
-            else:
-                self.uav = addr
-                self.up.append((time.time(), data))
-                self.sock.sendto(data, self.gcs)
-
-
-def run_endpoints(tmp_path, gspec, uspec, relay: Relay, at_t0=lambda t0: None) -> float:
-    """Both endpoints as processes until their deadline: they load, bind and say "ready" before t0
-    (as in a run), then t0 is published and `at_t0(t0)` runs meanwhile. Returns t0."""
-    (tmp_path / "g.json").write_text(gspec.model_dump_json())
-    (tmp_path / "u.json").write_text(uspec.model_dump_json())
-    run = [sys.executable, "-m", "uavcas.emulation.apps.mavlink"]
-    procs = [subprocess.Popen(run + [role, str(tmp_path / f"{role[0]}.json")], stdout=subprocess.PIPE,
-                              stderr=subprocess.PIPE, text=True) for role in ("gcs", "uav")]
-    try:
-        assert [proc.stdout.readline().strip() for proc in procs] == ["ready", "ready"]
-        t0 = time.time()
-        mv.write_t0(uspec.t0_path, t0)
-        at_t0(t0)
-        wait_all(procs, uspec.duration_s + 10)
-    finally:
-        stop_all(relay, procs)
-    return t0
-
-
-def _type_of(data: bytes) -> str:
-    from pymavlink.dialects.v20 import common
-
-    return common.MAVLink(None).parse_buffer(data)[0].get_type()
-
-
-def _free_port() -> int:
-    s = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-    s.bind(("127.0.0.1", 0))
-    port = s.getsockname()[1]
-    s.close()
-    return port
-
-
-def wait_all(procs, timeout_s: float) -> None:
-    """Every endpoint process ends by itself within timeout_s, with exit status 0."""
-    for proc in procs:
-        _, err = proc.communicate(timeout=timeout_s)
-        assert proc.returncode == 0, err[-1000:]
-
-
-def stop_all(relay: Relay, procs) -> None:
-    relay.stop = True
-    relay.join(2)
-    for proc in procs:
-        proc.kill()
-
-
-def _parse_each(datagrams):
-    from pymavlink.dialects.v20 import common
-
-    out = []
-    for t, d in datagrams:
-        assert d[0] == 0xFD  # MAVLink 2 magic
-        mav = common.MAVLink(None)  # strict: a bad CRC raises
-        msgs = mav.parse_buffer(d)
-        assert msgs is not None and len(msgs) == 1, d
-        assert mav.total_receive_errors == 0 and msgs[0].get_type() != "BAD_DATA"
-        out.append((t, msgs[0]))
-    return out
-
-
 def test_gcs_and_uav_exchange_mission_commands_and_streams_over_udp(tmp_path):
     p = plan(CFG, seed=14, windows=3, window_s=1.5)
-    gcs_port = _free_port()
+    gcs_port = free_port()
     relay = Relay(gcs_port)
     relay.start()
     dur, t0_path = p.duration_s + 0.5, tmp_path / "t0"
@@ -139,7 +39,7 @@ def test_gcs_and_uav_exchange_mission_commands_and_streams_over_udp(tmp_path):
     # the first item and the first command were dropped by the relay: both were resent once
     assert not relay.drop_once
     # 3 items + the lost one again (twice when the GCS's and the UAV's timers both fire)
-    assert 4 <= sum(_type_of(d) == "MISSION_ITEM_INT" for _, d in relay.down) <= 5
+    assert 4 <= sum(type_of(d) == "MISSION_ITEM_INT" for _, d in relay.down) <= 5
     acks = {e["window"]: (e["result"], e["tries"]) for e in glog if e["event"] == "command_result"}
     assert acks == {1: ("accepted", 2), 2: ("accepted", 1)}
     sent_at = {e["window"]: e["t_s"] for e in glog if e["event"] == "command_sent"}
@@ -149,7 +49,7 @@ def test_gcs_and_uav_exchange_mission_commands_and_streams_over_udp(tmp_path):
     assert speeds[:2] == pytest.approx([track.speed_in_window_mps(1), track.speed_in_window_mps(2)], rel=1e-6)
     assert [e["result"] for e in ulog if e["event"] == "mission_receive"] == ["accepted"]
 
-    up, down = _parse_each(relay.up), _parse_each(relay.down)
+    up, down = parse_each(relay.up), parse_each(relay.down)
     assert {m.get_type() for _, m in down} >= {"HEARTBEAT", "REQUEST_DATA_STREAM", "MISSION_COUNT",
                                                "MISSION_ITEM_INT", "COMMAND_LONG"}
     assert all(m.get_srcSystem() == 255 for _, m in down) and all(m.get_srcSystem() == 1 for _, m in up)

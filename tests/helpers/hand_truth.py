@@ -9,8 +9,8 @@ there). ICMP errors name the packet they quote (`quote`: a packet dict).
 from __future__ import annotations
 
 import numpy as np
-from synth_run import HOP_S, IPS, T0, make_plan
 
+from helpers.synth_run import HOP_S, IPS, T0, make_plan
 from uavcas.flows.follow import Timeline, follow
 from uavcas.flows.packets import COLUMNS, PacketTable, address_to_words, empty_columns
 from uavcas.labels import TruthContext

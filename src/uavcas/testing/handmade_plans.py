@@ -1,4 +1,4 @@
-"""Hand-made Plans for emulation tests and benchmarks: exact links and routes, no planner draws."""
+"""Hand-made Plans for the emulation tests and benchmarks: exact links and routes, no planner draws."""
 
 from __future__ import annotations
 

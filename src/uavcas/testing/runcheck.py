@@ -2,7 +2,7 @@
 finding a run in the registry.
 
 Used by the root tests and the benchmarks; independent of uavcas.flows on purpose (a second
-opinion on the captures).
+opinion on the captures). Needs dpkt (the `test` or `bench` extra).
 """
 
 from __future__ import annotations
