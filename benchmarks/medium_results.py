@@ -25,8 +25,11 @@ from pathlib import Path
 
 import pandas as pd
 
-MODELS = ["LR", "SGD", "RF", "MLP", "LightGBM", "1D-CNN", "LSTM", "ConvNet", "TinyML", "CNN-BiLSTM"]
-CONTEXT = ["Context", "Context-joint", "Context-flow", "Context-only"]
+from uavcas.ids.detectors import baselines, detectors
+
+# display names, from the detector registry: the paper's ten baselines, then the context detectors
+MODELS = [s.display for s in baselines()]
+CONTEXT = [s.display for s in detectors() if s.uses_context]
 VIEWS = {"5tuple": "5-tuple flows", "window-host": "window-host episodes"}
 PROTOCOLS = ["binary", "multiclass", "ood", "cross-condition"]
 # paper, binary Benign-vs-DoS weighted F1 (%) on UAV-CAS
