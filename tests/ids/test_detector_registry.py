@@ -82,32 +82,26 @@ def test_importing_the_registry_imports_no_estimator_library():
     assert out.stdout.strip() == "[]", out.stdout + out.stderr
 
 
-KNN = '''"""KNN: k nearest neighbours (a throwaway detector, written by a test)."""
-
-from __future__ import annotations
-
-from .registry import register
-from .spec import DetectorSpec
+ARCHITECTURE = Path(__file__).parents[2] / "docs" / "architecture.md"
 
 
-def _factory():
-    from sklearn.neighbors import KNeighborsClassifier
-
-    return KNeighborsClassifier(n_neighbors=5)
-
-
-SPEC = register(DetectorSpec(name="knn", display="KNN", kind="classical", factory=_factory,
-                             seed_param=None, thread_param="n_jobs"))
-'''
+def _worked_example() -> str:
+    """The module of docs/architecture.md's "a detector" example (the test runs what the docs show)."""
+    text = ARCHITECTURE.read_text()
+    section = text[text.index("### a detector"):]
+    start = section.index("```python\n") + len("```python\n")
+    return section[start:section.index("```\n", start)]
 
 
 @pytest.mark.slow
 def test_a_new_detector_is_one_new_module(tmp_path):
-    """A copy of the package with one module added to `uavcas/ids/detectors/`: the registry, the
-    CLI's help and `bench ids` (40 synthetic runs: 3 hold DoS, enough for a grouped split) all
-    have the new detector; nothing else was edited."""
+    """A copy of the package with one module added to `uavcas/ids/detectors/` (the docs' worked
+    example): the registry, the CLI's help and `bench ids` (40 synthetic runs: 3 hold DoS, enough
+    for a grouped split) all have the new detector; nothing else was edited."""
     shutil.copytree(Path(uavcas.__file__).parent, tmp_path / "uavcas", ignore=shutil.ignore_patterns("__pycache__"))
-    (tmp_path / "uavcas" / "ids" / "detectors" / "knn.py").write_text(KNN)
+    example = _worked_example()
+    assert 'name="knn"' in example
+    (tmp_path / "uavcas" / "ids" / "detectors" / "knn.py").write_text(example)
     env = _src_env(tmp_path)
 
     def run(*args: str) -> str:

@@ -40,8 +40,9 @@ class DetectorSpec:
     torch above all, inside it: importing the registry stays cheap and torch stays optional);
     `order`: its position in listings and tables (the paper's order first); `seed_param`,
     `epoch_param` and `thread_param`: the estimator's parameter for the seed, the epoch budget
-    and the thread count (None: it has none, e.g. no seed for a deterministic estimator); `tree`: permutation importance is computed for it; `paper_baseline`: one of
-    the paper's ten baselines (`--models all`)."""
+    and the thread count (None: it has none, e.g. no seed for a deterministic estimator);
+    `tree`: permutation importance is computed for it; `paper_baseline`: one of the paper's ten
+    baselines (`--models all`)."""
 
     name: str
     display: str
