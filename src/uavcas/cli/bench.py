@@ -28,7 +28,8 @@ def _models_help() -> str:
         listed = ", ".join(s.name + "*" * s.paper_baseline for s in detectors() if s.kind == kind)
         if listed:
             groups.append(f"{kind}{f' ({KIND_NEEDS[kind]})' if KIND_NEEDS[kind] else ''}: {listed}")
-    return f"Comma-separated detectors, or all (the paper's {len(baselines())} baselines, starred). {'; '.join(groups)}."
+    paper = f"the paper's {len(baselines())} baselines, starred"
+    return f"Comma-separated detectors, or all ({paper}). {'; '.join(groups)}."
 
 
 def _parse_holdout(items: list[str]) -> tuple[tuple[str, str], ...]:
@@ -100,7 +101,10 @@ def ids_cmd(
     protocols = _parse_list(protocol, PROTOCOLS, "--protocol")
     if scaler not in SCALERS:
         raise fail(f"--scaler: unknown {scaler!r} (known: {', '.join(SCALERS)})")
-    chosen = tuple(s.name for s in baselines()) if models.strip() == "all" else _parse_list(models, names(), "--models")
+    if models.strip() == "all":
+        chosen = tuple(s.name for s in baselines())
+    else:
+        chosen = _parse_list(models, names(), "--models")
     if any(detector(m).needs_torch for m in chosen):
         try:
             import torch  # noqa: F401

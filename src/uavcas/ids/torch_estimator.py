@@ -61,8 +61,8 @@ class TorchClassifier(EarlyStoppingClassifier):
     _dtype = np.float32
 
     def __init__(
-        self, network: Callable[[int, int], Any] | None = None, epochs: int = 50, batch_size: int = 128, lr: float = 1e-3,
-        patience: int = 5, validation_fraction: float = 0.1, random_state: int | None = 0,
+        self, network: Callable[[int, int], Any] | None = None, epochs: int = 50, batch_size: int = 128,
+        lr: float = 1e-3, patience: int = 5, validation_fraction: float = 0.1, random_state: int | None = 0,
         n_threads: int | None = None, device: str = "auto", verbose: int = 0,
     ) -> None:
         self.network = network
