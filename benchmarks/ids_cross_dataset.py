@@ -36,12 +36,12 @@ def main() -> int:
 
     from uavcas.dataset.synthetic import make_flows, write_dataset
     from uavcas.dataset.read import load_any
-    from uavcas.ids.models import MODELS
+    from uavcas.ids.detectors import baselines
     from uavcas.ids.protocols import BenchConfig, run_protocol
     from uavcas.ids.results import results_frame
 
     ours = args.dataset or write_dataset(Path(tempfile.mkdtemp()) / "uavcas-synthetic", make_flows(400, flows_per_run=50))
-    models = MODELS if args.models == "all" else tuple(args.models.split(","))
+    models = tuple(s.name for s in baselines()) if args.models == "all" else tuple(args.models.split(","))
     cfg = BenchConfig(models=models, scaler=args.scaler, epochs=args.epochs, seeds=(0,), importance=False,
                       n_threads=args.threads or None)
     cols = {}

@@ -25,8 +25,11 @@ from pathlib import Path
 
 import pandas as pd
 
-MODELS = ["LR", "SGD", "RF", "MLP", "LightGBM", "1D-CNN", "LSTM", "ConvNet", "TinyML", "CNN-BiLSTM"]
-CONTEXT = ["Context", "Context-joint", "Context-flow", "Context-only"]
+from uavcas.ids.detectors import baselines, detectors, names
+
+# display names, from the detector registry: the paper's ten baselines, then the context detectors
+MODELS = [s.display for s in baselines()]
+CONTEXT = [s.display for s in detectors() if s.uses_context]
 VIEWS = {"5tuple": "5-tuple flows", "window-host": "window-host episodes"}
 PROTOCOLS = ["binary", "multiclass", "ood", "cross-condition"]
 # paper, binary Benign-vs-DoS weighted F1 (%) on UAV-CAS
@@ -392,7 +395,7 @@ def regenerate_section(camp: pd.DataFrame) -> list[str]:
             ".venv/bin/uavcas campaign run --preset medium --out data/medium",
             "# the same runs as window-host episodes",
             "for r in data/medium/runs/*/; do .venv/bin/uavcas extract \"$r\" --view window-host --out data/medium-wh; done",
-            "M=lr,sgd,rf,mlp,lightgbm,cnn1d,lstm,convnet,tinyml,cnn_bilstm,context,context-joint,context-flow,context-only",
+            f"M={','.join(names())}",  # every registered detector
             "B=\"--seeds 0,1,2,3,4 --models $M --train-cap 300 --epochs 15 --no-importance\"",
             "for v in medium:5tuple medium-wh:wh; do",
             "  .venv/bin/uavcas bench ids data/${v%%:*} --out bench/${v##*:} --protocol binary,multiclass,ood --min-class-runs 2 $B",

@@ -36,7 +36,7 @@ def main(argv: list[str]) -> int:
     import torch
 
     from uavcas.dataset.read import load_any
-    from uavcas.ids.models import DEEP
+    from uavcas.ids.detectors import detectors
     from uavcas.ids.protocols import BenchConfig, execute, prepare
     from uavcas.ids.torch_estimator import default_threads
 
@@ -49,7 +49,8 @@ def main(argv: list[str]) -> int:
     threads = a.threads or default_threads()
     rows, f1 = [], {}
     for dev in devices:
-        cfg = BenchConfig(models=DEEP, epochs=a.epochs, seeds=seeds, importance=False, train_cap=a.train_cap or None,
+        deep = tuple(s.name for s in detectors() if s.needs_torch)
+        cfg = BenchConfig(models=deep, epochs=a.epochs, seeds=seeds, importance=False, train_cap=a.train_cap or None,
                           n_threads=threads, device=dev)
         prep = prepare(df, a.protocol, cfg)
         t0 = time.perf_counter()

@@ -17,7 +17,7 @@ from uavcas.cli import app
 from uavcas.dataset.synthetic import write_dataset
 from uavcas.ids.features import feature_matrix
 from uavcas.ids.leaderboard import COLUMNS as LEADERBOARD_COLUMNS
-from uavcas.ids.models import make_model
+from uavcas.ids.detectors import make_model
 from uavcas.ids.results import RESULT_COLUMNS
 from uavcas.ids.splits import grouped_split
 

@@ -12,14 +12,15 @@ import importlib.util
 import pytest
 from sklearn.utils.estimator_checks import parametrize_with_checks
 
-from uavcas.ids import baseline
-from uavcas.ids.models import CLASSICAL, DEEP
+from uavcas.ids import baseline, detectors
 
 HAS_TORCH = importlib.util.find_spec("torch") is not None
+DEEP = tuple(s.name for s in detectors() if s.needs_torch)
 FAST = {"mlp": {"batch_size": 16, "max_iter": 20}, **{d: {"batch_size": 16, "epochs": 20, "n_threads": 1} for d in DEEP}}
-# the context detector (one class for its three variants: they differ in the columns they select
-# by name, and an array without names is taken whole)
-NAMES = CLASSICAL + (DEEP if HAS_TORCH else ()) + ("context",)
+# every registered detector but the context ablation (one class for the four context variants:
+# they differ in the columns they select by name, and an array without names is taken whole)
+NAMES = tuple(s.name for s in detectors()
+              if (HAS_TORCH or not s.needs_torch) and (not s.uses_context or s.name == "context"))
 ESTIMATORS = [baseline(n, **FAST.get(n, {})) for n in NAMES]
 
 # The same reason scikit-learn gives for RandomForestClassifier and SGDClassifier in its own

@@ -14,16 +14,16 @@ from sklearn.preprocessing import StandardScaler
 
 from sklearn.metrics import log_loss
 
-from uavcas.ids import baseline
+from uavcas.ids import baseline, baselines, detectors
 from uavcas.ids.classical import GroupedMLPClassifier, LightGBMClassifier
-from uavcas.ids.models import DEEP, MODELS, make_model
+from uavcas.ids.detectors import make_model
 from uavcas.ids.torch_estimator import DL_MISSING, TorchClassifier, import_torch
 
 
 HAS_TORCH = importlib.util.find_spec("torch") is not None
 NEEDS_TORCH = pytest.mark.skipif(not HAS_TORCH, reason="PyTorch not installed (pip install '.[dl]')")
-ALL = [pytest.param(m, marks=NEEDS_TORCH) if m in DEEP else m for m in MODELS]
-DEEP_P = [pytest.param(m, marks=NEEDS_TORCH) for m in DEEP]
+ALL = [pytest.param(s.name, marks=NEEDS_TORCH) if s.needs_torch else s.name for s in baselines()]
+DEEP_P = [pytest.param(s.name, marks=NEEDS_TORCH) for s in detectors() if s.needs_torch]
 
 
 def _data(n=240, seed=0):
@@ -63,23 +63,24 @@ def test_pipeline_with_scaler_and_reproducible(name):
 @pytest.mark.parametrize("name", DEEP_P)
 def test_deep_early_stopping_uses_given_validation(name):
     x, y = _data(seed=2)
-    est = TorchClassifier(arch=name, epochs=3, patience=1, n_threads=1).fit(x[:200], y[:200], X_val=x[200:], y_val=y[200:])
+    est = baseline(name, epochs=3, patience=1, n_threads=1).fit(x[:200], y[:200], X_val=x[200:], y_val=y[200:])
     assert 1 <= est.n_epochs_ <= 3 and all("val_loss" in h for h in est.history_)
 
 
 @NEEDS_TORCH
 def test_device_auto_trains_where_torch_has_a_gpu_and_cpu_forces_the_cpu():
     torch = import_torch()
+    from uavcas.ids.nets import CNN1D
     x, y = _data(seed=3)
-    auto = TorchClassifier(arch="cnn1d", epochs=2, n_threads=1).fit(x, y)
+    auto = TorchClassifier(network=CNN1D, epochs=2, n_threads=1).fit(x, y)
     assert auto.device_ == ("cuda" if torch.cuda.is_available() else "cpu")
-    cpu = TorchClassifier(arch="cnn1d", epochs=2, n_threads=1, device="cpu").fit(x, y)
+    cpu = TorchClassifier(network=CNN1D, epochs=2, n_threads=1, device="cpu").fit(x, y)
     assert cpu.device_ == "cpu" and cpu.predict_proba(x[:5]).shape == (5, 3)
     with pytest.raises(ValueError, match="device 'tpu'"):
-        TorchClassifier(arch="cnn1d", device="tpu").fit(x, y)
+        TorchClassifier(network=CNN1D, device="tpu").fit(x, y)
     if not torch.cuda.is_available():
         with pytest.raises(ValueError, match="sees no CUDA GPU"):
-            TorchClassifier(arch="cnn1d", epochs=1, device="cuda").fit(x, y)
+            TorchClassifier(network=CNN1D, epochs=1, device="cuda").fit(x, y)
     assert make_model("lstm", device="cpu").get_params()["device"] == "cpu"
     assert "device" not in make_model("rf").get_params()
 
@@ -91,11 +92,13 @@ def test_clear_error_without_torch(monkeypatch):
     assert "torch==2.13.0" in DL_MISSING
 
 
-def test_unknown_model_and_arch():
-    with pytest.raises(ValueError, match="unknown model"):
+def test_unknown_model_and_network():
+    with pytest.raises(ValueError, match="unknown detector 'xgboost'; known: lr, sgd, rf"):
         make_model("xgboost")
-    with pytest.raises(ValueError, match="unknown architecture"):
-        TorchClassifier(arch="transformer").fit(*_data())
+    with pytest.raises(ValueError, match="network"):
+        TorchClassifier().fit(*_data())
+    with pytest.raises(ValueError, match="network"):
+        TorchClassifier(network="transformer").fit(*_data())
 
 
 @pytest.mark.parametrize("name", ALL)

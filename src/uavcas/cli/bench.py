@@ -10,6 +10,7 @@ import typer
 
 from uavcas.dataset.read import FORMATS
 from uavcas.flows.assemble import VIEWS
+from uavcas.ids.detectors import KIND_NEEDS, KINDS, baselines, detector, detectors, names
 from uavcas.vocabulary import TORCH_DEVICES
 
 from .common import atomic_write_text, check_output, dataset_argument, err_console, fail, one_of, path_fail
@@ -17,6 +18,18 @@ from .common import atomic_write_text, check_output, dataset_argument, err_conso
 BenchFormat = one_of(("auto", *FORMATS))
 TorchDevice = one_of(TORCH_DEVICES)
 bench_app = typer.Typer(help="Benchmarks on a dataset.", no_args_is_help=True)
+
+
+def _models_help() -> str:
+    """`--models` help, from the detector registry: the names by kind (the paper's baselines
+    starred), what each kind needs."""
+    groups = []
+    for kind in KINDS:
+        listed = ", ".join(s.name + "*" * s.paper_baseline for s in detectors() if s.kind == kind)
+        if listed:
+            groups.append(f"{kind}{f' ({KIND_NEEDS[kind]})' if KIND_NEEDS[kind] else ''}: {listed}")
+    paper = f"the paper's {len(baselines())} baselines, starred"
+    return f"Comma-separated detectors, or all ({paper}). {'; '.join(groups)}."
 
 
 def _parse_holdout(items: list[str]) -> tuple[tuple[str, str], ...]:
@@ -60,13 +73,13 @@ def ids_cmd(
     dataset: Path = dataset_argument("Dataset directory (flows.parquet), the authors' CSV (*_ts.csv) or a CICIDS2017/UNSW-NB15 sample."),
     out: Path = typer.Option(..., "--out", help="Output directory (one sub-directory per protocol when several)."),
     protocol: str = typer.Option("multiclass", "--protocol", help="binary | multiclass | ood | cross-condition, comma-separated, or all."),
-    models: str = typer.Option("all", "--models", help="Comma-separated: lr,sgd,rf,mlp,lightgbm,cnn1d,lstm,convnet,tinyml,cnn_bilstm (all: these ten), context,context-joint,context-flow,context-only (the context-aware detector and its ablation; need the dataset's ctx_* columns)."),
+    models: str = typer.Option("all", "--models", help=_models_help()),
     scaler: str = typer.Option("standard", "--scaler", help="standard | minmax | robust."),
     epochs: int = typer.Option(50, "--epochs", min=1, help="Max epochs of the neural models (early stopping on the grouped validation split)."),
     holdout: list[str] = typer.Option([], "--holdout", help="AXIS=VALUE held out (cross-condition; repeatable)."),
     seeds: str = typer.Option("0,1,2,3,4", "--seeds", help="Comma-separated seeds: one grouped split and model seed each; mean ± std over them."),
     features: str = typer.Option(None, "--features", help="A feature set of the schema (e.g. cic, paper) or comma-separated columns (default: the dataset's)."),
-    importance: bool = typer.Option(True, "--importance/--no-importance", help="Permutation importance of the tree models (RF, LightGBM)."),
+    importance: bool = typer.Option(True, "--importance/--no-importance", help=f"Permutation importance of the tree models ({', '.join(s.display for s in detectors() if s.tree)})."),
     train_cap: int = typer.Option(0, "--train-cap", min=0, help="At most N training (and validation) flows per run and class, seeded (0: all); test flows are never capped."),
     min_class_runs: int = typer.Option(0, "--min-class-runs", min=0, help="Leave out the flows of classes held by fewer than N runs, listed in the notes (0: refuse such a class, naming it)."),
     threads: int = typer.Option(0, "--threads", min=0, help="Threads per model (0: cores available)."),
@@ -80,7 +93,6 @@ def ids_cmd(
     import pandas as pd
 
     from uavcas.dataset.read import load_any
-    from uavcas.ids.models import ALL_MODELS, DEEP, MODELS
     from uavcas.ids.protocols import PROTOCOLS, SCALERS, BenchConfig, execute, prepare
     from uavcas.ids.results import results_frame, write_results
     from uavcas.ids.torch_estimator import DL_MISSING
@@ -89,8 +101,11 @@ def ids_cmd(
     protocols = _parse_list(protocol, PROTOCOLS, "--protocol")
     if scaler not in SCALERS:
         raise fail(f"--scaler: unknown {scaler!r} (known: {', '.join(SCALERS)})")
-    names = MODELS if models.strip() == "all" else _parse_list(models, ALL_MODELS, "--models")
-    if any(m in DEEP for m in names):
+    if models.strip() == "all":
+        chosen = tuple(s.name for s in baselines())
+    else:
+        chosen = _parse_list(models, names(), "--models")
+    if any(detector(m).needs_torch for m in chosen):
         try:
             import torch  # noqa: F401
         except ImportError:
@@ -98,7 +113,7 @@ def ids_cmd(
     feats = None
     if features:
         feats = features.strip() if "," not in features else tuple(f.strip() for f in features.split(",") if f.strip())
-    cfg = BenchConfig(models=names, scaler=scaler, epochs=epochs, seeds=_parse_seeds(seeds),
+    cfg = BenchConfig(models=chosen, scaler=scaler, epochs=epochs, seeds=_parse_seeds(seeds),
                       holdout=_parse_holdout(holdout), features=feats, importance=importance,
                       train_cap=train_cap or None, min_class_runs=min_class_runs, n_threads=threads or None,
                       device=device)
@@ -113,7 +128,7 @@ def ids_cmd(
         res = execute(prep, cfg)
         meta = {"dataset": str(dataset), "scaler": scaler, "epochs": epochs, "seeds": list(cfg.seeds), "device": device,
                 "train_cap": cfg.train_cap, "min_class_runs": cfg.min_class_runs,
-                "models": list(names), "holdout": [f"{a}={v}" for a, v in cfg.holdout],
+                "models": list(chosen), "holdout": [f"{a}={v}" for a, v in cfg.holdout],
                 "absent_features": df.attrs.get("absent_features", [])}
         where = out if len(prepared) == 1 else out / prep.protocol
         write_results(res, where, meta)

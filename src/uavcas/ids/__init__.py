@@ -1,7 +1,7 @@
-"""IDS benchmark: ten baselines and the context-aware detector (with its ablation) as scikit-learn
-estimators (`baseline(name, **params)`), grouped splits repeated over seeds, four protocols, a
-leaderboard."""
+"""IDS benchmark: the registered detectors (`uavcas.ids.detectors`: the paper's ten baselines, the
+context-aware detector and its ablation) as scikit-learn estimators (`baseline(name, **params)`),
+grouped splits repeated over seeds, four protocols, a leaderboard."""
 
-from .models import ALL_MODELS, CONTEXT_MODELS, DISPLAY, MODELS, baseline
+from .detectors import DetectorSpec, baseline, baselines, detector, detectors, names
 
-__all__ = ["ALL_MODELS", "CONTEXT_MODELS", "DISPLAY", "MODELS", "baseline"]
+__all__ = ["DetectorSpec", "baseline", "baselines", "detector", "detectors", "names"]

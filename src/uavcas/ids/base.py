@@ -23,6 +23,7 @@ from sklearn.utils.multiclass import check_classification_targets
 from sklearn.utils.validation import check_is_fitted, validate_data
 
 MIN_HOLDOUT_ROWS = 10  # below this, no row is spared for validation
+PATIENCE = 5  # the paper's early stopping: epochs without a lower validation loss before stopping
 
 
 def stratified_holdout(yi: np.ndarray, fraction: float, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray] | None:
@@ -95,3 +96,14 @@ class EarlyStoppingClassifier(ClassifierMixin, BaseEstimator):
         tags = super().__sklearn_tags__()
         tags.non_deterministic = False  # seeded: same random_state, same model
         return tags
+
+
+def accepts_validation(est: BaseEstimator) -> bool:
+    return isinstance(est, EarlyStoppingClassifier)
+
+
+def fit_model(est: BaseEstimator, X, y, X_val=None, y_val=None) -> BaseEstimator:
+    """Fit, giving the protocol's (grouped) validation split to the models that early-stop on it."""
+    if accepts_validation(est) and X_val is not None and len(X_val):
+        return est.fit(X, y, X_val=X_val, y_val=y_val)
+    return est.fit(X, y)

@@ -19,7 +19,8 @@ perfect and would leave it nothing to learn) and stops on the validation split l
 confidence (tiny gradients and hessians) from taking a huge Newton step: without it two context
 trees flipped every DoS flow of an unseen run to Benign on that subset.
 
-The ablation uses the same learner and settings on other inputs:
+The ablation uses the same learner and settings on other inputs (each variant is a detector
+module of its own, `uavcas.ids.detectors.context*`):
 
 | name | `inputs` | columns it learns from |
 |---|---|---|
@@ -47,11 +48,6 @@ from uavcas.schema import CONTEXT_PREFIX
 from .classical import LightGBMClassifier
 
 INPUTS = ("both", "flow", "context")
-# each variant's parameters of ContextClassifier
-VARIANTS: dict[str, dict] = {
-    "context": {"inputs": "both"}, "context-joint": {"inputs": "both", "residual": False},
-    "context-flow": {"inputs": "flow"}, "context-only": {"inputs": "context"},
-}
 
 
 def select_columns(columns, inputs: str) -> list | None:

@@ -12,12 +12,12 @@ import math
 import numpy as np
 import pandas as pd
 
+from .detectors import detectors
 from .metrics import STEALTH
-from .models import ALL_MODELS, DISPLAY
 
 COLUMNS = ("protocol", "model", "metric", "class", "mean", "std")
 PROTOCOL_ORDER = ("binary", "multiclass", "ood", "cross-condition")
-MODEL_ORDER = [DISPLAY[m] for m in ALL_MODELS]
+MODEL_ORDER = [s.display for s in detectors()]
 # overall columns of each protocol's main table: (metric, class, header)
 MAIN: dict[str, tuple[tuple[str, str, str], ...]] = {
     "binary": (("f1_weighted", "", "weighted F1"), ("f1_macro", "", "macro F1"), ("auroc", "", "AUROC"),

@@ -1,4 +1,5 @@
-"""PyTorch architectures of the five deep baselines (imported only when torch is installed).
+"""PyTorch architectures of the five deep baselines (imported only by their detectors' factories,
+`uavcas.ids.detectors`, when they are built: torch is the optional `dl` extra).
 
 Input: one flow = its scaled feature vector x of length F (47). Convolutional and recurrent
 models read it as a 1-channel sequence of F values, the usual way these papers apply CNNs and
@@ -21,9 +22,11 @@ RNNs to flow statistics. Choices (the paper cites the references but gives no la
 
 from __future__ import annotations
 
-import torch
-from torch import nn
-from torch.nn import functional as F
+from .torch_estimator import import_torch
+
+torch = import_torch()  # without torch: the `dl` extra's install line, not a bare ModuleNotFoundError
+nn = torch.nn
+F = torch.nn.functional
 
 
 def _padded(x: torch.Tensor, length: int) -> torch.Tensor:
@@ -100,7 +103,3 @@ class CNNBiLSTM(nn.Module):
         _, (h, _) = self.lstm(z)
         return self.head(torch.cat([h[-2], h[-1]], dim=1))
 
-
-ARCHITECTURES: dict[str, type[nn.Module]] = {
-    "cnn1d": CNN1D, "lstm": LSTMNet, "convnet": ConvNet, "tinyml": TinyML, "cnn_bilstm": CNNBiLSTM,
-}

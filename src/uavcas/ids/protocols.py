@@ -28,9 +28,10 @@ from threadpoolctl import threadpool_limits
 from uavcas import schema
 from uavcas.vocabulary import families_of
 
+from .base import fit_model
+from .detectors import baselines, detector, make_model
 from .features import context_matrix, feature_matrix, resolve_features
 from .metrics import STEALTH, auroc, class_scores, confusion, pr_auc, scores
-from .models import DEEP, DISPLAY, MODELS, TREES, fit_model, make_model, uses_context
 from .splits import DegenerateSplitError, Split, cap_rows, check_declared, grouped_split, runs_per_class
 from .torch_estimator import default_threads
 
@@ -44,7 +45,7 @@ _DOS = re.compile(r"^dos($|[ _\-])", re.IGNORECASE)  # DoS, 'DoS Hulk', 'DoS-UDP
 
 @dataclass
 class BenchConfig:
-    models: tuple[str, ...] = MODELS
+    models: tuple[str, ...] = field(default_factory=lambda: tuple(s.name for s in baselines()))  # detector names
     scaler: str = "standard"
     epochs: int = 50
     seeds: tuple[int, ...] = DEFAULT_SEEDS
@@ -263,7 +264,7 @@ def _split_rows(task: Task, seed: int, sp: Split) -> list[SplitRow]:
 def _inputs(task: Task, name: str, features: list[str]) -> tuple[np.ndarray, list[str] | None]:
     """A model's matrix and, for the context models (which select their inputs by name), its
     column names: the flow features followed by the context columns."""
-    if not uses_context(name):
+    if not detector(name).uses_context:
         return task.x, None
     return np.hstack([task.x, task.x_ctx]), features + list(schema.CONTEXT_FEATURES)
 
@@ -276,8 +277,9 @@ def _fit_one(res: ProtocolResult, task: Task, sp: Split, name: str, seed: int, c
     def tf(rows):
         z = np.clip(scaler.transform(x[rows]), -1e6, 1e6).astype(np.float32)
         return z if names is None else pd.DataFrame(z, columns=names)
+    spec = detector(name)
     est = make_model(name, random_state=seed, epochs=cfg.epochs, n_threads=cfg.n_threads, device=cfg.device)
-    model = DISPLAY[name]
+    model = spec.display
     # why: BLAS/OpenMP pools default to all cores and busy-wait; on a shared 2-core machine
     # oversubscription makes a 1-second fit take 10
     with threadpool_limits(limits=cfg.n_threads or default_threads()):
@@ -287,9 +289,9 @@ def _fit_one(res: ProtocolResult, task: Task, sp: Split, name: str, seed: int, c
         seconds = time.perf_counter() - t0
         res.add(seed, model, rows)
         res.confusion[(seed, model)] = confusion(task.y[main], pred, task.declared)
-        if cfg.importance and name in TREES:
+        if cfg.importance and spec.tree:
             res.importance += _importance(est, tf, task, main, seed, model, cfg, names or res.features)
-    epochs = getattr(est, "n_iter_", None) if name in ("mlp",) + DEEP else None
+    epochs = getattr(est, "n_iter_", None) if spec.epoch_param else None
     res.fits.append(Fit(seed, model, seconds, None if epochs is None else int(epochs), getattr(est, "device_", "cpu")))
     res.add(seed, model, [("fit_s", "", seconds)] + ([("epochs", "", epochs)] if epochs is not None else []))
     if cfg.progress:
@@ -357,7 +359,7 @@ def prepare(df: pd.DataFrame, protocol: str, cfg: BenchConfig) -> Prepared:
     df = _drop_rare_classes(df, cfg.min_class_runs, notes).reset_index(drop=True)
     features = resolve_features(df, cfg.features)
     task = PREPARE[protocol](df, feature_matrix(df, features), notes, cfg)
-    if any(uses_context(m) for m in cfg.models):
+    if any(detector(m).uses_context for m in cfg.models):
         task.x_ctx = context_matrix(df)
     splits = {seed: task.split(seed) for seed in cfg.seeds}
     source = df.attrs.get("source")

@@ -1,4 +1,6 @@
-"""`TorchClassifier`: a scikit-learn estimator around the PyTorch baselines of `nets.py`.
+"""`TorchClassifier`: a scikit-learn estimator around a PyTorch network (`network`: a class or
+callable `(n_features, n_classes) -> torch.nn.Module`, e.g. one of `nets.py`; each deep detector
+of `uavcas.ids.detectors` names its own).
 
 Training follows the paper's protocol: Adam (lr 1e-3), batch 128, 50 epochs by default, cross-
 entropy, early stopping on the validation split: stop after `patience` (5) epochs without a lower
@@ -18,6 +20,8 @@ from __future__ import annotations
 
 import copy
 import os
+from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 
@@ -57,11 +61,11 @@ class TorchClassifier(EarlyStoppingClassifier):
     _dtype = np.float32
 
     def __init__(
-        self, arch: str = "cnn1d", epochs: int = 50, batch_size: int = 128, lr: float = 1e-3,
-        patience: int = 5, validation_fraction: float = 0.1, random_state: int | None = 0,
+        self, network: Callable[[int, int], Any] | None = None, epochs: int = 50, batch_size: int = 128,
+        lr: float = 1e-3, patience: int = 5, validation_fraction: float = 0.1, random_state: int | None = 0,
         n_threads: int | None = None, device: str = "auto", verbose: int = 0,
     ) -> None:
-        self.arch = arch
+        self.network = network
         self.epochs = epochs
         self.batch_size = batch_size
         self.lr = lr
@@ -87,10 +91,8 @@ class TorchClassifier(EarlyStoppingClassifier):
         return dev
 
     def fit(self, X, y, X_val=None, y_val=None):
-        from .nets import ARCHITECTURES
-
-        if self.arch not in ARCHITECTURES:
-            raise ValueError(f"unknown architecture {self.arch!r}; known: {sorted(ARCHITECTURES)}")
+        if not callable(self.network):
+            raise ValueError(f"network: expected a torch.nn.Module class or builder, got {self.network!r}")
         if self.device not in DEVICES:
             raise ValueError(f"device {self.device!r}: expected one of {', '.join(DEVICES)}")
         return super().fit(X, y, X_val=X_val, y_val=y_val)
@@ -106,10 +108,8 @@ class TorchClassifier(EarlyStoppingClassifier):
             torch.use_deterministic_algorithms(was_det)
 
     def _train(self, torch, X, yi, X_val, yv, rng) -> None:
-        from .nets import ARCHITECTURES
-
         dev = self.device_ = self._device(torch)
-        model = ARCHITECTURES[self.arch](X.shape[1], len(self.classes_)).to(dev)
+        model = self.network(X.shape[1], len(self.classes_)).to(dev)
         opt = torch.optim.Adam(model.parameters(), lr=self.lr)
         loss_fn = torch.nn.CrossEntropyLoss()
         # copies: the caller's array may be read-only (memory-mapped); on the device once, not per batch
@@ -144,7 +144,7 @@ class TorchClassifier(EarlyStoppingClassifier):
                     bad += 1
             self.history_.append(rec)
             if self.verbose:
-                print(f"[{self.arch}] {rec}")
+                print(f"[{getattr(self.network, '__name__', self.network)}] {rec}")
             if has_val and bad >= self.patience:
                 break
         if best_state is not None:

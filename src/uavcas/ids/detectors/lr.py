@@ -1,0 +1,17 @@
+"""LR: logistic regression, a paper baseline (Hassler et al. 2024)."""
+
+from __future__ import annotations
+
+from .registry import register
+from .spec import DetectorSpec
+
+
+def _factory():
+    # scikit-learn is imported when the detector is built, not with the registry (the CLI reads it)
+    from sklearn.linear_model import LogisticRegression
+
+    return LogisticRegression(max_iter=1000, random_state=0)
+
+
+SPEC = register(DetectorSpec(name="lr", display="LR", kind="classical", factory=_factory, order=10,
+                             paper_baseline=True))

@@ -1,0 +1,20 @@
+"""TinyML: a microcontroller-sized dense network (Wu et al. 2024), a paper baseline; the network is
+`uavcas.ids.nets.TinyML`, trained by `uavcas.ids.torch_estimator.TorchClassifier`."""
+
+from __future__ import annotations
+
+from .registry import register
+from .spec import DetectorSpec
+
+
+def _factory():
+    # torch (the optional `dl` extra) is imported when the detector is built, never with the registry
+    from uavcas.ids.base import PATIENCE
+    from uavcas.ids.nets import TinyML
+    from uavcas.ids.torch_estimator import TorchClassifier
+
+    return TorchClassifier(network=TinyML, epochs=50, patience=PATIENCE)
+
+
+SPEC = register(DetectorSpec(name="tinyml", display="TinyML", kind="deep", factory=_factory, order=90,
+                             epoch_param="epochs", thread_param="n_threads", paper_baseline=True))
