@@ -7,10 +7,10 @@ Rules (paper, section 'Attack Implementation', and what its code should have don
 - an attack lasts 10-20 s (clipped to the run) and starts at a seeded offset, so attacks do not
   always begin at t = 0;
 - a run may hold several attack *episodes* (`episodes`, default 1 as in the paper): the
-  composition again, later in the run, on a victim not attacked before and attackers
-  drawn afresh. Episodes never
-  overlap and are at least `EPISODE_GAP_S` apart, so one episode's aftermath (a flood victim's
-  SYN-ACK retransmissions, a replayed exchange's answers) is over before the next begins. Why:
+  composition again, later in the run, on a victim not attacked before and attackers drawn
+  afresh. Episodes never overlap and are at least `EPISODE_GAP_S` apart, so one episode's
+  aftermath (a flood victim's SYN-ACK retransmissions, a replayed exchange's answers) is over
+  before the next begins. Why:
   a collaborative class lives on the victim host in the windows where both attacks meet, about
   four windows per episode; one episode per run leaves the medium preset's classes at ~16
   window-host rows over its four runs, where the benchmark needs 30;
@@ -47,7 +47,7 @@ def episode_intervals(duration_s: float, episodes: int, rng: np.random.Generator
         return [(round(start, 3), round(min(start + length, duration_s), 3))]
     if episodes < 1:
         raise EpisodeError(f"episodes must be >= 1, got {episodes}")
-    # every episode keeps the 10-20 s rule; the longest is shortened so that all of them fit
+    # every episode keeps the 10 s minimum; the 20 s maximum is lowered (for all) so that they fit
     cap = min(ATTACK_MAX_S, (duration_s - (episodes - 1) * EPISODE_GAP_S) / episodes)
     if cap < ATTACK_MIN_S:
         raise EpisodeError(f"{episodes} attack episodes of >= {ATTACK_MIN_S:g} s, {EPISODE_GAP_S:g} s apart, "
