@@ -1,7 +1,8 @@
 """The extraction stage: `extract(run_dir) -> Shard`, one run's labelled flows with their axes.
 
-Captures -> flows (`uavcas.flows`) -> every packet followed across the switches
-(`uavcas.flows.follow`) -> one effect per packet and labels from them (`uavcas.labels`) -> identity
+Captures -> every packet followed across the switches (`uavcas.flows.follow`) -> flows
+(`uavcas.flows`; each transmission counted once, even one that missed its flow's vantage point)
+-> one effect per packet and labels from them (`uavcas.labels`) -> identity
 and axis columns from the plan's typed scenario (nothing here parses the config string). Writing
 the shard and the dataset card is `uavcas.dataset.store`'s job.
 
@@ -10,7 +11,10 @@ Only complete runs are extracted: run.json present with exit status 0. A run tha
 its shard then says so (`complete: false`, `run_exit_status`), as does the dataset card.
 
 The context columns (`ctx_*`, `uavcas.flows.context`) are computed from the captures and flows
-alone, before anything reads the plan's attacks or the attack log.
+alone, before anything reads the plan's attacks or the attack log. (The flows' vantage rule asks
+the follower which observations are one transmission; the follower chains them along the
+forwarding the run held, a wormhole's tables included, and reads no attack log or truth. What it
+changes is which observation of a packet a flow keeps, never a feature's formula.)
 """
 
 from __future__ import annotations
@@ -23,7 +27,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pandas as pd
 
-from uavcas.flows import DEFAULT_STANDARD, VIEWS, FlowConfig, Flows, PacketTable, extract_flows
+from uavcas.flows import DEFAULT_STANDARD, VIEWS, FlowConfig, Flows, PacketTable, flows_of, read_packets
 from uavcas.flows.context import CONTEXT_WINDOW_S, context_frames
 from uavcas.flows.follow import Followed, follow_run
 from uavcas.labels import PacketTruth, TruthContext, label_flows, packet_truth, read_attack_log, rule_text
@@ -142,10 +146,12 @@ def extract_detailed(
         raise RunDirError(f"{rd.root}: {problem}; extract it anyway with --allow-incomplete (marked incomplete)")
     cfg = FlowConfig(view="5tuple" if episodes else view, termination=termination,  # type: ignore[arg-type]
                      min_packets=min_packets, window_t0_unix=t0, window_s=plan.window_s)
-    ex = extract_flows(pcaps, cfg, points=[p.stem for p in pcaps], allow_truncated=allow_truncated, standard=features)
+    packets = read_packets(pcaps, points=[p.stem for p in pcaps], allow_truncated=allow_truncated)
+    _, followed = follow_run(rd.root, table=packets)  # the captures and the forwarding the run held
+    ex = flows_of(packets, cfg, transmissions=followed.pid, standard=features)
     # from the captures and flows only: computed before the attack log is even read
     ctx, routes = context_frames(ex.packets, ex.flows) if context else (None, None)
-    log, followed, truth = run_truth(rd, ex.packets, plan, t0)
+    log, followed, truth = run_truth(rd, ex.packets, plan, t0, followed)
     if episodes:  # the 5-tuple flows first, then their packets and flows per node and window
         ff = ex.frame.reset_index(drop=True)
         if ctx is not None:
@@ -173,7 +179,7 @@ def extract_detailed(
             view=view,
             labels=labels,
             features=features,
-            flow_rules=cfg.describe(),
+            flow_rules={**cfg.describe(), "missed_transmissions": "kept once, at their last observation"},
             min_packets=cfg.effective_min_packets,
             n_packets=len(ex.packets),
             n_flows=len(df),
@@ -212,10 +218,12 @@ def run_inputs(rd: RunDir) -> tuple["Plan", list[Path], float]:
     return plan, pcaps, t0
 
 
-def run_truth(rd: RunDir, packets: PacketTable, plan: "Plan", t0: float):
-    """The attack log, the followed transmissions and every packet's truth (`labels.effects`)."""
+def run_truth(rd: RunDir, packets: PacketTable, plan: "Plan", t0: float, followed: Followed | None = None):
+    """The attack log, the followed transmissions (unless given) and every packet's truth
+    (`labels.effects`)."""
     log = read_attack_log(rd.attacks_jsonl, plan, t0)
-    _, followed = follow_run(rd.root, table=packets)
+    if followed is None:
+        _, followed = follow_run(rd.root, table=packets)
     return log, followed, packet_truth(TruthContext(packets, log, followed, plan, t0))
 
 

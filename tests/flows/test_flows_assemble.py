@@ -5,9 +5,10 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 import pytest
+from scapy.layers.inet import IP
 
 from helpers.pcapgen import A, B, C, http_session, ipv6_session, syn_flood, tcp, udp, write
-from uavcas.flows import FlowConfig, StreamReport, extract_flows, iter_flow_frames
+from uavcas.flows import FlowConfig, StreamReport, extract_flows, flows_of, iter_flow_frames, read_packets
 
 # one flow per key: the paper's granularity, used where a test is about keys, not termination
 WHOLE = dict(termination="timeout", idle_timeout_s=0, active_timeout_s=0)
@@ -80,6 +81,31 @@ def test_vantage_point_dedup(tmp_path):
     assert tie.capture_point == "s-c" and tie.packets == len(s)  # ties: alphabetically first
     both = extract_flows([w1, w2], FlowConfig(dedup=False, **WHOLE)).frame.iloc[0]
     assert both.packets == 2 * len(s) - 1
+
+
+def test_vantage_point_keeps_transmissions_that_missed_it(tmp_path):
+    # The blackhole + replay case: the victim A's originals die at its own switch (s-a: 6 packets,
+    # the most), its replayer's copies (TTL 59) leave from another switch (s-r) and reach B's (s-b).
+    orig = [udp(0.1 * i, A, B, 4000, 5600) for i in range(6)]
+    copies = [udp(0.25 + 0.2 * i, A, B, 4000, 5600) for i in range(2)]
+    for k, c in enumerate(copies):
+        c[IP].ttl, c[IP].id = 59, 100 + k
+    at_r = [c.copy() for c in copies]
+    at_b = [c.copy() for c in copies]
+    for c in at_b:
+        c.time += 0.003
+    paths = [write(tmp_path / "s-a.pcap", orig), write(tmp_path / "s-b.pcap", at_b), write(tmp_path / "s-r.pcap", at_r)]
+    packets = read_packets(paths, points=["s-a", "s-b", "s-r"])
+    cfg = FlowConfig(**WHOLE)
+    assert flows_of(packets, cfg).frame.packets.tolist() == [6]  # one point alone: the copies are lost
+    # one id per transmission (what the follower gives): originals 0..5, each copy one id at s-r and s-b
+    tid = np.where(packets["ttl"] == 59, 6 + packets["ip_id"].astype(np.int64) - 100, np.arange(len(packets)))
+    fr = flows_of(packets, cfg, transmissions=tid)
+    assert fr.frame.packets.tolist() == [8]  # every transmission once
+    kept = fr.flows.order
+    assert sorted(packets.points[i] for i in packets["point"][kept]) == ["s-a"] * 6 + ["s-b"] * 2  # copies at their last point
+    with pytest.raises(ValueError, match="one id per packet"):
+        flows_of(packets, cfg, transmissions=tid[:-1])
 
 
 def test_ipv6_flow(tmp_path):

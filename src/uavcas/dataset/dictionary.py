@@ -50,7 +50,8 @@ _IDS: dict[str, tuple[str, str]] = {
     "first_ts": ("s", "Unix time of the first packet (float64: rounded to about 0.2 us)"),
     "last_ts": ("s", "Unix time of the last packet (float64: rounded to about 0.2 us)"),
     "first_ts_ns": ("ns", "Unix time of the first packet, exact; packet k is at first_ts_ns + seq_time_s[k] x 1e9"),
-    "capture_point": (NO_UNIT, "the switch whose capture holds the row's packets (s-<node>)"),
+    "capture_point": (NO_UNIT, "the flow's vantage switch (s-<node>): its capture holds the row's packets, except a "
+                      "transmission that never crossed it, kept at its last switch"),
     "host": (NO_UNIT, "the plan node (UAV or base station) the episode is about"),
     "host_ip": (NO_UNIT, "the node's address"),
     "window": (NO_UNIT, "plan window index: floor((t - t0) / window_s)"),
@@ -67,7 +68,8 @@ _AXES: dict[str, tuple[str, str]] = {
     "noise_dbm": ("dBm", "noise floor (the scenario's 95 is -95.0)"),
 }
 _COUNTS: dict[str, tuple[str, str]] = {
-    "packets": ("packets", "packets of the row (flows: at its capture point; episodes: sent or received by the node)"),
+    "packets": ("packets", "packets of the row (flows: each transmission once, at the capture point when it crossed it; "
+                "episodes: sent or received by the node)"),
     "bytes": ("bytes", "sum of the flow's frame lengths (link-layer, as tshark frame.len)"),
     "duration_s": ("s", "last packet time - first packet time"),
 }

@@ -5,7 +5,7 @@
 groups packets into flows (termination.py: the `connection`, `cic` and `timeout` policies),
 `flow_frame` (features.py) computes one row per flow with the features of a standard
 (`standards`: one module per standard; cic: CICFlowMeter's, paper: the authors'). `extract_flows`
-chains the three in memory (the extraction stage needs the packets for its labels);
+(`flows_of` for a table already read) chains the three in memory (the extraction stage needs the packets for its labels);
 `iter_flow_frames` (stream.py) streams one capture with bounded memory.
 """
 
@@ -28,7 +28,7 @@ from .termination import TERMINATIONS
 __all__ = [
     "CSV_LEAD_COLUMNS", "MAX_PACKETS_PER_FLOW", "TERMINATIONS", "VIEWS", "CaptureError",
     "CaptureStats", "Extraction", "FlowConfig", "Flows", "PacketTable", "StreamReport", "assemble",
-    "extract_flows", "flow_frame", "iter_flow_frames", "read_packets",
+    "extract_flows", "flow_frame", "flows_of", "iter_flow_frames", "read_packets",
 ]  # fmt: skip
 
 
@@ -48,5 +48,16 @@ def extract_flows(
     standard: str = DEFAULT_STANDARD,
 ) -> Extraction:
     packets = read_packets(paths, points=points, allow_truncated=allow_truncated)
-    flows = assemble(packets, config)
+    return flows_of(packets, config, sequences=sequences, standard=standard)
+
+
+def flows_of(
+    packets: PacketTable,
+    config: FlowConfig = FlowConfig(),
+    transmissions=None,
+    sequences: bool = True,
+    standard: str = DEFAULT_STANDARD,
+) -> Extraction:
+    """Flows and their rows from a packet table already read (`transmissions`: `assemble`'s)."""
+    flows = assemble(packets, config, transmissions=transmissions)
     return Extraction(packets, flows, flow_frame(packets, flows, sequences=sequences, standard=standard))

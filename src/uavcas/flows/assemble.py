@@ -9,7 +9,12 @@ Rules, in the order they are applied:
 2. Vantage point (de-duplication). A packet crossing several switches is captured once per
    switch. For each key we keep the packets of ONE capture point: the point that saw the most
    packets of that key, ties broken by the point name (alphabetically first). Counts and bytes
-   are therefore those of a single, real observation, never a sum of copies.
+   are therefore those of a single, real observation, never a sum of copies. When the run's
+   transmissions are known (`transmissions`: the follower's `pid`, as the extraction stage gives
+   it), a transmission of the key that never crossed that point is kept once too, at its last
+   observation: a replayed copy sent from the attacker's side while the victim's originals die at
+   a blackhole, a packet of a detour or a route change, one lost on a link before the point. So
+   every transmitted packet of a key counts exactly once; one point alone could not see them all.
 3. Order. Packets of a key are ordered by time (integer ns), then capture point, then record number.
 4. Termination: a named policy (`uavcas.flows.termination`) cuts a key's packets into flows.
    `connection` (the 5-tuple default): one TCP connection is one flow; it closes on RST or once
@@ -221,8 +226,11 @@ def _key_codes(p: PacketTable, view: str, cfg: FlowConfig | None = None) -> tupl
     return codes, src_is_a
 
 
-def _choose_vantage(code: np.ndarray, point: np.ndarray, names: tuple[str, ...]) -> np.ndarray:
-    """Mask of packets seen at their key's chosen capture point (most packets, ties by name)."""
+def _choose_vantage(code: np.ndarray, point: np.ndarray, names: tuple[str, ...],
+                    transmissions: np.ndarray | None = None, ts_ns: np.ndarray | None = None) -> np.ndarray:
+    """Mask of packets seen at their key's chosen capture point (most packets, ties by name), and
+    with `transmissions` (a transmission id per row) the last observation of each transmission
+    that never crossed its key's point."""
     n_points = len(names)
     if n_points <= 1:
         return np.ones(code.shape[0], dtype=bool)
@@ -230,7 +238,18 @@ def _choose_vantage(code: np.ndarray, point: np.ndarray, names: tuple[str, ...])
     n_keys = int(code.max()) + 1 if code.shape[0] else 0
     counts = np.bincount(code * n_points + rank[point], minlength=n_keys * n_points).reshape(n_keys, n_points)
     best_rank = counts.argmax(axis=1)  # argmax returns the first maximum = the smallest name
-    return rank[point] == best_rank[code]
+    keep = rank[point] == best_rank[code]
+    if transmissions is None or not code.shape[0]:
+        return keep
+    tid = np.asarray(transmissions, dtype=np.int64)
+    if tid.shape != code.shape or ts_ns is None:
+        raise ValueError(f"transmissions: one id per packet expected ({code.shape[0]}), got {tid.shape}")
+    crossed = np.zeros(int(tid.max()) + 1, dtype=bool)
+    crossed[tid[keep]] = True
+    by_tid = np.lexsort((ts_ns, tid))  # each transmission's observations in time order
+    last = np.zeros(code.shape[0], dtype=bool)
+    last[by_tid[np.r_[np.flatnonzero(tid[by_tid][1:] != tid[by_tid][:-1]), by_tid.shape[0] - 1]]] = True
+    return keep | (last & ~crossed[tid])
 
 
 def _key_packets(p: PacketTable, order: np.ndarray, code: np.ndarray, src_is_a: np.ndarray) -> KeyPackets:
@@ -251,14 +270,16 @@ def _cuts(kp: KeyPackets, cfg: FlowConfig) -> Cuts:
     return timeout_cuts(kp, cfg.idle_ns, cfg.active_ns)
 
 
-def assemble(p: PacketTable, cfg: FlowConfig = FlowConfig()) -> Flows:
-    """Group the packets of `p` into flows following the module rules."""
+def assemble(p: PacketTable, cfg: FlowConfig = FlowConfig(), transmissions: np.ndarray | None = None) -> Flows:
+    """Group the packets of `p` into flows following the module rules (`transmissions`: one
+    transmission id per packet, `flows.follow`'s pid, for rule 2's missed transmissions)."""
     n = len(p)
     if n == 0:
         z = np.zeros(0, dtype=np.int64)
         return Flows(z, z, np.zeros(0, dtype=bool), np.zeros(1, dtype=np.int64), z, cfg, z, z)
     code, src_is_a = _key_codes(p, cfg.view, cfg)
-    keep = _choose_vantage(code, p["point"], p.points) if cfg.dedup else np.ones(n, dtype=bool)
+    keep = (_choose_vantage(code, p["point"], p.points, transmissions, p["ts_ns"]) if cfg.dedup
+            else np.ones(n, dtype=bool))
     idx = np.flatnonzero(keep)
     order = idx[np.lexsort((p["frame_index"][idx], p["point"][idx], p["ts_ns"][idx], code[idx]))]
     cut = _cuts(_key_packets(p, order, code, src_is_a), cfg)

@@ -9,7 +9,8 @@ traffic in one plan window. A victim hit by a blackhole and a flood in one windo
 
 Rules (`host_window_frame`):
 - Packets: the observations the 5-tuple flows kept (`Flows.order`: one capture point per flow,
-  so a packet seen at three switches counts once), each placed in window
+  and a transmission that missed it at its last one, so a packet seen at three switches counts
+  once), each placed in window
   k = floor((t - t0) / window_s), clipped to the plan's windows as `TruthContext.window` places
   packets for the attack rules (traffic before t = 0 counts in window 0, after the last window in
   the last one). A packet belongs to the episode of its source node (sent, `_out`) and to that of
