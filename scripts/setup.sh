@@ -64,6 +64,6 @@ if [[ "${UAVCAS_NO_APT:-0}" != "1" && "${UAVCAS_NO_VM:-0}" != "1" && "$(id -u)" 
     && command -v apt-get >/dev/null; then
   # the kernel `uavcas doctor --vm` boots: apt-get download + dpkg -x + depmod + initramfs;
   # does nothing when the current one is already there
-  .venv/bin/python -m uavcas.emulation.vm prepare
+  .venv/bin/python -m uavcas.diagnostics.vm prepare
 fi
 log "ready: $(.venv/bin/uavcas --version)"

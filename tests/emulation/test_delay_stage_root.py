@@ -13,7 +13,8 @@ from pathlib import Path
 
 import pytest
 
-from uavcas.emulation import Emulation, kernel, new_prefix, nfqdelay, selftest
+from uavcas.diagnostics import selftest
+from uavcas.emulation import Emulation, kernel, new_prefix, nfqdelay
 from uavcas.twin import model
 
 pytestmark = pytest.mark.root

@@ -14,7 +14,6 @@ from uavcas.emulation.controller import Detour, adjacency, compute, shortest_pat
 from uavcas.emulation.hosts import host_lines, HostSpec, node_argv, subnet_prefixlen
 from uavcas.emulation.naming import Naming
 from uavcas.emulation.nfqdelay import verdict_msg
-from uavcas.emulation.selftest import binomial_interval, loss_check, HopConfig
 from uavcas.emulation.shaping import (FallbackShaper, NetemShaper, Shape, nft_loss_lines, nft_port_init_lines,
                                       nft_table_ruleset,
                                       parse_tc_rate,
@@ -188,16 +187,6 @@ def test_verdict_message_layout():
     assert length == len(msg) == 32 and kind == 0x301 and flags == 1
     assert msg[18:20] == b"\x00\x03"  # res_id is the queue number, big-endian
     assert msg[-8:] == struct.pack("!II", 1, 0x01020304)  # NF_ACCEPT, packet id
-
-
-def test_loss_tolerance_is_binomial_99():
-    lo, hi = binomial_interval(3000, 0.0494)
-    assert lo < 0.0494 < hi and hi - lo < 0.025
-    hops = [HopConfig(10, 1, 0.02), HopConfig(10, 1, 0.03)]
-    c = loss_check(0.05, 3000, hops)
-    assert c.expected == pytest.approx(4.94) and c.ok
-    wide = loss_check(0.05, 3000, hops, confidence=0.9999)
-    assert wide.low < c.low < c.high < wide.high and not loss_check(0.07, 3000, hops, 0.9999).ok
 
 
 # registry --------------------------------------------------------------------------------------------

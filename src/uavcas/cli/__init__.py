@@ -17,8 +17,9 @@ from . import bench as _bench
 from . import calibrate as _calibrate
 from . import campaign as _campaign
 from . import channel as _channel
+from . import clean as _clean
 from . import dataset as _dataset
-from . import emulate as _emulate
+from . import doctor as _doctor
 from . import flows as _flows
 from . import mavlink as _mavlink
 from . import plan as _plan
@@ -65,7 +66,7 @@ app = typer.Typer(
     pretty_exceptions_enable=False,
 )
 
-for _module in (_plan, _campaign, _dataset, _flows, _emulate, _analyze, _bench, _report, _run, _calibrate,
+for _module in (_plan, _campaign, _dataset, _flows, _doctor, _clean, _analyze, _bench, _report, _run, _calibrate,
                 _channel, _audit, _mavlink, _publish):
     _module.register(app)
 

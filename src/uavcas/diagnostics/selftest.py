@@ -8,7 +8,7 @@ Measured end to end with small Python endpoints started inside the namespaces:
   kernel's receive timestamp) vs the sum of the hops' delays: median, p90 and p99;
 * UDP loss vs 1 - prod(1 - loss_hop), judged against the binomial 99 % interval.
 
-Endpoints: python -m uavcas.emulation.selftest {tcp-sink,tcp-source,udp-sink,udp-source} ...
+Endpoints: python -m uavcas.diagnostics.selftest {tcp-sink,tcp-source,udp-sink,udp-source} ...
 """
 
 from __future__ import annotations
@@ -186,7 +186,7 @@ def udp_source(dst: str, port: int, count: int, pps: float, size: int) -> dict:
 
 # orchestration (from the parent, through an Emulation) -----------------------------------------
 def _endpoint(emu, node: str, args: list[str], timeout_s: float) -> subprocess.Popen:
-    return emu.popen(node, [sys.executable, "-m", "uavcas.emulation.selftest", *args], timeout_s=timeout_s,
+    return emu.popen(node, [sys.executable, "-m", "uavcas.diagnostics.selftest", *args], timeout_s=timeout_s,
                      stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
 
 

@@ -143,7 +143,7 @@ class ContentionProbe:
         self._proc: subprocess.Popen | None = None
 
     def __enter__(self) -> "ContentionProbe":
-        self._proc = subprocess.Popen([sys.executable, "-m", "uavcas.emulation.contention"], stdin=subprocess.PIPE,
+        self._proc = subprocess.Popen([sys.executable, "-m", "uavcas.diagnostics.contention"], stdin=subprocess.PIPE,
                                       stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True,
                                       start_new_session=True)
         self._t0 = time.monotonic()

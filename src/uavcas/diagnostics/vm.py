@@ -35,7 +35,7 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
-from . import kernel
+from uavcas.emulation import kernel
 
 VM_DIR = Path(os.environ.get("UAVCAS_VM_DIR", "/var/cache/uavcas/vm"))
 META_PACKAGE = "linux-image-amd64"
@@ -342,7 +342,7 @@ def doctor_in_vm(accel: str = "auto", timeout_s: float = TIMEOUT_S, log=lambda s
     out_dir.mkdir(parents=True, exist_ok=True)
     try:
         def args(acc: str) -> list[str]:  # an emulated CPU gets the light profile
-            return ["-m", "uavcas.emulation.doctor", "--json", f"{GUEST_OUT}/doctor.json", "--profile",
+            return ["-m", "uavcas.diagnostics.doctor", "--json", f"{GUEST_OUT}/doctor.json", "--profile",
                     "native" if acc == "kvm" else "emulated-cpu"]
 
         run = run_in_vm(args, out_dir, accel, timeout_s, log)
@@ -362,7 +362,7 @@ def doctor_in_vm(accel: str = "auto", timeout_s: float = TIMEOUT_S, log=lambda s
 def main(argv: list[str] | None = None) -> None:
     args = argv if argv is not None else sys.argv[1:]
     if args != ["prepare"]:
-        raise SystemExit("usage: python -m uavcas.emulation.vm prepare")
+        raise SystemExit("usage: python -m uavcas.diagnostics.vm prepare")
     k = prepare(lambda s: print(f"[vm] {s}", file=sys.stderr))
     print(f"[vm] guest kernel {k.version} ready under {k.root}", file=sys.stderr)
 

@@ -12,11 +12,12 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+from uavcas.emulation.emulation import Emulation
+from uavcas.emulation.naming import new_prefix
+from uavcas.emulation.probe import Features, probe
+
 from . import selftest
 from .contention import Contention, ContentionProbe
-from .emulation import Emulation
-from .naming import new_prefix
-from .probe import Features, probe
 from .selftest import Check, DelayTolerance, HopConfig
 
 
@@ -143,7 +144,7 @@ def run_doctor(prefix: str | None = None, measure: bool = True, backend: str | N
 
 
 def main(argv: list[str] | None = None) -> None:
-    """`python -m uavcas.emulation.doctor --json FILE`: the measurement alone, as JSON (what the
+    """`python -m uavcas.diagnostics.doctor --json FILE`: the measurement alone, as JSON (what the
     VM guest runs: the CLI would import every sub-command on a slow emulated CPU)."""
     import argparse
     import json

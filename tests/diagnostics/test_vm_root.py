@@ -16,7 +16,7 @@ from pathlib import Path
 
 import pytest
 
-from uavcas.emulation import vm
+from uavcas.diagnostics import vm
 
 pytestmark = pytest.mark.root
 UAVCAS = str(Path(sys.executable).parent / "uavcas")

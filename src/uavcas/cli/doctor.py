@@ -1,4 +1,5 @@
-"""`uavcas doctor` and `uavcas clean`: the emulation core's own commands."""
+"""`uavcas doctor`: kernel features, the chosen shaper, tools, and the two-hop self-test
+(`uavcas.diagnostics`), natively or in a VM guest."""
 
 from __future__ import annotations
 
@@ -27,7 +28,7 @@ def doctor(
                                                          help="auto (KVM if it boots, else TCG), kvm or tcg."),
 ) -> None:
     """Report kernel features, the chosen shaper and tools; measure a two-hop shaped path."""
-    from uavcas.emulation.doctor import run_doctor
+    from uavcas.diagnostics.doctor import run_doctor
     from uavcas.emulation.naming import check_prefix
 
     if json_out is not None:
@@ -62,8 +63,8 @@ def doctor(
 
 
 def _doctor_vm(accel: str, json_out: Path | None) -> None:
-    from uavcas.emulation import contention, vm
-    from uavcas.emulation.doctor import DoctorResult
+    from uavcas.diagnostics import contention, vm
+    from uavcas.diagnostics.doctor import DoctorResult
 
     if accel not in ("auto", "kvm", "tcg"):
         raise fail(f"--vm-accel: {accel!r} is not one of auto, kvm, tcg")
@@ -137,39 +138,9 @@ def _print_measurement(res) -> None:
         console.print(f"[yellow]warning:[/] {escape(w)}", highlight=False)
 
 
-def clean(
-    prefix: str = typer.Option(None, "--prefix", help="Only this run's prefix (default: every dead registered run)."),
-    force: bool = typer.Option(False, "--force", help="Also clean a run that is still alive."),
-) -> None:
-    """Remove what crashed emulation runs left: processes, namespaces (with their links and rules), cgroups."""
-    from uavcas.emulation.cleanup import clean as do_clean
-    from uavcas.emulation.naming import check_prefix
-
-    if os.geteuid() != 0:
-        raise fail("clean needs root")
-    if prefix is not None:
-        try:
-            check_prefix(prefix)
-        except ValueError as e:
-            raise fail(f"--prefix: {e}") from None
-    reports = do_clean(prefix, force=force)
-    if not reports:
-        console.print("nothing to clean")
-    for r in reports:
-        if r.skipped_live:
-            console.print(f"{r.prefix}: live run, skipped (use --force)")
-        elif r.error is None:
-            console.print(f"{r.prefix}: removed {len(r.namespaces)} namespaces, killed {len(r.killed_pids)} "
-                          f"processes, removed {len(r.cgroups)} cgroups")
-    failed = [r for r in reports if r.error is not None]
-    if failed:
-        raise fail("; ".join(f"{r.prefix}: {r.error}" for r in failed) + " (run `uavcas clean` again)", code=1)
-
-
 def _yes(v: bool) -> str:
     return "[green]yes[/]" if v else "[red]no[/]"
 
 
 def register(app: typer.Typer) -> None:
     app.command("doctor")(doctor)
-    app.command("clean")(clean)

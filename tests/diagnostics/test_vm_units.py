@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from uavcas.emulation import vm
+from uavcas.diagnostics import vm
 
 DEP = """kernel/fs/9p/9p.ko: kernel/net/9p/9pnet.ko kernel/fs/fscache/fscache.ko kernel/fs/netfs/netfs.ko
 kernel/fs/fscache/fscache.ko: kernel/fs/netfs/netfs.ko
@@ -59,7 +59,7 @@ def test_initrd_name_follows_its_content(tmp_path):
 
 def test_guest_script_loads_modules_runs_and_powers_off(tmp_path):
     k = vm.GuestKernel(tmp_path / "k", "6.1.0-1-amd64")
-    script = vm.guest_script(k, Path("/repo dir"), ["/venv/bin/python", "-m", "uavcas.emulation.doctor"])
+    script = vm.guest_script(k, Path("/repo dir"), ["/venv/bin/python", "-m", "uavcas.diagnostics.doctor"])
     assert f"modprobe -d {tmp_path / 'k'} -a " in script and "sch_netem" in script
-    assert "cd '/repo dir'" in script and "/venv/bin/python -m uavcas.emulation.doctor > $OUT/command.out" in script
+    assert "cd '/repo dir'" in script and "/venv/bin/python -m uavcas.diagnostics.doctor > $OUT/command.out" in script
     assert script.index("command.rc") < script.index("echo o > /proc/sysrq-trigger")
