@@ -24,18 +24,18 @@ SINR: noise and interference add in linear power (mW),
 
 and everything after it is the links' chain: MCS (adaptive by Minstrel's criterion or the
 scenario's fixed level), coded PER over fading, the retry chain, loss and MAC time
-(`budget.link_chain` with `states`). A pulsed emitter of duty cycle D (its period long against one
-packet's retries, short against a packet train) puts each packet in the jammed state with
-probability D: the chain's mixture of the SINR (weight D) and SNR (1 - D) states. Energy-detect
-deferral of the senders (a jammer above the CCA threshold keeping a transmitter silent) is not
-modelled: the jammer acts on the receivers' SINR only.
+(`linkchain.LinkChain.mcs_rate_loss` with `states`). A pulsed emitter of duty cycle D (its
+period long against one packet's retries, short against a packet train) puts each packet in the
+jammed state with probability D: the chain's mixture of the SINR (weight D) and SNR (1 - D)
+states. Energy-detect deferral of the senders (a jammer above the CCA threshold keeping a
+transmitter silent) is not modelled: the jammer acts on the receivers' SINR only.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from .budget import LinkParams, link_chain
+from .budget import LinkParams
 from .geometry import LinkGeometry
 from .linkchain import LinkChain
 
@@ -76,6 +76,5 @@ def jammed_chain(chain: LinkChain, snr_db, interference_dbm, duty: float, distan
         states, weights = [sinr, snr], [duty, 1.0 - duty]
     # the threshold rule picks on the SINR of the duty-averaged interference power
     avg = sinr_db(snr, chain.budget.noise_dbm, np.asarray(interference_dbm, dtype=float) + 10 * np.log10(duty))
-    mcs, _, lp = link_chain(avg, distance_m, chain.mcs_table, chain.link_layer, k_db, chain.fixed_mcs,
-                            chain.selection, chain.margin_db, states=(states, weights))
+    mcs, _, lp = chain.mcs_rate_loss(avg, distance_m, k_db, states=(states, weights))
     return sinr, mcs, lp

@@ -29,7 +29,7 @@ from typing import Literal
 import numpy as np
 
 from .airtime import CCA_DBM, hears_matrix, shared_rate_mbps
-from .budget import DEFAULT_LINK_LAYER, LinkBudget, LinkLayer, link_chain
+from .budget import DEFAULT_LINK_LAYER, LinkBudget, LinkLayer, LinkParams, link_chain
 from .fading import KFactorProfile
 from .geometry import LinkGeometry
 from .mcs import DEFAULT_MARGIN_DB, MCS_80211AG, McsTable, parse_modulation
@@ -128,11 +128,17 @@ class LinkChain:
         total = median if shadow_db is None else median + shadow
         snr = self.budget.snr_db(total)
         k_db = None if self.fading is None else self.fading.at(geometry.h_air_m)
-        mcs, reach, lp = link_chain(snr, geometry.d3d_m, self.mcs_table, self.link_layer, k_db, self.fixed_mcs,
-                                    self.selection, self.margin_db)
+        mcs, reach, lp = self.mcs_rate_loss(snr, geometry.d3d_m, k_db)
         return ChainedLinks(distance_m=geometry.d3d_m, pathloss_db=total, shadow_db=shadow, snr_db=snr, k_db=k_db,
                             mcs=mcs, per=reach[:, 1], rate_mbps=lp.rate_mbps, delay_ms=lp.delay_ms, loss=lp.loss,
                             mac_time_us=lp.mac_time_us)
+
+    def mcs_rate_loss(self, snr_db, distance_m, k_db, states=None) -> tuple[np.ndarray, np.ndarray, LinkParams]:
+        """(mcs, reach, LinkParams) from the SNR on: this chain's MCS rule and link layer
+        (`budget.link_chain`; `states` = (SNRs, weights) for a link that switches between
+        states, e.g. under a pulsed jammer, `interference.jammed_chain`)."""
+        return link_chain(snr_db, distance_m, self.mcs_table, self.link_layer, k_db, self.fixed_mcs, self.selection,
+                          self.margin_db, states=states)
 
     def hears(self, n_nodes: int, pairs, pathloss_db) -> np.ndarray:
         """(n, n) bool: node u hears node v at this total loss (pairs not given: deaf)."""
