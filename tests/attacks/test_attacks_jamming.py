@@ -93,7 +93,7 @@ def test_issue_check_20_dbm_at_100_m_from_a_30_dbm_links_receiver_changes_its_mc
     arr = ch.evaluate(pos, np.array([[0, 1]]), np.array([True, False]))
     jammer = np.array([400.0, 100.0, 60.0])  # 100 m from the UAV receiver, at its height
     i_dbm = received_dbm(ch.model, 20.0, 0.0, jammer, False, pos[1:], np.array([False]))
-    sinr, mcs, lp = jammed_chain(ch, arr.snr_db, i_dbm, 1.0, arr.distance_m, None)
+    sinr, mcs, lp = jammed_chain(ch.chain, arr.snr_db, i_dbm, 1.0, arr.distance_m, None)
     assert sinr[0] < arr.snr_db[0] - 20  # the jammer is ~30 dB above the noise floor
     assert mcs[0] != arr.mcs[0] or abs(lp.loss[0] - arr.loss[0]) >= MATERIAL_LOSS
 

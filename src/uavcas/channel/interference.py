@@ -24,19 +24,20 @@ SINR: noise and interference add in linear power (mW),
 
 and everything after it is the links' chain: MCS (adaptive by Minstrel's criterion or the
 scenario's fixed level), coded PER over fading, the retry chain, loss and MAC time
-(`budget.link_chain` with `states`). A pulsed emitter of duty cycle D (its period long against one
-packet's retries, short against a packet train) puts each packet in the jammed state with
-probability D: the chain's mixture of the SINR (weight D) and SNR (1 - D) states. Energy-detect
-deferral of the senders (a jammer above the CCA threshold keeping a transmitter silent) is not
-modelled: the jammer acts on the receivers' SINR only.
+(`linkchain.LinkChain.mcs_rate_loss` with `states`). A pulsed emitter of duty cycle D (its
+period long against one packet's retries, short against a packet train) puts each packet in the
+jammed state with probability D: the chain's mixture of the SINR (weight D) and SNR (1 - D)
+states. Energy-detect deferral of the senders (a jammer above the CCA threshold keeping a
+transmitter silent) is not modelled: the jammer acts on the receivers' SINR only.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from .budget import LinkParams, link_chain
+from .budget import LinkParams
 from .geometry import LinkGeometry
+from .linkchain import LinkChain
 
 
 def received_dbm(model, eirp_dbm: float, rx_gain_dbi: float, emitter_m, emitter_ground: bool,
@@ -62,18 +63,18 @@ def combined_dbm(levels_dbm) -> np.ndarray:
     return 10.0 * np.log10(np.sum(10.0 ** (lv / 10.0), axis=0))
 
 
-def jammed_chain(channel, snr_db, interference_dbm, duty: float, distance_m,
+def jammed_chain(chain: LinkChain, snr_db, interference_dbm, duty: float, distance_m,
                  k_db) -> tuple[np.ndarray, np.ndarray, LinkParams]:
     """(SINR dB, MCS, LinkParams) of links under interference with this duty cycle (0-1], through
-    `channel`'s own chain (its MCS table, link layer, MCS rule; module docstring)."""
+    the run's own link chain (`Channel.chain`: its noise floor, MCS table, link layer, MCS rule;
+    module docstring)."""
     snr = np.atleast_1d(np.asarray(snr_db, dtype=float))
-    sinr = sinr_db(snr, channel.budget.noise_dbm, interference_dbm)
+    sinr = sinr_db(snr, chain.budget.noise_dbm, interference_dbm)
     if duty >= 1.0:
         states, weights = [sinr], [1.0]
     else:
         states, weights = [sinr, snr], [duty, 1.0 - duty]
     # the threshold rule picks on the SINR of the duty-averaged interference power
-    avg = sinr_db(snr, channel.budget.noise_dbm, np.asarray(interference_dbm, dtype=float) + 10 * np.log10(duty))
-    mcs, _, lp = link_chain(avg, distance_m, channel.table, channel.link_layer, k_db, channel.fixed_mcs,
-                            channel.selection, channel.margin_db, states=(states, weights))
+    avg = sinr_db(snr, chain.budget.noise_dbm, np.asarray(interference_dbm, dtype=float) + 10 * np.log10(duty))
+    mcs, _, lp = chain.mcs_rate_loss(avg, distance_m, k_db, states=(states, weights))
     return sinr, mcs, lp

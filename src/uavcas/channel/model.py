@@ -4,6 +4,10 @@
               -> MCS (adaptive or fixed) -> coded PER averaged over Rician fading -> ARQ
               -> LinkParams (single-link DCF rate; `airtime` shares it among contenders)
 
+`Channel` holds the part with state: the nodes, the LOS-state and shadowing processes. From the
+loss on (SNR, MCS, rate, loss; who hears whom) it calls its `chain` (`linkchain.LinkChain`),
+the one assembly of the link budget, which `uavcas channel predict` calls too.
+
 The plan builds one `Channel` per run and calls `evaluate` once per window, in window order,
 with every node pair; each call advances the shadowing (and LOS-state) processes by the nodes'
 displacement since the previous call, so consecutive windows are correlated as Gudmundson's
@@ -33,15 +37,16 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Literal
 
 import numpy as np
 from scipy.special import ndtr
 
-from .budget import LinkBudget, LinkLayer, link_chain
+from .airtime import CCA_DBM
+from .budget import LinkLayer
 from .fading import KFactorProfile
 from .geometry import LinkGeometry
-from .mcs import DEFAULT_MARGIN_DB, MCS_80211AG, McsTable, parse_modulation
+from .linkchain import ChainedLinks, LinkChain, Selection
+from .mcs import DEFAULT_MARGIN_DB, McsTable
 from .pathloss import PathLossModel, PathLossProfile, make_pathloss
 from .shadowing import DEFAULT_DECORRELATION_M, GudmundsonShadowing
 
@@ -50,31 +55,13 @@ _SHADOW_STREAM, _LOS_STREAM = 1, 2
 
 
 @dataclass(frozen=True, eq=False)
-class LinkArrays:
-    """One window's channel for k links; every array has shape (k,) (pairs: (k, 2)).
-
-    `pathloss_db` is the total loss the link sees, shadowing included, so that
-    snr_db = P_tx + G_tx + G_rx - pathloss_db - N holds; the model's median loss is
-    pathloss_db - shadow_db.
-    """
+class LinkArrays(ChainedLinks):
+    """One window's channel for k links: the link chain's arrays (`linkchain.ChainedLinks`, shape
+    (k,)) plus the pairs (k, 2), their horizontal distance and LOS state."""
 
     pairs: np.ndarray  # node indices (a, b) as given
-    distance_m: np.ndarray  # 3-D
     d2d_m: np.ndarray
-    pathloss_db: np.ndarray
-    shadow_db: np.ndarray
-    snr_db: np.ndarray
-    mcs: np.ndarray  # int
-    per: np.ndarray  # first attempt's frame error rate at that MCS (fading-averaged)
-    rate_mbps: np.ndarray  # the link alone on the channel; `airtime` divides it among contenders
-    delay_ms: np.ndarray  # propagation + processing (the MAC time is in the rate)
-    loss: np.ndarray  # residual after ARQ
-    mac_time_us: np.ndarray  # expected channel time per packet, retries included
-    k_db: np.ndarray | None  # Rician K used per link (None: no fading)
     los: np.ndarray | None  # bool, for models with a LOS state (3GPP), else None
-
-    def __len__(self) -> int:
-        return len(self.pairs)
 
 
 class Channel:
@@ -97,6 +84,10 @@ class Channel:
     sample_los: draw a LOS state (3GPP models) rather than use the LOS-weighted mean loss.
     link_layer: 802.11 DCF assumptions (`budget.LinkLayer`).
     fading: Rician K(h) profile (None: no small-scale fading).
+    cca_dbm: carrier-sense threshold of the hearing matrix (`LinkChain.hears`).
+
+    The radio settings build the run's `chain` (`linkchain.LinkChain.build`), which turns each
+    window's loss into SNR, MCS, rate and loss, and says which nodes hear each other.
     """
 
     def __init__(
@@ -120,7 +111,8 @@ class Channel:
         sample_los: bool = True,
         mcs_table: McsTable | None = None,
         fading: KFactorProfile | None = None,
-        selection: Literal["throughput", "threshold"] = "throughput",
+        selection: Selection = "throughput",
+        cca_dbm: float = CCA_DBM,
     ) -> None:
         if node_names is None and n_nodes is None:
             raise ValueError("give node_names or n_nodes")
@@ -130,15 +122,11 @@ class Channel:
         self.node_names = names
         self.n_nodes = len(names)
         self.model = make_pathloss(pathloss, profile, fc_ghz) if isinstance(pathloss, str) else pathloss
-        self.budget = LinkBudget(
-            tx_power_dbm=tx_power_dbm, tx_gain_dbi=tx_gain_dbi, rx_gain_dbi=rx_gain_dbi, noise_dbm=noise_dbm
+        self.chain = LinkChain.build(
+            tx_power_dbm=tx_power_dbm, noise_dbm=noise_dbm, tx_gain_dbi=tx_gain_dbi, rx_gain_dbi=rx_gain_dbi,
+            modulation=modulation, margin_db=margin_db, link_layer=link_layer, mcs_table=mcs_table, fading=fading,
+            selection=selection, cca_dbm=cca_dbm,
         )
-        self.table = mcs_table or MCS_80211AG
-        self.fixed_mcs = parse_modulation(modulation, len(self.table))
-        self.margin_db = float(margin_db)
-        self.link_layer = link_layer or LinkLayer()
-        self.fading = fading
-        self.selection = selection
         self.seed = int(seed)
         self._shadow = GudmundsonShadowing(
             self.n_nodes, d_corr_m, np.random.SeedSequence([self.seed, _SHADOW_STREAM])
@@ -174,24 +162,5 @@ class Channel:
             los_u = ndtr(self._los.unit(pairs))  # Phi(Z): uniform marginal, correlated in time
         res = self.model.evaluate(geom, los_u)
         shadow = self._shadow(pos, pairs, res.sigma_db)
-        total = res.loss_db + shadow
-        snr = self.budget.snr_db(total)
-        k_db = None if self.fading is None else self.fading.at(geom.h_air_m)
-        mcs, reach, lp = link_chain(snr, geom.d3d_m, self.table, self.link_layer, k_db, self.fixed_mcs,
-                                    self.selection, self.margin_db)
-        return LinkArrays(
-            pairs=pairs,
-            distance_m=geom.d3d_m,
-            d2d_m=geom.d2d_m,
-            pathloss_db=total,
-            shadow_db=shadow,
-            snr_db=snr,
-            mcs=mcs,
-            per=reach[:, 1],
-            rate_mbps=lp.rate_mbps,
-            delay_ms=lp.delay_ms,
-            loss=lp.loss,
-            mac_time_us=lp.mac_time_us,
-            k_db=k_db,
-            los=res.los,
-        )
+        chained = self.chain.links(geom, res.loss_db, shadow)
+        return LinkArrays(pairs=pairs, d2d_m=geom.d2d_m, los=res.los, **chained.columns())

@@ -14,9 +14,10 @@ passed through. OUT.csv is GEOM.csv plus:
   registry `uavcas.channel.pathloss` (`--help` lists them).
 * snr_db = tx_dbm + antenna gains (profile) - pathloss_db - noise_dbm.
 * mcs, rate_mbps, loss - the link chain of the plan for one link alone on the channel
-  (`uavcas.channel.budget.link_chain`: coded PER, Rician fading with the profile's K(h) at
-  h_uav_m averaged over a window, retry chain, the profile's MCS selection). rate_mbps is the
-  single-link DCF rate; in a plan, links in carrier-sense range share it (`channel.airtime`).
+  (`uavcas.channel.linkchain.predict_links`, the `LinkChain` the twin's `Channel` runs: coded
+  PER, Rician fading with the profile's K(h) at h_uav_m averaged over a window, retry chain, the
+  profile's MCS selection). rate_mbps is the single-link DCF rate; in a plan, links in
+  carrier-sense range share it (`LinkChain.shared_rate_mbps`).
 """
 
 from __future__ import annotations
@@ -88,27 +89,17 @@ def predict_frame(df, model_name: str, profile, tx_dbm: float, noise_dbm: float)
     """The output columns for a validated geometry frame (see module docstring)."""
     import numpy as np
 
-    from uavcas.channel import LinkGeometry, make_pathloss
-    from uavcas.channel.budget import LinkBudget, link_chain
-    from uavcas.channel.mcs import MCS_80211AG
+    from uavcas.channel import LinkChain, LinkGeometry, predict_links
 
-    c = profile.channel
-    fc = df["fc_ghz"].to_numpy(float) if "fc_ghz" in df.columns else np.full(len(df), c.fc_ghz)
-    geom_all = LinkGeometry(d3d_m=df["d3d_m"].to_numpy(float), d2d_m=df["d2d_m"].to_numpy(float),
-                            h_ground_m=df["h_bs_m"].to_numpy(float), h_air_m=df["h_uav_m"].to_numpy(float),
-                            air_to_air=np.zeros(len(df), dtype=bool))
-    loss = np.empty(len(df))
-    for f in np.unique(fc):
-        rows = fc == f
-        geom = LinkGeometry(*(getattr(geom_all, k)[rows] for k in ("d3d_m", "d2d_m", "h_ground_m", "h_air_m", "air_to_air")))
-        loss[rows] = make_pathloss(model_name, profile.pathloss, float(f)).loss_db(geom)
-    budget = LinkBudget(tx_power_dbm=tx_dbm, tx_gain_dbi=c.tx_gain_dbi, rx_gain_dbi=c.rx_gain_dbi, noise_dbm=noise_dbm)
-    snr = budget.snr_db(loss)
-    k_db = None if c.fading is None else c.fading.at(geom_all.h_air_m)
-    mcs, _, lp = link_chain(snr, geom_all.d3d_m, MCS_80211AG, c.link_layer, k_db, None, c.selection, c.margin_db)
+    fc = df["fc_ghz"].to_numpy(float) if "fc_ghz" in df.columns else np.full(len(df), profile.channel.fc_ghz)
+    geom = LinkGeometry(d3d_m=df["d3d_m"].to_numpy(float), d2d_m=df["d2d_m"].to_numpy(float),
+                        h_ground_m=df["h_bs_m"].to_numpy(float), h_air_m=df["h_uav_m"].to_numpy(float),
+                        air_to_air=np.zeros(len(df), dtype=bool))
+    chain = LinkChain.build(tx_power_dbm=tx_dbm, noise_dbm=noise_dbm, **profile.chain_kwargs())
+    res = predict_links(model_name, profile.pathloss, fc, geom, chain)
     out = df.copy()
-    out["pathloss_db"], out["snr_db"], out["mcs"] = loss, snr, mcs
-    out["rate_mbps"], out["loss"] = lp.rate_mbps, lp.loss
+    for col in OUTPUT:
+        out[col] = getattr(res, col)
     return out
 
 

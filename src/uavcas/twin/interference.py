@@ -29,7 +29,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from uavcas.channel.airtime import contention_sets, hears_matrix
+from uavcas.channel.airtime import contention_sets
 from uavcas.channel.interference import jammed_chain, received_dbm
 
 from .model import Attack, Interferer, Link, LinkOverride
@@ -49,16 +49,15 @@ def rate_or_loss_changed(rate0: float, loss0: float, rate: float, loss: float) -
 
 
 def window_interference(channel, emitters, w: int, t0: float, t1: float, names: list[str], pos: np.ndarray,
-                        is_bs: np.ndarray, links: list[Link], arr, pair_index: dict, tx_dbm: float, prof,
+                        is_bs: np.ndarray, links: list[Link], arr, pair_index: dict, hears: np.ndarray, prof,
                         ) -> tuple[list[Interferer], list[LinkOverride]]:
-    """(interferers, overrides) of window w for `emitters`: [(Attack, attacks.Emitter)]."""
+    """(interferers, overrides) of window w for `emitters`: [(Attack, attacks.Emitter)]; `hears`
+    is the window's hearing matrix (`channel.chain.hears`), the one the unjammed rates shared."""
     c = prof.channel
     air = [lk for lk in links if lk.kind == "air"]
     idx = {x: k for k, x in enumerate(names)}
     ends = np.array([(idx[lk.a], idx[lk.b]) for lk in air], dtype=np.int64).reshape(-1, 2)
     kk = np.array([pair_index[(int(a), int(b))] for a, b in ends], dtype=np.int64)
-    hears = hears_matrix(len(names), arr.pairs, arr.pathloss_db, float(tx_dbm), c.tx_gain_dbi + c.rx_gain_dbi,
-                         c.cca_dbm)
     contend = contention_sets(ends, hears).astype(float)
     interferers, overrides = [], []
     for attack, em in emitters:
@@ -82,7 +81,7 @@ def _overrides(channel, attack: Attack, em, where, start, stop, pos, is_bs, air,
     rx = np.r_[ends[:, 1], ends[:, 0]]
     k2 = np.r_[kk, kk]
     k_db = None if arr.k_db is None else arr.k_db[k2]
-    sinr, mcs, lp = jammed_chain(channel, arr.snr_db[k2], at_node[rx], em.duty, arr.distance_m[k2], k_db)
+    sinr, mcs, lp = jammed_chain(channel.chain, arr.snr_db[k2], at_node[rx], em.duty, arr.distance_m[k2], k_db)
     m = len(air)
     if c.link_layer.rate_model == "dcf":
         t_dir = lp.mac_time_us

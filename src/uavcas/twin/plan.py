@@ -10,7 +10,9 @@ shadowing evolves with the geometry rather than with the routing); the routing r
 (`topology.routing`) picks the active links among the usable ones, plus the detours of
 traffic-detouring attacks while one is scheduled, and marks UAVs that reach no BS disconnected.
 The active air links then share the channel's airtime with the links in their carrier-sense
-range (`uavcas.channel.airtime`): a link's rate is its share of the DCF capacity.
+range: a link's rate is its share of the DCF capacity. The run's link chain
+(`uavcas.channel.linkchain.LinkChain`, `Channel.chain`) gives the per-link values, the hearing
+matrix and the shares; `uavcas channel predict` calls the same chain.
 
 An attack that places a radio emitter (a jammer: `AttackFamily.emitter`, placed from a stream of
 its own) adds, while it is on, its interference to the noise floor of the links' receivers; the
@@ -25,7 +27,7 @@ from __future__ import annotations
 import numpy as np
 
 from uavcas.attacks import EmitterContext, family
-from uavcas.channel import Channel, hears_matrix, shared_rate_mbps
+from uavcas.channel import Channel, LinkChain
 from uavcas.mobility import Area, make_mission
 from uavcas.scenario import Scenario
 from uavcas.topology.routing import Topology, nearest_neighbour_topology, route, with_wormholes
@@ -160,10 +162,11 @@ def plan(
         triples = [(names.index(v), names.index(a.attackers[0]), bs_of[names.index(v)])
                    for a in detours for v in a.victims]
         topo = with_wormholes(base, pos, is_bs, triples, losses[w]) if triples else base
-        shared = _shared_rates(topo, arrs[w], pair_index, n, scenario.tx_dbm, prof)
+        hears = channel.chain.hears(n, arrs[w].pairs, arrs[w].pathloss_db)
+        shared = _shared_rates(topo, arrs[w], pair_index, hears, channel.chain)
         links = [_link(names, topo, e, arrs[w], pair_index[e], prof, shared.get(e)) for e in topo.edges]
         interferers, overrides = window_interference(channel, emitters, w, t0, t1, names, pos, is_bs, links, arrs[w],
-                                                     pair_index, scenario.tx_dbm, prof) if emitters else ([], [])
+                                                     pair_index, hears, prof) if emitters else ([], [])
         out_windows.append(
             Window(
                 index=w,
@@ -209,18 +212,15 @@ def _loss_matrix(n: int, pairs: np.ndarray, loss: np.ndarray) -> np.ndarray:
     return m
 
 
-def _shared_rates(topo: Topology, arr, pair_index, n: int, tx_dbm: float, prof: TwinProfile) -> dict:
-    """Air link -> its share of the DCF airtime among the active air links it contends with."""
+def _shared_rates(topo: Topology, arr, pair_index, hears: np.ndarray, chain: LinkChain) -> dict:
+    """Air link -> its share of the DCF airtime among the active air links it contends with
+    (`LinkChain.shared_rate_mbps`; empty with the PHY rate model, whose links keep their rates)."""
     air = [e for e, why in zip(topo.edges, topo.reasons) if why != "backhaul"]
     if not air:
         return {}
     idx = np.array([pair_index[e] for e in air])
-    c = prof.channel
-    hears = hears_matrix(n, arr.pairs, arr.pathloss_db, float(tx_dbm), c.tx_gain_dbi + c.rx_gain_dbi, c.cca_dbm)
-    rates = shared_rate_mbps(arr.pairs[idx], arr.mac_time_us[idx], hears, c.link_layer.packet_bytes)
-    if c.link_layer.rate_model != "dcf":  # the paper's PHY-rate mode keeps its raw rates
-        return {}
-    return dict(zip(air, rates))
+    rates = chain.shared_rate_mbps(arr.pairs[idx], arr.mac_time_us[idx], hears)
+    return {} if rates is None else dict(zip(air, rates))
 
 
 def _link(names, topo: Topology, edge, arr, k: int, prof: TwinProfile, shared_rate: float | None) -> Link:

@@ -91,18 +91,24 @@ class TwinProfile(BaseModel):
     def mobility_params(self, mission: str):
         return self.mobility.for_kind(mission)
 
-    def channel_kwargs(self) -> dict:
+    def chain_kwargs(self) -> dict:
+        """The profile's settings of the link chain (`uavcas.channel.LinkChain.build`): antenna
+        gains, MCS rule, link layer, fading, carrier sense. The scenario adds power, noise and
+        modulation."""
         c = self.channel
         return {
             "tx_gain_dbi": c.tx_gain_dbi,
             "rx_gain_dbi": c.rx_gain_dbi,
             "margin_db": c.margin_db,
-            "d_corr_m": c.d_corr_m,
-            "fc_ghz": c.fc_ghz,
             "link_layer": c.link_layer,
             "fading": c.fading,
             "selection": c.selection,
+            "cca_dbm": c.cca_dbm,
         }
+
+    def channel_kwargs(self) -> dict:
+        """`uavcas.channel.Channel`'s settings: the chain's, plus shadowing and carrier."""
+        return {**self.chain_kwargs(), "d_corr_m": self.channel.d_corr_m, "fc_ghz": self.channel.fc_ghz}
 
     def to_json(self) -> str:
         return self.model_dump_json(indent=1) + "\n"
