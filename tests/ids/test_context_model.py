@@ -107,3 +107,23 @@ def test_bench_context_needs_context_columns(synth_df, tmp_path):
     r = runner.invoke(app, ["bench", "ids", str(ds), "--out", str(tmp_path / "lr"), "--models", "lr",
                             "--seeds", "0", "--no-importance"])
     assert r.exit_code == 0, r.output
+
+
+def test_context_detector_on_episode_rows():
+    """The window-host view's context columns are the episode summaries (`context_columns`), more
+    than the flows' ctx_*: the context models must be given their names (a mismatch raised)."""
+    from uavcas.ids.features import context_columns, feature_sets
+    from uavcas.ids.protocols import BenchConfig, run_protocol
+    from uavcas.schema import EPISODE_CONTEXT_FEATURES, EPISODE_VIEW
+
+    rng = np.random.default_rng(0)
+    n = 12 * 40
+    df = pd.DataFrame({c: rng.normal(size=n) for c in feature_sets()[f"{EPISODE_VIEW}-cic"]})
+    ctx = pd.DataFrame({c: rng.normal(size=n) for c in EPISODE_CONTEXT_FEATURES})
+    df = pd.concat([df, ctx], axis=1)
+    df["label"] = np.where(ctx[EPISODE_CONTEXT_FEATURES[-1]] > 0, "Replay", "Benign")
+    df["run_id"], df["view"] = np.repeat([f"r{k}" for k in range(12)], 40), EPISODE_VIEW
+    assert context_columns(df) == EPISODE_CONTEXT_FEATURES and len(EPISODE_CONTEXT_FEATURES) > len(CONTEXT_FEATURES)
+    res = run_protocol(df, "multiclass", BenchConfig(models=("context",), seeds=(0,), importance=False, n_threads=1))
+    f1 = {s.cls: s.value for s in res.scores if s.metric == "f1" and s.model == "Context"}
+    assert f1["Replay"] > 0.9, f1  # it learned from an episode context column, by name

@@ -30,7 +30,7 @@ from uavcas.vocabulary import families_of
 
 from .base import fit_model
 from .detectors import baselines, detector, make_model
-from .features import context_matrix, feature_matrix, resolve_features
+from .features import context_columns, context_matrix, feature_matrix, resolve_features
 from .metrics import STEALTH, auroc, class_scores, confusion, pr_auc, scores
 from .splits import DegenerateSplitError, Split, cap_rows, check_declared, grouped_split, runs_per_class
 from .torch_estimator import default_threads
@@ -132,7 +132,8 @@ class Task:
     declared: list[str]
     score: Callable[["Task", Split, Predict], tuple[list, np.ndarray, np.ndarray]]
     fixed: dict[str, np.ndarray] = field(default_factory=dict)  # label of extra test runs -> rows
-    x_ctx: np.ndarray | None = None  # the context columns (schema.CONTEXT_FEATURES), for the context models
+    x_ctx: np.ndarray | None = None  # the context columns (`features.context_columns`), for the context models
+    ctx_names: tuple[str, ...] = ()  # their names: flows' ctx_*, or the episode summaries of them
 
     def split(self, seed: int) -> Split:
         p = self.pool
@@ -266,7 +267,7 @@ def _inputs(task: Task, name: str, features: list[str]) -> tuple[np.ndarray, lis
     column names: the flow features followed by the context columns."""
     if not detector(name).uses_context:
         return task.x, None
-    return np.hstack([task.x, task.x_ctx]), features + list(schema.CONTEXT_FEATURES)
+    return np.hstack([task.x, task.x_ctx]), features + list(task.ctx_names)
 
 
 def _fit_one(res: ProtocolResult, task: Task, sp: Split, name: str, seed: int, cfg: BenchConfig) -> None:
@@ -360,7 +361,7 @@ def prepare(df: pd.DataFrame, protocol: str, cfg: BenchConfig) -> Prepared:
     features = resolve_features(df, cfg.features)
     task = PREPARE[protocol](df, feature_matrix(df, features), notes, cfg)
     if any(detector(m).uses_context for m in cfg.models):
-        task.x_ctx = context_matrix(df)
+        task.x_ctx, task.ctx_names = context_matrix(df), context_columns(df)
     splits = {seed: task.split(seed) for seed in cfg.seeds}
     source = df.attrs.get("source")
     if source and source not in ("uavcas", "uavcas-csv"):
