@@ -1,0 +1,222 @@
+"""No import cycle in src/uavcas, read with `ast` (nothing is imported).
+
+Every import statement is an edge, wherever it stands: at module level, inside a function, or
+under `if TYPE_CHECKING:` (a type-only edge is still a dependency a reader has to follow, and a
+function-level import is a cycle Python merely postpones). What an import statement makes Python
+run is what counts:
+- `import a.b.c` and `from a.b.c import x` run `a.b.c`, and before it every package on the way
+  (`a`, `a.b`) that does not already contain the importer (those are running already);
+- `from a import b` runs `a.b` too when `b` is a submodule of `a`;
+- relative imports resolve against the importer's package (a package's `__init__` is its own
+  package);
+- `importlib.import_module("a.b")` with a constant name is an import, and a package that imports
+  its submodules with `pkgutil.iter_modules(__path__)` (the registries) imports every one of them.
+"""
+
+from __future__ import annotations
+
+import ast
+import functools
+from collections.abc import Iterator
+from dataclasses import dataclass
+from pathlib import Path
+
+SRC = Path(__file__).resolve().parents[1] / "src"
+ROOT = "uavcas"
+
+
+@dataclass(frozen=True)
+class Edge:
+    src: str
+    dst: str
+    where: str  # "path:line", for the message
+
+
+def _module_name(path: Path, src: Path) -> str:
+    parts = list(path.relative_to(src).with_suffix("").parts)
+    if parts[-1] == "__init__":
+        parts.pop()
+    return ".".join(parts)
+
+
+@functools.cache
+def _modules(src: Path = SRC, root: str = ROOT) -> dict[str, Path]:
+    return {_module_name(p, src): p for p in sorted((src / root).rglob("*.py"))}
+
+
+def _ancestors_or_self(name: str) -> list[str]:
+    parts = name.split(".")
+    return [".".join(parts[:i]) for i in range(1, len(parts) + 1)]
+
+
+def _resolve(importer: str, is_package: bool, module: str | None, level: int) -> str:
+    if level == 0:
+        return module or ""
+    package = importer if is_package else importer.rpartition(".")[0]
+    parts = package.split(".")
+    base = ".".join(parts[: len(parts) - (level - 1)])
+    return f"{base}.{module}" if module else base
+
+
+def _targets(importer: str, mods: dict[str, Path], node: ast.AST) -> Iterator[str]:
+    """The modules one statement or call imports by name (before ancestors are added)."""
+    is_package = mods[importer].name == "__init__.py"
+    if isinstance(node, ast.Import):
+        yield from (a.name for a in node.names)
+    elif isinstance(node, ast.ImportFrom):
+        base = _resolve(importer, is_package, node.module, node.level)
+        yield base
+        for a in node.names:
+            if f"{base}.{a.name}" in mods:
+                yield f"{base}.{a.name}"
+    elif isinstance(node, ast.Call):
+        f = node.func
+        name = f.attr if isinstance(f, ast.Attribute) else f.id if isinstance(f, ast.Name) else ""
+        if name == "import_module" and node.args and isinstance(node.args[0], ast.Constant):
+            yield str(node.args[0].value)
+        elif (name == "iter_modules" and is_package and node.args
+              and isinstance(node.args[0], ast.Name) and node.args[0].id == "__path__"):
+            yield from (m for m in mods if m.rpartition(".")[0] == importer)
+
+
+def edges(src: Path = SRC, root: str = ROOT) -> list[Edge]:
+    mods = _modules(src, root)
+    out: list[Edge] = []
+    for importer, path in mods.items():
+        tree = ast.parse(path.read_text(encoding="utf-8"), filename=str(path))
+        running = set(_ancestors_or_self(importer))
+        for node in ast.walk(tree):
+            for target in _targets(importer, mods, node):
+                for dst in _ancestors_or_self(target):
+                    if dst in mods and dst not in running:
+                        out.append(Edge(importer, dst, f"{path.relative_to(src)}:{node.lineno}"))
+    return out
+
+
+def _components(graph: dict[str, set[str]]) -> list[list[str]]:
+    """Strongly connected components of more than one module (Tarjan, iterative)."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    on_stack: set[str] = set()
+    found: list[list[str]] = []
+    for start in sorted(graph):
+        if start in index:
+            continue
+        work = [(start, iter(sorted(graph[start])))]
+        index[start] = low[start] = len(index)
+        stack.append(start)
+        on_stack.add(start)
+        while work:
+            v, it = work[-1]
+            for w in it:
+                if w not in index:
+                    index[w] = low[w] = len(index)
+                    stack.append(w)
+                    on_stack.add(w)
+                    work.append((w, iter(sorted(graph[w]))))
+                    break
+                if w in on_stack:
+                    low[v] = min(low[v], index[w])
+            else:
+                work.pop()
+                if work:
+                    low[work[-1][0]] = min(low[work[-1][0]], low[v])
+                if low[v] == index[v]:
+                    comp = []
+                    while True:
+                        w = stack.pop()
+                        on_stack.discard(w)
+                        comp.append(w)
+                        if w == v:
+                            break
+                    if len(comp) > 1:
+                        found.append(sorted(comp))
+    return found
+
+
+def _shortest_cycle(graph: dict[str, set[str]], members: list[str]) -> list[str]:
+    """A shortest cycle through the component's first module, as a list of modules."""
+    inside = set(members)
+    start = members[0]
+    prev: dict[str, str] = {}
+    frontier = [start]
+    while frontier:
+        nxt = []
+        for v in frontier:
+            for w in sorted(graph[v] & inside):
+                if w == start:
+                    path = [v]
+                    while path[-1] != start:
+                        path.append(prev[path[-1]])
+                    return [*reversed(path), start]
+                if w not in prev:
+                    prev[w] = v
+                    nxt.append(w)
+        frontier = nxt
+    raise AssertionError("a component without a cycle")
+
+
+def cycles(src: Path = SRC, root: str = ROOT) -> list[str]:
+    """One message per cycle-carrying component: its modules and a shortest cycle, edge by edge."""
+    all_edges = edges(src, root)
+    graph: dict[str, set[str]] = {m: set() for m in _modules(src, root)}
+    where: dict[tuple[str, str], str] = {}
+    for e in all_edges:
+        if e.src != e.dst:
+            graph[e.src].add(e.dst)
+            where.setdefault((e.src, e.dst), e.where)
+    msgs = []
+    for comp in _components(graph):
+        cyc = _shortest_cycle(graph, comp)
+        steps = "\n".join(f"    {a} -> {b}  ({where[a, b]})" for a, b in zip(cyc, cyc[1:]))
+        msgs.append(f"{len(comp)} modules in a cycle: {', '.join(comp)}\n  e.g.\n{steps}")
+    return msgs
+
+
+def _tree(tmp: Path, files: dict[str, str]) -> Path:
+    for rel, text in files.items():
+        (tmp / rel).parent.mkdir(parents=True, exist_ok=True)
+        (tmp / rel).write_text(text, encoding="utf-8")
+    return tmp
+
+
+def test_the_reader_sees_every_kind_of_import(tmp_path):
+    src = _tree(tmp_path, {
+        "pkg/__init__.py": "",
+        "pkg/low.py": "import os\n",
+        "pkg/top.py": "from pkg.low import x\n",  # module level
+        "pkg/typed.py": "from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n    from .low import x\n",
+        "pkg/late.py": "def f():\n    import pkg.sub.leaf\n",  # function level, through a package
+        "pkg/sub/__init__.py": "from . import leaf\n",  # a package's own relative import
+        "pkg/sub/leaf.py": "from .. import low\n",  # `from package import submodule`
+        "pkg/reg/__init__.py": "import importlib, pkgutil\nfor m in pkgutil.iter_modules(__path__):\n"
+                               "    importlib.import_module(m.name)\n",
+        "pkg/reg/one.py": "",
+        "pkg/dyn.py": "import importlib\nimportlib.import_module('pkg.top')\n",
+    })
+    e = {(x.src, x.dst) for x in edges(src, "pkg")}
+    assert e == {
+        ("pkg.top", "pkg.low"), ("pkg.typed", "pkg.low"), ("pkg.late", "pkg.sub"),
+        ("pkg.late", "pkg.sub.leaf"), ("pkg.sub", "pkg.sub.leaf"), ("pkg.sub.leaf", "pkg.low"),
+        ("pkg.reg", "pkg.reg.one"), ("pkg.dyn", "pkg.top"),
+    }
+    assert cycles(src, "pkg") == []
+
+
+def test_a_cycle_is_found_and_shown(tmp_path):
+    src = _tree(tmp_path, {
+        "pkg/__init__.py": "",
+        "pkg/a.py": "from pkg import b\n",
+        "pkg/b.py": "def f():\n    from pkg.c import g\n",
+        "pkg/c.py": "from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n    import pkg.a\n",
+        "pkg/d.py": "import pkg.a\n",  # outside the cycle
+    })
+    (msg,) = cycles(src, "pkg")
+    assert msg.startswith("3 modules in a cycle: pkg.a, pkg.b, pkg.c\n")
+    assert "pkg.a -> pkg.b  (pkg/a.py:1)" in msg and "pkg.c -> pkg.a  (pkg/c.py:3)" in msg
+
+
+def test_no_import_cycle():
+    found = cycles()
+    assert not found, "import cycles in src/uavcas:\n" + "\n".join(found)
