@@ -1,16 +1,17 @@
-"""No import cycle in src/uavcas, read with `ast` (nothing is imported).
+"""No import cycle in src/uavcas, read with `ast` (nothing is imported). Two graphs:
 
-Every import statement is an edge, wherever it stands: at module level, inside a function, or
-under `if TYPE_CHECKING:` (a type-only edge is still a dependency a reader has to follow, and a
-function-level import is a cycle Python merely postpones). What an import statement makes Python
-run is what counts:
-- `import a.b.c` and `from a.b.c import x` run `a.b.c`, and before it every package on the way
-  (`a`, `a.b`) that does not already contain the importer (those are running already);
-- `from a import b` runs `a.b` too when `b` is a submodule of `a`;
-- relative imports resolve against the importer's package (a package's `__init__` is its own
-  package);
-- `importlib.import_module("a.b")` with a constant name is an import, and a package that imports
-  its submodules with `pkgutil.iter_modules(__path__)` (the registries) imports every one of them.
+1. The dependency graph: every import statement is an edge, wherever it stands: at module level,
+   inside a function, or under `if TYPE_CHECKING:` (a type-only edge is still a dependency, and
+   a function-level import is a cycle Python merely postpones). An edge goes to the module the
+   statement names: `import a.b` and `from a.b import x` to `a.b`; `from a import b` to `a.b`
+   when `b` is a submodule, else to `a`; relative imports resolve against the importer's package
+   (a package's `__init__` is its own); `importlib.import_module("a.b")` with a constant name is
+   an import, and a package that imports its submodules with `pkgutil.iter_modules(__path__)`
+   (the registries) imports every one of them.
+2. What Python runs on import: only the imports executed when a module is imported (not in
+   functions, not under TYPE_CHECKING), and, for each, the packages on the way (importing `a.b.c`
+   runs `a/__init__` and `a/b/__init__` first, unless the importer is inside them). A cycle here
+   is an ImportError (or a half-initialised module) depending on which module is imported first.
 """
 
 from __future__ import annotations
@@ -44,9 +45,10 @@ def _modules(src: Path = SRC, root: str = ROOT) -> dict[str, Path]:
     return {_module_name(p, src): p for p in sorted((src / root).rglob("*.py"))}
 
 
-def _ancestors_or_self(name: str) -> list[str]:
+def _ancestors(name: str) -> list[str]:
+    """The packages Python imports before `name`, outermost first."""
     parts = name.split(".")
-    return [".".join(parts[:i]) for i in range(1, len(parts) + 1)]
+    return [".".join(parts[:i]) for i in range(1, len(parts))]
 
 
 def _resolve(importer: str, is_package: bool, module: str | None, level: int) -> str:
@@ -65,10 +67,8 @@ def _targets(importer: str, mods: dict[str, Path], node: ast.AST) -> Iterator[st
         yield from (a.name for a in node.names)
     elif isinstance(node, ast.ImportFrom):
         base = _resolve(importer, is_package, node.module, node.level)
-        yield base
         for a in node.names:
-            if f"{base}.{a.name}" in mods:
-                yield f"{base}.{a.name}"
+            yield f"{base}.{a.name}" if f"{base}.{a.name}" in mods else base
     elif isinstance(node, ast.Call):
         f = node.func
         name = f.attr if isinstance(f, ast.Attribute) else f.id if isinstance(f, ast.Name) else ""
@@ -79,15 +79,32 @@ def _targets(importer: str, mods: dict[str, Path], node: ast.AST) -> Iterator[st
             yield from (m for m in mods if m.rpartition(".")[0] == importer)
 
 
-def edges(src: Path = SRC, root: str = ROOT) -> list[Edge]:
+def _run_on_import(node: ast.AST) -> Iterator[ast.AST]:
+    """The nodes Python executes when the module is imported: not function bodies, not the body
+    of an `if TYPE_CHECKING:` (its `else:` runs)."""
+    for child in ast.iter_child_nodes(node):
+        if isinstance(child, (ast.FunctionDef, ast.AsyncFunctionDef, ast.Lambda)):
+            continue
+        yield child
+        if isinstance(child, ast.If) and "TYPE_CHECKING" in ast.unparse(child.test):
+            for x in child.orelse:
+                yield x
+                yield from _run_on_import(x)
+            continue
+        yield from _run_on_import(child)
+
+
+def edges(src: Path = SRC, root: str = ROOT, on_import: bool = False) -> list[Edge]:
+    """Every import statement's edge (`on_import`: only the imports Python runs when the module
+    is imported, plus the packages on the way to each, whose `__init__` runs first)."""
     mods = _modules(src, root)
     out: list[Edge] = []
     for importer, path in mods.items():
         tree = ast.parse(path.read_text(encoding="utf-8"), filename=str(path))
-        running = set(_ancestors_or_self(importer))
-        for node in ast.walk(tree):
+        running = set(_ancestors(importer)) | {importer}
+        for node in (_run_on_import(tree) if on_import else ast.walk(tree)):
             for target in _targets(importer, mods, node):
-                for dst in _ancestors_or_self(target):
+                for dst in (_ancestors(target) + [target] if on_import else [target]):
                     if dst in mods and dst not in running:
                         out.append(Edge(importer, dst, f"{path.relative_to(src)}:{node.lineno}"))
     return out
@@ -157,9 +174,9 @@ def _shortest_cycle(graph: dict[str, set[str]], members: list[str]) -> list[str]
     raise AssertionError("a component without a cycle")
 
 
-def cycles(src: Path = SRC, root: str = ROOT) -> list[str]:
+def cycles(src: Path = SRC, root: str = ROOT, on_import: bool = False) -> list[str]:
     """One message per cycle-carrying component: its modules and a shortest cycle, edge by edge."""
-    all_edges = edges(src, root)
+    all_edges = edges(src, root, on_import)
     graph: dict[str, set[str]] = {m: set() for m in _modules(src, root)}
     where: dict[tuple[str, str], str] = {}
     for e in all_edges:
@@ -197,8 +214,7 @@ def test_the_reader_sees_every_kind_of_import(tmp_path):
     })
     e = {(x.src, x.dst) for x in edges(src, "pkg")}
     assert e == {
-        ("pkg.top", "pkg.low"), ("pkg.typed", "pkg.low"), ("pkg.late", "pkg.sub"),
-        ("pkg.late", "pkg.sub.leaf"), ("pkg.sub", "pkg.sub.leaf"), ("pkg.sub.leaf", "pkg.low"),
+        ("pkg.top", "pkg.low"), ("pkg.typed", "pkg.low"), ("pkg.late", "pkg.sub.leaf"), ("pkg.sub", "pkg.sub.leaf"), ("pkg.sub.leaf", "pkg.low"),
         ("pkg.reg", "pkg.reg.one"), ("pkg.dyn", "pkg.top"),
     }
     assert cycles(src, "pkg") == []
@@ -217,6 +233,30 @@ def test_a_cycle_is_found_and_shown(tmp_path):
     assert "pkg.a -> pkg.b  (pkg/a.py:1)" in msg and "pkg.c -> pkg.a  (pkg/c.py:3)" in msg
 
 
+def test_what_runs_on_import_includes_the_packages_on_the_way(tmp_path):
+    src = _tree(tmp_path, {
+        "pkg/__init__.py": "",
+        "pkg/a/__init__.py": "from pkg.a.top import f\n",  # a package that loads its top module
+        "pkg/a/low.py": "from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n    import pkg.a.top\n",
+        "pkg/a/top.py": "import pkg.b.low2\ndef f():\n    import pkg.a.low\n",
+        "pkg/b/__init__.py": "",
+        "pkg/b/low2.py": "import os\n",
+    })
+    e = {(x.src, x.dst) for x in edges(src, "pkg", on_import=True)}
+    assert e == {("pkg.a", "pkg.a.top"), ("pkg.a.top", "pkg.b"), ("pkg.a.top", "pkg.b.low2")}
+    assert cycles(src, "pkg", on_import=True) == []
+    assert cycles(src, "pkg")  # the dependency graph has pkg.a.low -> pkg.a.top -> pkg.a.low
+    (src / "pkg/b/low2.py").write_text("from pkg.a.low import x\n")  # runs pkg/a/__init__ first
+    (msg,) = cycles(src, "pkg", on_import=True)
+    assert "pkg.b.low2 -> pkg.a  (pkg/b/low2.py:1)" in msg
+
+
 def test_no_import_cycle():
     found = cycles()
     assert not found, "import cycles in src/uavcas:\n" + "\n".join(found)
+
+
+def test_no_cycle_in_what_runs_on_import():
+    found = cycles(on_import=True)
+    assert not found, "cycles among the imports src/uavcas runs on import (package __init__s included):\n" \
+        + "\n".join(found)

@@ -19,14 +19,13 @@ from __future__ import annotations
 import json
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Literal
+from typing import Any, Literal
 
 from pydantic import BaseModel, ConfigDict, ValidationError
 
 from uavcas.events import AttackRecord, RecordError, read_attack_records
-
-if TYPE_CHECKING:
-    from uavcas.twin.model import Plan
+from uavcas.twin.load import read_plan
+from uavcas.twin.model import Plan
 
 CAPTURE_SUFFIXES = (".pcap", ".pcapng")
 
@@ -239,13 +238,11 @@ class RunDir:
     def pcaps(self) -> list[Path]:
         return sorted(p for p in self.pcap_dir.glob("*") if p.suffix in CAPTURE_SUFFIXES)
 
-    def read_plan(self) -> "Plan":
-        from uavcas.twin.model import Plan
-
+    def read_plan(self) -> Plan:
         if not self.plan_json.exists():
             raise RunDirError(f"{self.root}: no plan.json (not a run directory)")
         try:
-            return Plan.from_json(self.plan_json.read_text())
+            return read_plan(self.plan_json.read_text())
         except ValueError as exc:
             raise RunDirError(f"{self.plan_json}: invalid plan ({str(exc).splitlines()[0]})") from None
 

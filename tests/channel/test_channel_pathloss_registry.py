@@ -136,13 +136,13 @@ import uavcas
 from uavcas.channel import Channel
 from uavcas.channel.pathloss import names, spec
 from uavcas.dataset.dictionary import describe
-from uavcas.scenario import Scenario
+from uavcas.scenario import parse
 from uavcas.twin.plan import plan
 
 assert uavcas.__file__.startswith(sys.argv[1]), uavcas.__file__
 assert "halfsplit" in names() and spec("halfsplit").samples_los
 text = "benign-3-1-image-halfsplit-adaptive-random-30-95"
-assert Scenario.parse(text).pathloss == "halfsplit"
+assert parse(text).pathloss == "halfsplit"
 p = plan(text, windows=1)
 assert p.scenario.pathloss == "halfsplit" and p.windows and p.windows[0].links
 ch = Channel(n_nodes=3, pathloss="halfsplit")

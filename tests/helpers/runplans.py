@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from uavcas.attacks import family as attack_family
+from uavcas.twin.load import plan_from_data
 from uavcas.twin.model import Attack, Link, Node, Plan, Route, Window, WormholeOverride
 
 
@@ -24,8 +26,9 @@ def make_plan(ns: list[Node], links: list[Link], attacks: list[Attack], n_window
                    routes=[Route(src=r[0], dst=r[-1], hops=list(r)) for r in routes],
                    wormholes=[WormholeOverride(victim=v, attacker=a, bs=b) for v, a, b in wormholes])
             for k in range(n_windows)]
-    return Plan(config=config, seed=5, window_s=window_s, profile="test", area_m=(1000.0, 1000.0, 30.0, 110.0),
-                nodes=ns, windows=wins, attacks=attacks)
+    # read as a plan.json is: a config that is a scenario gives the plan its typed scenario
+    return plan_from_data(dict(config=config, seed=5, window_s=window_s, profile="test",
+                               area_m=(1000.0, 1000.0, 30.0, 110.0), nodes=ns, windows=wins, attacks=attacks))
 
 
 def attack(family: str, attackers: list[str], victim: str, start_s: float, stop_s: float, k: int = 0,
@@ -34,4 +37,4 @@ def attack(family: str, attackers: list[str], victim: str, start_s: float, stop_
         params.setdefault("interval_us", 1000)
         params.setdefault("nominal_pps", 1e6 / params["interval_us"])
     return Attack(attack_id=f"{family}-{k}", family=family, attackers=attackers, victims=[victim],
-                  start_s=start_s, stop_s=stop_s, params=params)
+                  start_s=start_s, stop_s=stop_s, params=params, spec=attack_family(family).spec_from_params(params))

@@ -40,7 +40,8 @@ from scapy.layers.l2 import Ether
 from scapy.packet import Raw
 from scapy.utils import wrpcap
 
-from uavcas.twin.model import Attack, Link, Node, Plan, Window, WormholeOverride
+from uavcas.twin.load import plan_from_data
+from uavcas.twin.model import Link, Node, Plan, Window, WormholeOverride
 
 T0 = 1_700_000_000.0
 CONFIG = "blackhole+dos=1000+replay=50,200,10,5,inc-4-1-image-logdist-adaptive-random-30-95"
@@ -105,11 +106,13 @@ def make_plan(wormhole: bool = False) -> Plan:
         for k in range(12)
     ]
     attacks = [
-        Attack(attack_id="dos-0", family="dos", attackers=["uav1"], victims=["uav0"], start_s=DOS_WINDOW[0], stop_s=DOS_WINDOW[1], params={"interval_us": 1000}),
-        Attack(attack_id="replay-0", family="replay", attackers=["uav2"], victims=["uav3"], start_s=10.0, stop_s=20.0),
-        Attack(attack_id="blackhole-0", family="blackhole", attackers=["uav2"], victims=["uav3"], start_s=BLACKHOLE_WINDOW[0], stop_s=BLACKHOLE_WINDOW[1]),
+        dict(attack_id="dos-0", family="dos", attackers=["uav1"], victims=["uav0"], start_s=DOS_WINDOW[0], stop_s=DOS_WINDOW[1], params={"interval_us": 1000}),
+        dict(attack_id="replay-0", family="replay", attackers=["uav2"], victims=["uav3"], start_s=10.0, stop_s=20.0),
+        dict(attack_id="blackhole-0", family="blackhole", attackers=["uav2"], victims=["uav3"], start_s=BLACKHOLE_WINDOW[0], stop_s=BLACKHOLE_WINDOW[1]),
     ]
-    return Plan(config=CONFIG, seed=7, window_s=5.0, profile="test", area_m=(1000.0, 1000.0, 30.0, 110.0), nodes=nodes, windows=windows, attacks=attacks)
+    # read as a plan.json of the time before attacks carried specs: the families fill them in
+    return plan_from_data(dict(config=CONFIG, seed=7, window_s=5.0, profile="test", area_m=(1000.0, 1000.0, 30.0, 110.0),
+                               nodes=nodes, windows=windows, attacks=attacks))
 
 
 def _seen_at(pkts, node, extra_s=0.0, exclude=()):

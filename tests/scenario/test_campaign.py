@@ -107,7 +107,6 @@ def test_every_quick_attack_has_something_to_act_on():
 def test_every_medium_composition_is_a_declared_class_and_repeats_on_fresh_victims():
     """The medium preset's compositions are classes of the vocabulary (pairs included), and its
     three episodes per run attack three different victims, never overlapping."""
-    from uavcas.scenario import Scenario
     from uavcas.scenario.campaign import PRESETS
     from uavcas.twin import plan
     from uavcas.twin.schedule import EPISODE_GAP_S
@@ -116,7 +115,7 @@ def test_every_medium_composition_is_a_declared_class_and_repeats_on_fresh_victi
     medium = PRESETS["medium"]
     assert medium.episodes == 3
     for config in medium.configs:
-        assert class_name(Scenario.parse(config).families) in CLASSES, config
+        assert class_name(parse(config).families) in CLASSES, config
     p = plan("blackhole+dos=1000-6-2-mixed-3gpp-adaptive-grid-10-95", seed=3, episodes=medium.episodes)
     by_episode = sorted({(a.start_s, a.stop_s, a.victims[0]) for a in p.attacks})
     assert len(by_episode) == 3 and len({v for *_, v in by_episode}) == 3

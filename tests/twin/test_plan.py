@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from uavcas.scenario import PRESETS, parse
-from uavcas.twin import Plan, plan
+from uavcas.twin import Plan, plan, read_plan
 from uavcas.topology.routing import USABLE_LOSS_MAX, Topology
 
 MISSIONS = ("spiral", "grid", "hover_transit", "random")
@@ -73,7 +73,7 @@ def test_same_seed_same_bytes_other_seed_other_plan():
     cfg = "blackhole+dos=1000-10-2-image-3gpp-adaptive-random-30-95"
     a, b, c = plan(cfg, seed=5).to_json(), plan(cfg, seed=5).to_json(), plan(cfg, seed=6).to_json()
     assert a == b != c
-    assert Plan.from_json(a).to_json() == a
+    assert read_plan(a).to_json() == a
 
 
 def test_plan_json_has_the_documented_fields():
@@ -157,7 +157,7 @@ def test_cli_plan_writes_json_and_figures(tmp_path):
              "--out", str(out), "--figure", str(figs))
     assert r.returncode == 0, r.stderr
     assert "MCS" in r.stdout and "dos-0" in r.stdout
-    assert Plan.from_json(out.read_text()).windows[2].index == 2
+    assert read_plan(out.read_text()).windows[2].index == 2
     assert sorted(p.name for p in figs.glob("*.png")) == [f"topology_w0{k}.png" for k in range(3)]
     again = tmp_path / "again.json"
     assert _cli("plan", "dos=1000-6-2-image-logdist-adaptive-random-30-95", "--seed", "1", "--windows", "3",

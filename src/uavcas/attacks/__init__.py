@@ -9,13 +9,9 @@ from __future__ import annotations
 
 import importlib
 import pkgutil
-from typing import Annotated, Union
-
-from pydantic import Field
-
 from uavcas.vocabulary import FAMILIES
 
-from .base import AttackFamily, Emitter, EmitterContext, ScenarioError, ScheduleDraw, SpecBase
+from .base import AttackExecutor, AttackFamily, Emitter, EmitterContext, ScenarioError, ScheduleDraw, SpecBase, TruthContext
 from .registry import families, family, register
 
 _INFRA = {"answers", "base", "registry"}  # shared code, no family
@@ -29,7 +25,6 @@ if _missing:
 
 # Distinct spec classes in canonical order (dos and ddos share one).
 SPECS: tuple[type[SpecBase], ...] = tuple(dict.fromkeys(f.spec for f in families()))
-AttackSpec = Annotated[Union[SPECS], Field(discriminator="family")]  # type: ignore[valid-type]
 
-__all__ = ["AttackFamily", "AttackSpec", "Emitter", "EmitterContext", "SPECS", "ScenarioError", "ScheduleDraw", "SpecBase",
-           "families", "family", "register"]
+__all__ = ["AttackExecutor", "AttackFamily", "Emitter", "EmitterContext", "SPECS", "ScenarioError", "ScheduleDraw",
+           "SpecBase", "TruthContext", "families", "family", "register"]

@@ -9,63 +9,106 @@ A family (`AttackFamily` subclass, one per module of this package, registered by
   SYN; flows are labelled from their packets' effects, `uavcas.labels`).
 
 Layers outside this package ask the registry (`uavcas.attacks.family(name)`) and never test a
-family name themselves. Modules here import the emulation, flows and labels code lazily, inside
-the methods: the codec imports this package, and those layers import the codec.
+family name themselves. A family types against this module's protocols for what the layers above
+hand it (`AttackExecutor`: the runner's executor, `emulation.attacks`; `TruthContext`: the
+labeller's view of a run, `labels.effects`) and against the plan records (`uavcas.twin.model`),
+which import no family; it imports the emulation's building blocks (kernel, apps) where it acts.
 """
 
 from __future__ import annotations
 
-import re
 from abc import ABC, abstractmethod
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, ClassVar
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, ClassVar, Protocol
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict
 
+from uavcas.scenario_model import ScenarioError, SpecBase
 from uavcas.vocabulary import PAYLOADS
 
 if TYPE_CHECKING:
-    from uavcas.emulation.attacks import AttackExecutor
+    from uavcas.emulation.apps.procs import Proc
     from uavcas.emulation.controller import Detour
-    from uavcas.labels.attacklog import AttackWindow
-    from uavcas.labels.effects import TruthContext
-    from uavcas.twin.model import Attack, LinkOverride, Window
+    from uavcas.events import AttackRecord
+    from uavcas.flows.packets import PacketTable
+    from uavcas.labels.attacklog import AttackLog, AttackWindow
+    from uavcas.twin.model import Attack, LinkOverride, Plan, Window
 
 
-class ScenarioError(ValueError):
-    """A malformed scenario string; the message is one line and names the bad field.
+class AttackExecutor(Protocol):
+    """What a family's executor rules use of the runner's executor (`emulation.attacks`
+    implements it): the running emulation, the attack log, per-attack state, the current window."""
 
-    Defined here because family tokens are parsed by their families; the codec re-exports it.
-    """
+    # the running `emulation.emulation.Emulation` (namespaces, switches, popen); typed Any because
+    # that module reads plans through the registry, above this package
+    emu: Any
+    plan: Plan
+    work_dir: Path
+    log_dir: Path  # where attack processes write their logs
+    duration_s: float
+    active: dict[str, Attack]  # the attacks started and not yet halted, by id
+    state: dict[str, Any]  # family-owned, keyed by attack id (or attack id/attacker)
+    window: Window | None  # the window in force
+
+    def ip(self, node: str) -> str: ...
+    def index(self, node: str) -> int: ...
+    def spec(self, a: Attack) -> SpecBase: ...
+    def now(self) -> float: ...
+    def log(self, rec: AttackRecord) -> AttackRecord: ...
+    def add_process(self, proc: Proc, event_log: Path | None = None) -> None: ...
+    def bs_of(self, uav: str) -> str: ...
+    def reapply_window(self) -> dict[str, Any]: ...
+    def reshape(self) -> None: ...
 
 
-_INT = re.compile(r"^(0|[1-9][0-9]*)$")
+class Followed(Protocol):
+    """The packet follower's answer (`flows.follow.Followed`) as the truth rules read it."""
+
+    @property
+    def pid(self) -> np.ndarray: ...  # per row, the transmission's id
+    @property
+    def hop(self) -> np.ndarray: ...  # per row, its hop along the transmission
+    @property
+    def points(self) -> tuple[str, ...]: ...  # capture points, as the packet table's
+    @property
+    def n_packets(self) -> int: ...
+    @property
+    def losses(self) -> Any: ...  # `flows.follow.Losses`
+    def crossings(self) -> Any: ...  # `flows.follow.Crossings`
 
 
-def int_field(name: str, raw: str, lo: int, hi: int) -> int:
-    if not _INT.match(raw):
-        raise ScenarioError(f"field '{name}': expected a non-negative integer, got {raw!r}")
-    v = int(raw)
-    if not lo <= v <= hi:
-        raise ScenarioError(f"field '{name}': {v} is outside [{lo}, {hi}]")
-    return v
+class TruthContext(Protocol):
+    """What a family's effect rule may look at (`labels.effects.TruthContext` implements it): the
+    run's packets, their transmissions, the attack log and the plan; masks are over packet rows."""
 
+    packets: PacketTable
+    log: AttackLog
+    followed: Followed
+    plan: Plan
+    t0_unix: float
 
-def choice(name: str, raw: str, choices: tuple[str, ...]) -> str:
-    if raw not in choices:
-        raise ScenarioError(f"field '{name}': {raw!r} is not one of {', '.join(choices)}")
-    return raw
-
-
-class SpecBase(BaseModel):
-    """Typed parameters of one attack token of a scenario string."""
-
-    model_config = ConfigDict(frozen=True, extra="forbid")
-
-    def token(self) -> str:
-        return self.family  # type: ignore[attr-defined]
+    @property
+    def n(self) -> int: ...
+    @property
+    def ts(self) -> np.ndarray: ...
+    @property
+    def is_last(self) -> np.ndarray: ...
+    @property
+    def is_first(self) -> np.ndarray: ...
+    @property
+    def window(self) -> np.ndarray: ...  # plan window of each row
+    @property
+    def point_node(self) -> np.ndarray: ...  # per capture point, its node's plan index (-1: none)
+    def packets_from(self, ips: Iterable[str]) -> np.ndarray: ...
+    def packets_to(self, ips: Iterable[str]) -> np.ndarray: ...
+    def touching(self, ips: Iterable[str]) -> np.ndarray: ...
+    def during(self, start_unix: float, stop_unix: float) -> np.ndarray: ...
+    def attacker_to_victim(self, windows: Iterable[AttackWindow], rows: np.ndarray) -> np.ndarray: ...
+    def at_switch_of(self, names: Iterable[str]) -> np.ndarray: ...
+    def node_names(self, ips: Iterable[str]) -> list[str]: ...
+    def spread(self, rows: np.ndarray) -> np.ndarray: ...
 
 
 class ScheduleDraw:
@@ -141,6 +184,10 @@ class AttackFamily(ABC):
         if arg is not None:
             raise ScenarioError(f"field 'attacks': {self.name} takes no value, got {tok!r}")
         return self.spec(family=self.name)
+
+    def read_spec(self, data: Any) -> SpecBase:
+        """The spec of a plan attack or scenario from its JSON form (a plan being read)."""
+        return self.spec.model_validate(data)
 
     def spec_from_params(self, params: dict[str, Any]) -> SpecBase:
         """The spec of a plan attack written before attacks carried one (its `params`)."""

@@ -31,14 +31,14 @@ from typing import TYPE_CHECKING, Any, Literal
 import numpy as np
 from pydantic import Field
 
+from uavcas.scenario_model import ScenarioError, SpecBase, int_field
+
 from .answers import ANSWER_WITHIN_S, TCP_ACK, TCP_RST, TCP_SYN, answers, icmp_errors_quoting, tcp_flags_are
-from .base import AttackFamily, ScenarioError, ScheduleDraw, SpecBase, int_field
+from .base import AttackExecutor, AttackFamily, ScheduleDraw, TruthContext
 from .registry import register
 
 if TYPE_CHECKING:
-    from uavcas.emulation.attacks import AttackExecutor
     from uavcas.labels.attacklog import AttackWindow
-    from uavcas.labels.effects import TruthContext
     from uavcas.twin.model import Attack
 
 DEFAULT_INTERVAL_US = 1000

@@ -42,15 +42,14 @@ from typing import TYPE_CHECKING, Any, Literal
 import numpy as np
 from pydantic import Field
 
+from uavcas.scenario_model import ScenarioError, SpecBase
 from uavcas.vocabulary import MAVLINK_PAYLOADS
 
-from .base import AttackFamily, ScenarioError, ScheduleDraw, SpecBase
+from .base import AttackExecutor, AttackFamily, ScheduleDraw, TruthContext
 from .registry import register
 
 if TYPE_CHECKING:
-    from uavcas.emulation.attacks import AttackExecutor
     from uavcas.labels.attacklog import AttackWindow
-    from uavcas.labels.effects import TruthContext
     from uavcas.twin.model import Attack
 
 DEFAULT_DRIFT_MPS = 3.0  # module docstring

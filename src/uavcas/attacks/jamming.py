@@ -49,13 +49,13 @@ from typing import TYPE_CHECKING, Any, Literal
 import numpy as np
 from pydantic import Field
 
-from .base import AttackFamily, Emitter, EmitterContext, ScenarioError, ScheduleDraw, SpecBase, choice, int_field
+from uavcas.scenario_model import ScenarioError, SpecBase, choice, int_field
+
+from .base import AttackExecutor, AttackFamily, Emitter, EmitterContext, ScheduleDraw, TruthContext
 from .registry import register
 
 if TYPE_CHECKING:
-    from uavcas.emulation.attacks import AttackExecutor
     from uavcas.labels.attacklog import AttackWindow
-    from uavcas.labels.effects import TruthContext
     from uavcas.twin.model import Attack, LinkOverride, Window
 
 Placement = Literal["near", "uav"]
@@ -155,12 +155,12 @@ class Jamming(AttackFamily):
 
     # ground truth ------------------------------------------------------------------------------
     def effects(self, ctx: "TruthContext", windows: list["AttackWindow"]) -> np.ndarray:
-        from uavcas.flows.follow import node_of_point
+        # deferred: twin's package __init__ loads the planner, which loads this package
         from uavcas.twin.interference import rate_or_loss_changed
 
         plan, fol = ctx.plan, ctx.followed
         index = {x.name: x.index for x in plan.nodes}
-        node = np.array([index.get(node_of_point(p) or "", -1) for p in fol.points] or [-1], dtype=np.int64)
+        node = ctx.point_node
         n, W = len(plan.nodes), len(plan.windows)
         hit = np.zeros(fol.n_packets, dtype=bool)
         lo, c = fol.losses, fol.crossings()

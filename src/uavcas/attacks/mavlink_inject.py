@@ -44,17 +44,16 @@ from typing import TYPE_CHECKING, Any, Literal
 import numpy as np
 from pydantic import Field
 
+from uavcas.scenario_model import ScenarioError, SpecBase, choice, int_field
 from uavcas.vocabulary import MAVLINK_PAYLOADS
 
 from .answers import ANSWER_WITHIN_S, icmp_errors_quoting, udp_answers
-from .base import AttackFamily, ScenarioError, SpecBase, choice, int_field
+from .base import AttackExecutor, AttackFamily, TruthContext
 from .flood import path_hops
 from .registry import register
 
 if TYPE_CHECKING:
-    from uavcas.emulation.attacks import AttackExecutor
     from uavcas.labels.attacklog import AttackWindow
-    from uavcas.labels.effects import TruthContext
     from uavcas.twin.model import Attack
 
 COMMANDS: tuple[str, ...] = ("rtl", "land", "speed")

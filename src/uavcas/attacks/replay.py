@@ -41,17 +41,16 @@ from typing import TYPE_CHECKING, Any, Literal
 import numpy as np
 from pydantic import Field
 
+from uavcas.scenario_model import ScenarioError, SpecBase, choice, int_field
 from uavcas.vocabulary import SEQ_MODES, SeqMode
 
 from .answers import (ANSWER_WITHIN_S, TCP_ACK, TCP_FIN, TCP_RST, TCP_SYN, answers, icmp_errors_quoting,
                       payload_len, tcp_flags_are)
-from .base import AttackFamily, ScenarioError, SpecBase, choice, int_field
+from .base import AttackExecutor, AttackFamily, TruthContext
 from .registry import register
 
 if TYPE_CHECKING:
-    from uavcas.emulation.attacks import AttackExecutor
     from uavcas.labels.attacklog import AttackLog, AttackWindow
-    from uavcas.labels.effects import TruthContext
     from uavcas.twin.model import Attack
 
 MATCH_TOLERANCE_S = 1.0

@@ -24,14 +24,14 @@ from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
-from .base import AttackFamily, ScheduleDraw, SpecBase
+from uavcas.scenario_model import SpecBase
+
+from .base import AttackExecutor, AttackFamily, ScheduleDraw, TruthContext
 from .registry import register
 
 if TYPE_CHECKING:
-    from uavcas.emulation.attacks import AttackExecutor
     from uavcas.emulation.controller import Detour
     from uavcas.labels.attacklog import AttackWindow
-    from uavcas.labels.effects import TruthContext
     from uavcas.twin.model import Attack, Window
 
 

@@ -24,19 +24,15 @@ per-family counts and labels. Where two families provoke one row, the first in c
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
-
 import numpy as np
 
 from uavcas.attacks import families
+from uavcas.flows.follow import POINT_PREFIX, Followed, node_of_point
 from uavcas.flows.packets import PacketTable, address_to_words
+from uavcas.twin.model import Plan
 from uavcas.vocabulary import EFFECT_PRECEDENCE, EFFECTS, FAMILIES
 
 from .attacklog import AttackLog
-
-if TYPE_CHECKING:
-    from uavcas.flows.follow import Followed
-    from uavcas.twin.model import Plan
 
 BENIGN = EFFECTS.index("benign")
 CHANNEL_LOSS = EFFECTS.index("channel_loss")
@@ -48,12 +44,13 @@ _RANK = np.array([EFFECT_PRECEDENCE.index(e) for e in EFFECTS], dtype=np.int64)
 @dataclass
 class TruthContext:
     """What a family's effect rule may look at: the run's packets, their transmissions (follower),
-    the attack log and the plan (node names and windows, placed in time by `t0_unix`)."""
+    the attack log and the plan (node names and windows, placed in time by `t0_unix`). The
+    families type against its protocol, `uavcas.attacks.TruthContext`."""
 
     packets: PacketTable
     log: AttackLog
-    followed: "Followed"
-    plan: "Plan"
+    followed: Followed
+    plan: Plan
     t0_unix: float
     _cache: dict = field(default_factory=dict, repr=False)
 
@@ -95,11 +92,19 @@ class TruthContext:
 
     def at_switch_of(self, names) -> np.ndarray:
         """Rows captured at the switch of any of these nodes (capture point s-<node>)."""
-        from uavcas.flows.follow import POINT_PREFIX
-
         idx = [k for k, p in enumerate(self.packets.points) if p[len(POINT_PREFIX):] in set(names)
                and p.startswith(POINT_PREFIX)]
         return np.isin(self.packets["point"], idx)
+
+    @property
+    def point_node(self) -> np.ndarray:
+        """Per capture point of the follower, the plan index of its node (-1: not a node's switch;
+        [-1] when there are no points, so that indexing it by an empty array works)."""
+        if "point_node" not in self._cache:
+            index = {x.name: x.index for x in self.plan.nodes}
+            self._cache["point_node"] = np.array(
+                [index.get(node_of_point(p) or "", -1) for p in self.followed.points] or [-1], dtype=np.int64)
+        return self._cache["point_node"]
 
     def node_names(self, ips) -> list[str]:
         by_ip = {nd.ip: nd.name for nd in self.plan.nodes}

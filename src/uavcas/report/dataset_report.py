@@ -76,7 +76,7 @@ def _runs_table(runs, topo_ids: set[str], fid_ids: set[str], unit: str) -> str:
 
 
 def _topologies(dataset_dir: Path, runs) -> list[dict]:
-    from uavcas.twin.model import Plan
+    from uavcas.twin.load import read_plan
 
     from .figure import png_data_uri
     from .topology import attack_start_figure
@@ -87,7 +87,7 @@ def _topologies(dataset_dir: Path, runs) -> list[dict]:
         if not path.is_file():
             continue
         try:
-            plan = Plan.from_json(path.read_text())
+            plan = read_plan(path.read_text())
         except ValueError:
             continue  # an unreadable plan: the run is listed without a figure
         fig = attack_start_figure(plan)

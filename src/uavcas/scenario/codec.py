@@ -3,7 +3,8 @@
 `<attacks>-<n_uav>-<n_bs>-<payload>-<pathloss>-<modulation>-<mission>-<tx_dbm>-<noise>`, e.g.
 `blackhole+dos=1000-20-2-image-logdist-adaptive-random-30-95` (noise 95 means -95 dBm).
 The words come from `uavcas.vocabulary`; each attack token is parsed by its family
-(`uavcas.attacks`). The form is canonical: attack tokens are ordered as the vocabulary orders
+(`uavcas.attacks`) into the typed form (`uavcas.scenario_model`). The form is canonical: attack
+tokens are ordered as the vocabulary orders
 the families, so `dos=1000+blackhole-...` is normalised to `blackhole+dos=1000-...` (the same
 scenario, hence the same plan). Any other deviation (leading zeros, ...) is refused with a
 one-line `ScenarioError` naming the field at fault.
@@ -11,106 +12,12 @@ one-line `ScenarioError` naming the field at fault.
 
 from __future__ import annotations
 
-import re
-
-from pydantic import BaseModel, ConfigDict, Field, field_validator
-
-from uavcas.attacks import AttackSpec, ScenarioError, family
-from uavcas.attacks.base import choice, int_field
-from uavcas.channel.pathloss import PathlossName
+from uavcas.attacks import family
 from uavcas.channel.pathloss import names as pathloss_names
-from uavcas.vocabulary import (
-    BENIGN_TOKEN,
-    FAMILIES,
-    FIELD_NAMES,
-    MISSIONS,
-    PAYLOADS,
-    Mission,
-    Payload,
-)
+from uavcas.scenario_model import MCS_LEVEL, Scenario, ScenarioError, choice, int_field
+from uavcas.vocabulary import BENIGN_TOKEN, FAMILIES, FIELD_NAMES, MISSIONS, PAYLOADS
 
-__all__ = ["AttackSpec", "FIELD_NAMES", "Scenario", "ScenarioError", "attacks_of", "canonical", "parse"]
-
-_MCS = re.compile(r"^mcs([0-6])$")
-
-
-class Scenario(BaseModel):
-    model_config = ConfigDict(frozen=True, extra="forbid")
-
-    attacks: tuple[AttackSpec, ...] = ()  # empty = benign; canonical family order
-    n_uav: int = Field(ge=1, le=250)
-    n_bs: int = Field(ge=1, le=16)
-    payload: Payload = "image"
-    pathloss: PathlossName = "logdist"  # a name of the path-loss registry
-    modulation: str = "adaptive"  # "adaptive" or a fixed level "mcs0".."mcs6"
-    mission: Mission = "random"
-    tx_dbm: int = 30
-    noise: int = 95  # positive magnitude: the noise floor is -noise dBm
-
-    @field_validator("attacks")
-    @classmethod
-    def _canonical_order(cls, v: tuple) -> tuple:
-        return tuple(sorted(v, key=lambda a: FAMILIES.index(a.family)))
-
-    @property
-    def noise_dbm(self) -> float:
-        return -float(self.noise)
-
-    @property
-    def families(self) -> tuple[str, ...]:
-        return tuple(a.family for a in self.attacks)
-
-    @property
-    def fixed_mcs(self) -> int | None:
-        m = _MCS.match(self.modulation)
-        return int(m.group(1)) if m else None
-
-    def attack(self, name: str):
-        for a in self.attacks:
-            if a.family == name:
-                return a
-        return None
-
-    @property
-    def attacks_token(self) -> str:
-        return "+".join(a.token() for a in self.attacks) or BENIGN_TOKEN
-
-    def to_string(self) -> str:
-        return "-".join(
-            str(v)
-            for v in (
-                self.attacks_token,
-                self.n_uav,
-                self.n_bs,
-                self.payload,
-                self.pathloss,
-                self.modulation,
-                self.mission,
-                self.tx_dbm,
-                self.noise,
-            )
-        )
-
-    def __str__(self) -> str:
-        return self.to_string()
-
-    @classmethod
-    def parse(cls, text: str) -> "Scenario":
-        return parse(text)
-
-    def axes(self) -> dict[str, object]:
-        """Axis values as flat columns (for datasets and per-axis analysis): vocabulary.AXIS_COLUMNS."""
-        return {
-            "attacks": self.attacks_token,
-            "n_uav": self.n_uav,
-            "n_bs": self.n_bs,
-            "payload": self.payload,
-            "pathloss": self.pathloss,
-            "modulation": self.modulation,
-            "mission": self.mission,
-            "tx_dbm": self.tx_dbm,
-            "noise_dbm": self.noise_dbm,
-        }
+__all__ = ["FIELD_NAMES", "Scenario", "ScenarioError", "attacks_of", "canonical", "parse"]
 
 
 def _parse_attack(tok: str):
@@ -160,7 +67,7 @@ def parse(text: str) -> Scenario:
     raw = dict(zip(FIELD_NAMES, fields))
     attacks = attacks_of(raw["attacks"])
     modulation = raw["modulation"]
-    if modulation != "adaptive" and not _MCS.match(modulation):
+    if modulation != "adaptive" and not MCS_LEVEL.match(modulation):
         raise ScenarioError(
             f"field 'modulation': {modulation!r} is not 'adaptive' or a fixed level mcs0..mcs6"
         )

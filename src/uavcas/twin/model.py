@@ -3,6 +3,10 @@
 A `Plan` is pure data. It is produced by `uavcas.twin.plan()` without root or side effects and is
 consumed by the emulator (`uavcas.emulation`), the labeller and the reports. Its JSON form
 (`plan.json`) is the contract between those stages; `SCHEMA_VERSION` changes when it does.
+
+The records import no attack family: an attack's spec is typed by the families' common base
+(`uavcas.scenario_model.SpecBase`), and the family reads its own spec when a plan is read
+(`uavcas.twin.load.read_plan`, the layer above that knows the registry).
 """
 
 from __future__ import annotations
@@ -10,10 +14,9 @@ from __future__ import annotations
 import re
 from typing import Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, model_validator
+from pydantic import BaseModel, ConfigDict, Field, SerializeAsAny, ValidationInfo, model_validator
 
-from uavcas.attacks import AttackSpec, family
-from uavcas.scenario.codec import Scenario, ScenarioError
+from uavcas.scenario_model import SPEC_READER, Scenario, SpecBase, read_spec, spec_reader
 from uavcas.vocabulary import FAMILIES, Family
 
 SCHEMA_VERSION = 4  # 2: Plan.site and Node.sysid; 3: Window.interferers and link_overrides (jamming); 4: Plan.episodes; defaults fill them in older plans
@@ -182,15 +185,20 @@ class Attack(_Frozen):
     start_s: float
     stop_s: float
     params: dict[str, float | int | str] = Field(default_factory=dict)
-    spec: AttackSpec  # the scenario's typed token of this family
+    # the scenario's typed token of this family: its family's spec class, read from JSON by the
+    # family (`uavcas.twin.load` passes the registry in as the validation context's SpecReader)
+    spec: SerializeAsAny[SpecBase]
 
     @model_validator(mode="before")
     @classmethod
-    def _spec_from_params(cls, data: Any) -> Any:
-        # plan.json written before attacks carried their spec, and hand-made attacks
-        if isinstance(data, dict) and data.get("spec") is None and data.get("family") in FAMILIES:
-            data = {**data, "spec": family(data["family"]).spec_from_params(data.get("params") or {})}
-        return data
+    def _read_spec(cls, data: Any, info: ValidationInfo) -> Any:
+        if not (isinstance(data, dict) and data.get("family") in FAMILIES):
+            return data
+        what = f"attack {data.get('attack_id')}"
+        if data.get("spec") is None:  # plan.json written before attacks carried their spec
+            spec = spec_reader(info, what).spec_from_params(data["family"], data.get("params") or {})
+            return {**data, "spec": spec}
+        return {**data, "spec": read_spec(data["spec"], info, what)}
 
     @model_validator(mode="after")
     def _spec_matches(self) -> "Attack":
@@ -217,13 +225,13 @@ class Plan(_Frozen):
 
     @model_validator(mode="before")
     @classmethod
-    def _scenario_from_config(cls, data: Any) -> Any:
-        # plan.json written before plans carried the typed scenario
-        if isinstance(data, dict) and "scenario" not in data and isinstance(data.get("config"), str):
-            try:
-                data = {**data, "scenario": Scenario.parse(data["config"])}
-            except ScenarioError:
-                pass
+    def _scenario_from_config(cls, data: Any, info: ValidationInfo) -> Any:
+        # plan.json written before plans carried the typed scenario (read by the plan reader;
+        # a plan built in code without one has none)
+        reader = (info.context or {}).get(SPEC_READER)
+        if reader is not None and isinstance(data, dict) and "scenario" not in data \
+                and isinstance(data.get("config"), str):
+            data = {**data, "scenario": reader.scenario(data["config"])}
         return data
 
     @property
@@ -250,12 +258,8 @@ class Plan(_Frozen):
         return sum(len(self.disconnected_uavs(w)) for w in self.windows) / total if total else 0.0
 
     def to_json(self) -> str:
-        """Byte-stable JSON: same plan, same bytes."""
+        """Byte-stable JSON: same plan, same bytes. Read back with `uavcas.twin.load.read_plan`."""
         return self.model_dump_json(indent=1) + "\n"
-
-    @classmethod
-    def from_json(cls, text: str) -> "Plan":
-        return cls.model_validate_json(text)
 
 
 Window.model_rebuild()

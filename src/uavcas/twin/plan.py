@@ -29,7 +29,7 @@ import numpy as np
 from uavcas.attacks import EmitterContext, family
 from uavcas.channel import Channel, LinkChain
 from uavcas.mobility import Area, make_mission
-from uavcas.scenario import Scenario
+from uavcas.scenario import Scenario, parse
 from uavcas.topology.routing import Topology, nearest_neighbour_topology, route, with_wormholes
 
 from .interference import window_interference
@@ -93,7 +93,7 @@ def plan(
     episodes: int = 1,
 ) -> Plan:
     if isinstance(scenario, str):
-        scenario = Scenario.parse(scenario)
+        scenario = parse(scenario)
     if windows < 1:
         raise ValueError(f"windows must be >= 1, got {windows}")
     if not window_s > 0:
