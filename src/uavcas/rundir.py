@@ -23,6 +23,7 @@ from typing import Any, Literal
 
 from pydantic import BaseModel, ConfigDict, ValidationError
 
+from uavcas.atomic import atomic_write_text
 from uavcas.events import AttackRecord, RecordError, read_attack_records
 from uavcas.twin.load import read_plan
 from uavcas.twin.model import Plan
@@ -214,8 +215,6 @@ class RunDir:
         return owner.t0_unix if owner is not None else None
 
     def write_owner(self, owner: RunOwner) -> None:
-        from uavcas.atomic import atomic_write_text
-
         atomic_write_text(self.owner_path, owner.model_dump_json() + "\n")
 
     def read_owner(self) -> RunOwner | None:

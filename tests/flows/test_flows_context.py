@@ -9,7 +9,8 @@ import pytest
 
 from helpers.capture_tables import HOP_S, IPS, POINTS, T0, send, table
 from uavcas.flows.assemble import FlowConfig, assemble
-from uavcas.flows.context import context_frame, transmissions
+from uavcas.flows.context import context_frame
+from uavcas.flows.transmissions import transmissions
 from uavcas.schema import CONTEXT_FEATURES
 
 SYN, ACK, PSH, FIN = 0x02, 0x10, 0x08, 0x01

@@ -10,7 +10,8 @@ import pytest
 
 from helpers.capture_tables import HOP_S, send, table
 from uavcas.flows.assemble import FlowConfig, assemble
-from uavcas.flows.context import context_frame, context_frames, transmissions
+from uavcas.flows.context import context_frame, context_frames
+from uavcas.flows.transmissions import transmissions
 from uavcas.flows.routes import route_codes
 from uavcas.schema import CONTEXT_FEATURES, CONTEXT_ROUTE_FEATURES
 

@@ -14,13 +14,10 @@ All of it is vectorised: one pandas merge of candidate rows with the answered ro
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 import numpy as np
 import pandas as pd
 
-if TYPE_CHECKING:
-    from uavcas.flows.packets import PacketTable
+from uavcas.flows.packets import PacketTable, payload_and_header
 
 TCP_FIN, TCP_SYN, TCP_RST, TCP_ACK = 0x01, 0x02, 0x04, 0x10
 SEQ_MOD = 1 << 32  # TCP sequence arithmetic
@@ -42,8 +39,6 @@ def tcp_flags_are(p: "PacketTable", flags: int, mask: int) -> np.ndarray:
 
 def payload_len(p: "PacketTable") -> np.ndarray:
     """TCP/UDP payload bytes of every row (as `flows.packets.payload_and_header`), int64."""
-    from uavcas.flows.packets import payload_and_header
-
     return payload_and_header(p["proto"], p["ip_len"], p["ip_hdr_len"], p["l4_hdr_len"])[0]
 
 

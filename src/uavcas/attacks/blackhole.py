@@ -32,7 +32,7 @@ from uavcas.scenario_model import SpecBase
 from .base import AttackExecutor, AttackFamily, ScheduleDraw, TruthContext
 from .registry import register
 
-if TYPE_CHECKING:
+if TYPE_CHECKING:  # types only: the twin's and labels' package __init__s load this registry
     from uavcas.labels.attacklog import AttackWindow
     from uavcas.twin.model import Attack
 
@@ -55,6 +55,7 @@ def ruleset(table: str, ports: list[str], victim_ip: str) -> str:
 
 
 def drop_on(fabric_ns: str, table: str, ports: list[str], victim_ip: str) -> None:
+    # deferred: uavcas.emulation's __init__ loads the emulator, which reads plans through this registry
     from uavcas.emulation import kernel
 
     kernel.run(["ip", "netns", "exec", fabric_ns, "nft", "-f", "-"], input_text=ruleset(table, ports, victim_ip))
@@ -62,6 +63,7 @@ def drop_on(fabric_ns: str, table: str, ports: list[str], victim_ip: str) -> Non
 
 def drop_off(fabric_ns: str, table: str) -> int:
     """Delete the table; returns how many frames it dropped (both rules)."""
+    # deferred: uavcas.emulation's __init__ loads the emulator, which reads plans through this registry
     from uavcas.emulation import kernel
 
     dropped = 0
@@ -77,6 +79,7 @@ def drop_off(fabric_ns: str, table: str) -> int:
 
 def switch_ports(index: int) -> list[str]:
     """The victim switch's host port and (by wildcard) every link port it has or will get."""
+    # deferred: uavcas.emulation's __init__ loads the emulator, which reads plans through this registry
     from uavcas.emulation.naming import Naming
 
     return [Naming.host_port(index), Naming.link_port(index, 0).rsplit("-", 1)[0] + "-*"]

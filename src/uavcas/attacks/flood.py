@@ -31,13 +31,14 @@ from typing import TYPE_CHECKING, Any, Literal
 import numpy as np
 from pydantic import Field
 
+from uavcas.events import AttackRate
 from uavcas.scenario_model import ScenarioError, SpecBase, int_field
 
 from .answers import ANSWER_WITHIN_S, TCP_ACK, TCP_RST, TCP_SYN, answers, icmp_errors_quoting, tcp_flags_are
 from .base import AttackExecutor, AttackFamily, ScheduleDraw, TruthContext
 from .registry import register
 
-if TYPE_CHECKING:
+if TYPE_CHECKING:  # types only: the twin's and labels' package __init__s load this registry
     from uavcas.labels.attacklog import AttackWindow
     from uavcas.twin.model import Attack
 
@@ -100,6 +101,7 @@ class _Flood(AttackFamily):
 
     # executor ----------------------------------------------------------------------------------
     def prepare(self, ex: "AttackExecutor", attack: "Attack") -> None:
+        # deferred: uavcas.emulation's __init__ loads the emulator, which reads plans through this registry
         from uavcas.emulation.apps.flood import Flood
 
         nominal = ex.spec(attack).nominal_pps
@@ -111,6 +113,7 @@ class _Flood(AttackFamily):
                 ex.add_process(proc)
 
     def start(self, ex: "AttackExecutor", attack: "Attack") -> dict[str, Any]:
+        # deferred: uavcas.emulation's __init__ loads the emulator, which reads plans through this registry
         from uavcas.emulation.apps.flood import start_all
 
         floods = ex.state[attack.attack_id]
@@ -121,8 +124,8 @@ class _Flood(AttackFamily):
         return self.halt(ex, attack)()
 
     def halt(self, ex: "AttackExecutor", attack: "Attack") -> Callable[[], dict[str, Any]]:
+        # deferred: uavcas.emulation's __init__ loads the emulator, which reads plans through this registry
         from uavcas.emulation.apps.flood import close_all, collect_all, quiet_after_s
-        from uavcas.events import AttackRate
 
         floods = ex.state.pop(attack.attack_id, [])
         t_closed = close_all(floods)

@@ -41,6 +41,7 @@ from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 from pydantic import Field
+from pymavlink.dialects.v20 import common
 
 from uavcas.scenario_model import ScenarioError, SpecBase
 from uavcas.vocabulary import MAVLINK_PAYLOADS
@@ -48,7 +49,7 @@ from uavcas.vocabulary import MAVLINK_PAYLOADS
 from .base import AttackExecutor, AttackFamily, ScheduleDraw, TruthContext
 from .registry import register
 
-if TYPE_CHECKING:
+if TYPE_CHECKING:  # types only: the twin's and labels' package __init__s load this registry
     from uavcas.labels.attacklog import AttackWindow
     from uavcas.twin.model import Attack
 
@@ -108,6 +109,7 @@ class GpsSpoof(AttackFamily):
 
     # executor ----------------------------------------------------------------------------------
     def _control(self, ex: "AttackExecutor", attack: "Attack"):
+        # deferred: uavcas.emulation's __init__ loads the emulator, which reads plans through this registry
         from uavcas.emulation.apps.mavlink.gps import Spoofing, control_path
 
         s: GpsSpoofSpec = ex.spec(attack)  # type: ignore[assignment]
@@ -117,6 +119,7 @@ class GpsSpoof(AttackFamily):
         return paths, base
 
     def start(self, ex: "AttackExecutor", attack: "Attack") -> dict[str, Any]:
+        # deferred: uavcas.emulation's __init__ loads the emulator, which reads plans through this registry
         from uavcas.emulation.apps.mavlink.gps import publish
 
         paths, base = self._control(ex, attack)
@@ -128,6 +131,7 @@ class GpsSpoof(AttackFamily):
         return self.halt(ex, attack)()
 
     def halt(self, ex: "AttackExecutor", attack: "Attack") -> Callable[[], dict[str, Any]]:
+        # deferred: uavcas.emulation's __init__ loads the emulator, which reads plans through this registry
         from uavcas.emulation.apps.mavlink.gps import publish
 
         paths, base = self._control(ex, attack)
@@ -137,8 +141,7 @@ class GpsSpoof(AttackFamily):
 
     # ground truth ------------------------------------------------------------------------------
     def effects(self, ctx: "TruthContext", windows: list["AttackWindow"]) -> np.ndarray:
-        from pymavlink.dialects.v20 import common
-
+        # deferred: uavcas.emulation's __init__ loads the emulator, which reads plans through this registry
         from uavcas.emulation.apps.mavlink.gps import POSITION_MESSAGES
 
         ids = [getattr(common, f"MAVLINK_MSG_ID_{name}") for name in POSITION_MESSAGES]  # 33 and 24

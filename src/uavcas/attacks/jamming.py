@@ -54,7 +54,7 @@ from uavcas.scenario_model import ScenarioError, SpecBase, choice, int_field
 from .base import AttackExecutor, AttackFamily, Emitter, EmitterContext, ScheduleDraw, TruthContext
 from .registry import register
 
-if TYPE_CHECKING:
+if TYPE_CHECKING:  # types only: the twin's and labels' package __init__s load this registry
     from uavcas.labels.attacklog import AttackWindow
     from uavcas.twin.model import Attack, LinkOverride, Window
 

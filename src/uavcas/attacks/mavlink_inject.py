@@ -38,6 +38,8 @@
 
 from __future__ import annotations
 
+import signal
+import sys
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any, Literal
 
@@ -52,7 +54,7 @@ from .base import AttackExecutor, AttackFamily, TruthContext
 from .flood import path_hops
 from .registry import register
 
-if TYPE_CHECKING:
+if TYPE_CHECKING:  # types only: the twin's and labels' package __init__s load this registry
     from uavcas.labels.attacklog import AttackWindow
     from uavcas.twin.model import Attack
 
@@ -125,8 +127,7 @@ class MavlinkInject(AttackFamily):
 
     # executor ----------------------------------------------------------------------------------
     def prepare(self, ex: "AttackExecutor", attack: "Attack") -> None:
-        import sys
-
+        # deferred: uavcas.emulation's __init__ loads the emulator, which reads plans through this registry
         from uavcas.emulation.apps.procs import spawn, wait_for
 
         s: MavlinkInjectSpec = ex.spec(attack)  # type: ignore[assignment]
@@ -169,8 +170,7 @@ class MavlinkInject(AttackFamily):
         return self.halt(ex, attack)()
 
     def halt(self, ex: "AttackExecutor", attack: "Attack") -> Callable[[], dict[str, Any]]:
-        import signal
-
+        # deferred: uavcas.emulation's __init__ loads the emulator, which reads plans through this registry
         from uavcas.emulation.apps.flood import quiet_after_s
         from uavcas.emulation.apps.mavinject import read_log
 
@@ -194,6 +194,7 @@ class MavlinkInject(AttackFamily):
 
     # ground truth ------------------------------------------------------------------------------
     def effects(self, ctx: "TruthContext", windows: list["AttackWindow"]) -> np.ndarray:
+        # deferred: uavcas.emulation's __init__ loads the emulator, which reads plans through this registry
         from uavcas.emulation.apps.mavlink.specs import UAV_PORT
 
         p = ctx.packets

@@ -39,8 +39,10 @@ import sys
 from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
+import pandas as pd
 from pydantic import Field
 
+from uavcas.flows.packets import address_to_words
 from uavcas.scenario_model import ScenarioError, SpecBase, choice, int_field
 from uavcas.vocabulary import SEQ_MODES, SeqMode
 
@@ -49,7 +51,7 @@ from .answers import (ANSWER_WITHIN_S, TCP_ACK, TCP_FIN, TCP_RST, TCP_SYN, answe
 from .base import AttackExecutor, AttackFamily, TruthContext
 from .registry import register
 
-if TYPE_CHECKING:
+if TYPE_CHECKING:  # types only: the twin's and labels' package __init__s load this registry
     from uavcas.labels.attacklog import AttackLog, AttackWindow
     from uavcas.twin.model import Attack
 
@@ -88,12 +90,14 @@ def mirror_lines(victim_port: str, attacker_port: str) -> list[str]:
 
 
 def mirror_on(fabric_ns: str, victim_port: str, attacker_port: str) -> None:
+    # deferred: uavcas.emulation's __init__ loads the emulator, which reads plans through this registry
     from uavcas.emulation import kernel
 
     kernel.run_batch("tc", fabric_ns, mirror_lines(victim_port, attacker_port))
 
 
 def mirror_off(fabric_ns: str, victim_port: str) -> None:
+    # deferred: uavcas.emulation's __init__ loads the emulator, which reads plans through this registry
     from uavcas.emulation import kernel
 
     # Only the replay puts a clsact on a host port; deleting it removes both filters.
@@ -137,6 +141,7 @@ class Replay(AttackFamily):
 
     # executor ----------------------------------------------------------------------------------
     def prepare(self, ex: "AttackExecutor", attack: "Attack") -> None:
+        # deferred: uavcas.emulation's __init__ loads the emulator, which reads plans through this registry
         from uavcas.emulation.apps.procs import spawn, wait_for
         from uavcas.emulation.naming import Naming
 
@@ -196,6 +201,7 @@ class Replay(AttackFamily):
 
     # ground truth ------------------------------------------------------------------------------
     def effects(self, ctx: "TruthContext", windows: list["AttackWindow"]) -> np.ndarray:
+        # deferred: uavcas.labels' __init__ loads the labeller, which runs this registry's rules
         from uavcas.labels.attacklog import AttackLog
 
         ids = {w.attack_id for w in windows}
@@ -228,8 +234,6 @@ def dup_acks(p, copies: np.ndarray, first: np.ndarray, within_s: float = DUP_ACK
     """Pure ACKs answering a copy at once (module docstring, (d)): on the copy's 5-tuple
     reversed, and at the ACK's `first` observation (its sender's switch) the nearest earlier
     packet of the copy's direction is a copy, at most `within_s` before."""
-    import pandas as pd
-
     n = len(p)
     out = np.zeros(n, dtype=bool)
     c = np.flatnonzero(copies & (p["proto"] == 6))
@@ -274,10 +278,6 @@ def injected_packets(p, log: "AttackLog") -> np.ndarray:
     nearest its time (the rest of that transmission follows through `TruthContext.spread`): an
     unconnected UDP socket sends IP id 0 with DF, so with the TTL left as it was (ttl_dec 0) the
     original and the other copies of one stream carry the very same key within the tolerance."""
-    import pandas as pd
-
-    from uavcas.flows.packets import address_to_words
-
     mask = np.zeros(len(p), dtype=bool)
     if not log.injections or len(p) == 0:
         return mask

@@ -45,7 +45,7 @@ class AttackError(RuntimeError):
     """An attack could not be started or stopped; names the attack."""
 
 
-class AttackExecutor:
+class AttackExecutor:  # implements uavcas.attacks.AttackExecutor, the protocol the families type against
     def __init__(self, emu, plan: "Plan", work_dir: Path, duration_s: float,
                  on_event: Callable[[AttackRecord], None] | None = None) -> None:
         self.emu, self.plan = emu, plan

@@ -32,15 +32,14 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .packets import PacketTable, address_to_words, read_packets
+from uavcas.emulation.controller import compute
+from uavcas.rundir import ForwardingEpoch, RunDir, RunDirError
+from uavcas.twin.model import Plan
 
-if TYPE_CHECKING:
-    from uavcas.rundir import ForwardingEpoch, RunDir
-    from uavcas.twin.model import Plan
+from .packets import PacketTable, address_to_words, read_packets
 
 KEY_COLUMNS: tuple[str, ...] = (
     "src_hi", "src_lo", "dst_hi", "dst_lo", "proto", "sport", "dport", "ip_id", "tcp_seq", "tcp_flags",
@@ -95,9 +94,6 @@ class Timeline:
         `applied_unix`: per window, when its apply began and ended (default: at the planned
         start). Attacks that change forwarding for part of a window are not modelled here.
         """
-        from uavcas.emulation.controller import compute
-        from uavcas.rundir import ForwardingEpoch
-
         names = [n.name for n in plan.nodes]
         epochs = []
         for w in plan.windows:
@@ -342,8 +338,6 @@ def _assemble(order, chain, ts, point, node, dst, window, points, point_node, ti
 def run_timeline(rd: "RunDir", plan: "Plan") -> Timeline:
     """The forwarding a run held: its own log (forwarding.jsonl) when present, else the plan's
     windows at the times run.json says they were applied."""
-    from uavcas.rundir import RunDirError
-
     epochs = rd.read_forwarding()
     if epochs:
         return Timeline.from_epochs(plan, epochs)
@@ -359,8 +353,6 @@ def follow_run(run_dir: str | Path, max_hop_s: float = MAX_HOP_S, table: PacketT
                allow_truncated: bool = True) -> tuple[PacketTable, Followed]:
     """Read a run directory's captures (unless `table` is given) and follow its packets along
     the forwarding the run held (`run_timeline`)."""
-    from uavcas.rundir import RunDir
-
     rd = RunDir(Path(run_dir))
     plan = rd.read_plan()
     if table is None:

@@ -43,7 +43,7 @@ import pandas as pd
 
 if TYPE_CHECKING:
     from .assemble import Flows
-    from .context import Transmissions
+    from .transmissions import Transmissions
     from .packets import PacketTable
 
 _NS = 1_000_000_000
