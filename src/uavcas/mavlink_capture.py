@@ -52,6 +52,15 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from uavcas.extract import run_inputs, run_truth
+from uavcas.flows import read_packets
+from uavcas.flows.decode import link_layer
+from uavcas.flows.packets import addresses_to_str, ns_to_s
+from uavcas.flows.pcapio import iter_capture
+from uavcas.rundir import RunDir
+from uavcas.twin.track import Track, geodetic_to_local
+from uavcas.vocabulary import EFFECTS, FAMILIES
+
 MAVLINK_PORT = 14550
 DEFAULT_DIALECT = "ardupilotmega"  # pymavlink's own default; a superset of common
 POSITION_FIELDS: tuple[str, ...] = ("lat", "lon", "alt", "relative_alt", "vx", "vy", "vz", "hdg")
@@ -200,9 +209,6 @@ def udp_payloads(path: str | Path, frame_index: np.ndarray, ip_hdr_len: np.ndarr
     packet table's own header lengths: the payload starts after the link layer, the IP header
     (options / extension headers included) and the 8-byte UDP header, and ends where the IP
     length says (Ethernet padding of a short frame is not payload) or the snap length cut it."""
-    from uavcas.flows.decode import link_layer
-    from uavcas.flows.pcapio import iter_capture
-
     out: list[bytes] = [b""] * int(frame_index.shape[0])
     if not frame_index.shape[0]:
         return out
@@ -236,10 +242,6 @@ class RunPackets:
 def run_packets(run_dir: str | Path, allow_truncated: bool = False) -> RunPackets:
     """Read a run's captures and compute each packet's truth the way `uavcas.extract` does (same
     reader, same capture-point names, same follower and rules), so rows and truths line up."""
-    from uavcas.extract import run_inputs, run_truth
-    from uavcas.flows import read_packets
-    from uavcas.rundir import RunDir
-
     rd = RunDir(Path(run_dir))
     plan, pcaps, t0 = run_inputs(rd)
     packets = read_packets(pcaps, points=[p.stem for p in pcaps], allow_truncated=allow_truncated)
@@ -259,9 +261,6 @@ def mavlink_table(run_dir: str | Path, port: int = MAVLINK_PORT, point: str | No
                   dialect: str = DEFAULT_DIALECT, allow_truncated: bool = False) -> pd.DataFrame:
     """Every MAVLink message in a run's captures, one row per message and capture point (module
     docstring). `point`: keep one capture point's observations (e.g. "s-uav0")."""
-    from uavcas.flows.packets import addresses_to_str, ns_to_s
-    from uavcas.vocabulary import EFFECTS, FAMILIES
-
     if not 0 < port < 65536:
         raise MavlinkError(f"port {port} is not a UDP port (1..65535)")
     mod = load_dialect(dialect)
@@ -306,8 +305,6 @@ def mavlink_table(run_dir: str | Path, port: int = MAVLINK_PORT, point: str | No
 def report_offsets(table: pd.DataFrame, plan) -> pd.DataFrame:
     """`OFFSET_COLUMNS` of each row of `table` (module docstring): claimed minus true position of a
     UAV's good GLOBAL_POSITION_INT / GPS_RAW_INT, in metres east, north, up; NaN elsewhere."""
-    from uavcas.twin.track import Track, geodetic_to_local
-
     out = pd.DataFrame(np.nan, index=table.index, columns=list(OFFSET_COLUMNS))
     uav_of = {n.sysid: n.name for n in plan.nodes if n.kind == "uav" and n.sysid is not None}
     tracks: dict[str, Track] = {}

@@ -22,7 +22,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from uavcas.atomic import atomic_write_text
-from uavcas.scenario import ManifestEntry
+from uavcas.dataset.parquet import table_meta
+from uavcas.scenario import ManifestEntry, parse
 
 if TYPE_CHECKING:
     from .task import Extraction
@@ -52,8 +53,6 @@ class CampaignDir:
         if self.extraction_path.exists():
             have = [json.loads(self.extraction_path.read_text())]
         else:
-            from uavcas.dataset.parquet import table_meta
-
             metas = [table_meta(s) for s in sorted((self.root / "shards").glob("*.parquet"))
                      if s.stem.isdigit() and self.is_done(int(s.stem))]
             # shards from before the termination policies record none (their flows were cut at
@@ -138,8 +137,6 @@ class CampaignDir:
 
 def read_manifest(path: Path) -> list[ManifestEntry]:
     """A manifest file written by `uavcas campaign manifest` (or by hand, same fields)."""
-    from uavcas.scenario import parse
-
     entries = []
     try:
         lines = Path(path).read_text().splitlines()

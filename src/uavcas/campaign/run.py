@@ -12,6 +12,7 @@ from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 
 from uavcas.atomic import atomic_write_bytes, atomic_write_text
+from uavcas.dataset.store import rebuild
 from uavcas.scenario import ManifestEntry
 from uavcas.vocabulary import FIDELITY_POLICIES
 
@@ -63,8 +64,6 @@ def run_campaign(
     fidelity: str = "flag",
     mavlink_signing: bool = False,
 ) -> CampaignResult:
-    from uavcas.dataset.store import rebuild
-
     console = console or Console(stderr=True)
     if jobs < 1:
         raise CampaignError(f"--jobs must be >= 1, got {jobs}")

@@ -16,6 +16,10 @@ import time
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
+from uavcas.dataset.parquet import to_table
+from uavcas.extract import EXTRACT_VIEWS, extract
+from uavcas.flows import TERMINATIONS
+from uavcas.flows.assemble import DEFAULT_TERMINATION, HOST_VIEWS
 from uavcas.rundir import RunDir
 from uavcas.scenario import ManifestEntry
 
@@ -35,10 +39,6 @@ class Extraction:
     min_attack_fraction: float = 0.0
 
     def __post_init__(self) -> None:
-        from uavcas.extract import EXTRACT_VIEWS
-        from uavcas.flows import TERMINATIONS
-        from uavcas.flows.assemble import HOST_VIEWS
-
         if self.view not in EXTRACT_VIEWS:
             raise ValueError(f"--view: {self.view!r} is not one of {', '.join(EXTRACT_VIEWS)}")
         if self.termination is not None and self.termination not in TERMINATIONS:
@@ -49,8 +49,6 @@ class Extraction:
     @property
     def policy(self) -> str | None:
         """The termination policy in force (None for the host-pair views, which have none)."""
-        from uavcas.flows.assemble import DEFAULT_TERMINATION, HOST_VIEWS
-
         return None if self.view in HOST_VIEWS else self.termination or DEFAULT_TERMINATION
 
     def options(self) -> dict:
@@ -95,8 +93,6 @@ def execute_entry(
     """
     import pyarrow.parquet as pq
 
-    from uavcas.dataset.parquet import to_table
-    from uavcas.extract import extract
 
     if isinstance(entry, dict):
         entry = ManifestEntry(**entry)

@@ -34,6 +34,9 @@ from uavcas.atomic import atomic_path
 from uavcas.flows.standards import feature_columns
 from uavcas.schema import EPISODE_VIEW, SEQUENCE_COLUMNS
 
+from .read import select_view
+from .store import card_standard, read_card
+
 ID_NAMES: dict[str, str] = {"src_ip": "Source IP", "src_port": "Source Port", "dst_ip": "Destination IP",
                             "dst_port": "Destination Port", "protocol": "Protocol"}
 LEFT_OUT: tuple[str, ...] = SEQUENCE_COLUMNS + ("first_ts", "last_ts")
@@ -101,9 +104,6 @@ def _rows(b: pa.RecordBatch, header: list[str]) -> list[str]:
 def write_flow_csv(dataset_dir: Path, out: Path, view: str | None = None) -> int:
     """Write DATASET_DIR's flows (of `view`, needed when it holds several) to the CSV file `out`;
     the number of rows written. Episodes (window-host rows) are refused: they are no flows."""
-    from .read import select_view
-    from .store import card_standard, read_card
-
     card = read_card(dataset_dir)
     path = Path(dataset_dir) / "flows.parquet"
     if card.get("unit") == "host-window" or "host" in pq.read_schema(path).names:

@@ -23,6 +23,8 @@ from typing import Literal, NamedTuple
 import numpy as np
 import pandas as pd
 
+from uavcas.ids.features import context_columns, context_matrix, resolve_features
+
 from .read import load_any
 
 
@@ -59,8 +61,6 @@ def load_dataset(path: str | Path, view: str | None = None, features: str | Iter
     `X.attrs["nonfinite"]` records the policy, the values it changed and the rows it touched
     (`{"policy": ..., "values": n, "rows": n, "rows_in": n}`).
     """
-    from uavcas.ids.features import context_columns, context_matrix, resolve_features
-
     if nonfinite not in NONFINITE:
         raise ValueError(f"nonfinite: {nonfinite!r} is not one of {', '.join(NONFINITE)}")
     df = load_any(path, fmt, view=view).reset_index(drop=True)

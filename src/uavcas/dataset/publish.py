@@ -33,9 +33,11 @@ import pyarrow.parquet as pq
 
 from uavcas import __version__
 from uavcas.atomic import atomic_dir
+from uavcas.labels.label import rule_summary
+from uavcas.twin.profile import ProfileError, load_profile, profile_sha256
 from uavcas.versions import file_sha256
 
-from .croissant import PARQUET, SHARDS, DatasetInfo, FileEntry, metadata_json, record_set_name, validate
+from .croissant import PARQUET, SHARDS, CroissantError, DatasetInfo, FileEntry, metadata_json, record_set_name, validate
 from .dictionary import columns, markdown_table
 from .runs import class_table, dataset_runs, flagged_lines
 from .store import DatasetError, card_standard, read_card
@@ -99,8 +101,6 @@ def _place(src: Path, dst: Path) -> bool:
 def calibration(card: dict) -> list[dict]:
     """Each twin profile the runs were planned with: its name, SHA-256s, and the data it was fitted
     on (its provenance), when the profile of that name here is the one the card records."""
-    from uavcas.twin.profile import ProfileError, load_profile, profile_sha256
-
     out = []
     for name, shas in (card.get("profiles") or {}).items():
         entry = {"name": name, "sha256": shas, "fitted_on": None, "note": ""}
@@ -139,8 +139,6 @@ def _origin(card: dict) -> str:
 
 def _card_text(card: dict, dataset_dir: Path, info: DatasetInfo, files: list[FileEntry], schema) -> str:
     """README.md: the dataset card for people."""
-    from uavcas.labels.label import rule_summary
-
     standard = card_standard(card)
     episodes = card.get("unit") == "host-window"
     names = set(schema.names)
@@ -164,7 +162,6 @@ def publish(dataset_dir: str | Path, out: str | Path, name: str | None = None, l
     """Publish DATASET_DIR into OUT (absent or an empty directory); see the module docstring."""
     from importlib.metadata import version as installed
 
-    from .croissant import CroissantError
 
     dataset_dir, out = Path(dataset_dir), Path(out)
     card = read_card(dataset_dir)

@@ -14,6 +14,7 @@ from pathlib import Path
 
 import pandas as pd
 
+from uavcas.fidelity.model import Fidelity
 from uavcas.schema import CLASSES
 
 UNAUDITED = "unaudited"
@@ -46,8 +47,6 @@ def _check_text(name: str, checks: dict) -> str:
 
 def dataset_runs(dataset_dir: str | Path, card: dict) -> list[RunRow]:
     """One row per run of the card, by run id (numerically where ids are numbers)."""
-    from uavcas.fidelity.model import Fidelity
-
     root = Path(dataset_dir)
     rows = []
     for r in card.get("runs", []):

@@ -42,6 +42,7 @@ from uavcas.versions import package_versions
 
 from .dictionary import card_columns
 from .parquet import META_KEY, table_meta, table_standard, to_table, with_dictionary, write_table
+from .uavcas_csv import Imported, read_layout
 
 __all__ = ["DatasetError", "ShardInfo", "extract_run", "import_layout", "read_card", "rebuild"]
 
@@ -196,8 +197,6 @@ def import_layout(src: Path, out_dir: Path) -> tuple[dict, "Imported"]:
     flows become one shard, `shards/import.parquet`, whose metadata (and so the card's `runs`)
     records the files read and what the layout lacks.
     """
-    from .uavcas_csv import Imported, read_layout  # noqa: F401
-
     out_dir = ensure_out_dir(out_dir)
     if any(out_dir.iterdir()):
         raise DatasetError(f"{out_dir}: not empty; import into a new directory")

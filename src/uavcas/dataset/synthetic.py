@@ -27,8 +27,16 @@ import pandas as pd
 
 from uavcas import schema
 from uavcas.atomic import atomic_dir
+from uavcas.flows.assemble import FlowConfig, assemble
+from uavcas.flows.context import context_frame
+from uavcas.flows.features import flow_frame
+from uavcas.flows.packets import COLUMNS, NO_MAVLINK, QUOTE_COLUMNS, PacketTable, empty_columns
+from uavcas.labels import constructed_truth
 from uavcas.scenario.campaign import MEDIUM_PAPER_CONFIGS, run_seed
 from uavcas.scenario.codec import parse
+
+from .parquet import to_table, write_table
+from .store import rebuild
 
 FLOODS = {"dos", "ddos"}
 _SERVER_IP, _SERVER_PORT = "10.0.0.100", 80
@@ -103,8 +111,6 @@ def _benign_mean_iat(n_uav: int, tx_dbm: int, mission: str, pathloss: str) -> fl
 def _packet_table(seqs, src_ips: list[int], src_ports: list[int], dst_ip: int, dst_port: int):
     """The packets of the flows `seqs` as a uavcas.flows packet table (TCP over IPv4, one capture
     point), so the synthetic features come from the real extractor."""
-    from uavcas.flows.packets import COLUMNS, NO_MAVLINK, QUOTE_COLUMNS, PacketTable, empty_columns
-
     n = np.array([len(s[0]) for s in seqs], dtype=np.int64)
     fid = np.repeat(np.arange(len(seqs)), n)
     back = np.concatenate([s[2] for s in seqs]).astype(bool)
@@ -146,10 +152,6 @@ def _packet_table(seqs, src_ips: list[int], src_ports: list[int], dst_ip: int, d
 
 def _flow_table(seqs, src_ips: list[int], src_ports: list[int], sequences: bool) -> pd.DataFrame:
     """Identity, counts, sequences and the 47 features of `seqs`, computed by uavcas.flows."""
-    from uavcas.flows.assemble import FlowConfig, assemble
-    from uavcas.flows.context import context_frame
-    from uavcas.flows.features import flow_frame
-
     dst_ip = int(ipaddress.IPv4Address(_SERVER_IP))
     table = _packet_table(seqs, src_ips, src_ports, dst_ip, _SERVER_PORT)
     # one flow per generated sequence: no termination rule may split one
@@ -194,7 +196,6 @@ def make_flows(runs: int = 48, flows_per_run: int = 60, seed: int = 0, sequences
                 row[f"label_{fam}"] = fam in f
             rows.append(row)
     df = pd.concat([pd.DataFrame(rows), _flow_table(seqs, src_ips, src_ports, sequences)], axis=1)
-    from uavcas.labels import constructed_truth
 
     truth = constructed_truth(df)  # every packet of an attack flow is an attack packet, by construction
     df = pd.concat([df, truth if sequences else truth.drop(columns=["seq_effect"])], axis=1)
@@ -211,9 +212,6 @@ def write_dataset(out_dir: str | Path, df: pd.DataFrame, run_meta: dict[str, dic
     store's own card), built in a temporary directory beside `out_dir` and renamed onto it.
     `out_dir` must not exist, or be an empty directory. `run_meta`: run id -> more of its shard
     metadata (e.g. `fidelity`, `fidelity_failed`, as an extracted run records them)."""
-    from .parquet import to_table, write_table
-    from .store import rebuild
-
     out = Path(out_dir)
     with atomic_dir(out) as tmp:
         for run_id, g in df.groupby("run_id", sort=True):

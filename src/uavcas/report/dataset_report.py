@@ -20,10 +20,19 @@ import pandas as pd
 import pyarrow.parquet as pq
 
 from uavcas.atomic import atomic_write_text
+from uavcas.dataset.dictionary import describe
+from uavcas.dataset.parquet import read_flows
+from uavcas.dataset.runs import class_table, dataset_runs
+from uavcas.dataset.store import card_standard, read_card
 from uavcas.labels.label import rule_summary
 from uavcas.schema import CLASSES
+from uavcas.twin.load import read_plan
 
 from .distributions import SHOWN_EPISODE_FEATURES, SHOWN_FEATURES, counts_frame, feature_figure
+from .fidelity import COLUMNS as FIDELITY_HELP
+from .fidelity import fidelity_figure, fidelity_frame, read_run_fidelity
+from .figure import png_data_uri
+from .topology import attack_start_figure
 
 TEMPLATE = "report.html.j2"
 
@@ -43,8 +52,6 @@ def _styled(df: pd.DataFrame, raw: tuple[str, ...] = ()) -> str:
 
 
 def _class_table(df: pd.DataFrame) -> str:
-    from uavcas.dataset.runs import class_table
-
     return _styled(class_table(df))
 
 
@@ -76,10 +83,6 @@ def _runs_table(runs, topo_ids: set[str], fid_ids: set[str], unit: str) -> str:
 
 
 def _topologies(dataset_dir: Path, runs) -> list[dict]:
-    from uavcas.twin.load import read_plan
-
-    from .figure import png_data_uri
-    from .topology import attack_start_figure
 
     out = []
     for r in runs:
@@ -97,8 +100,6 @@ def _topologies(dataset_dir: Path, runs) -> list[dict]:
 
 
 def _fidelity(dataset_dir: Path, runs) -> tuple[str | None, str | None]:
-    from .fidelity import fidelity_figure, fidelity_frame, read_run_fidelity
-
     audits = read_run_fidelity(dataset_dir)
     if not audits:
         return None, None
@@ -112,8 +113,6 @@ def _fidelity(dataset_dir: Path, runs) -> tuple[str | None, str | None]:
 
 
 def _distributions(df: pd.DataFrame, shown: tuple[str, ...], standard: str, episodes: bool) -> dict:
-    from uavcas.dataset.dictionary import describe
-
     classes = [c for c in CLASSES if c in set(df["label"])] + sorted(set(df["label"]) - set(CLASSES))
     figures, counts = [], {}
     for feat in shown:
@@ -126,10 +125,6 @@ def _distributions(df: pd.DataFrame, shown: tuple[str, ...], standard: str, epis
 
 def write_report(dataset_dir: str | Path, out_dir: str | Path) -> Path:
     """Render DATASET_DIR's report into OUT_DIR/index.html (the only file written); returns its path."""
-    from uavcas.dataset.parquet import read_flows
-    from uavcas.dataset.runs import dataset_runs
-    from uavcas.dataset.store import card_standard, read_card
-
     dataset_dir, out = Path(dataset_dir), Path(out_dir)
     card = read_card(dataset_dir)
     flows_path = dataset_dir / "flows.parquet"
@@ -144,7 +139,6 @@ def write_report(dataset_dir: str | Path, out_dir: str | Path) -> Path:
     summary = _summary(card, df, runs, standard)
     topologies = _topologies(dataset_dir, runs)
     fid_table, fid_uri = _fidelity(dataset_dir, runs)
-    from .fidelity import COLUMNS as FIDELITY_HELP
 
     fid_ids = {r.run_id for r in runs if (dataset_dir / "runs" / r.run_id / "fidelity.json").is_file()}
     card_json = json.dumps(card, indent=1)
