@@ -70,6 +70,7 @@ def stratified_sample(labels, n: int, seed: int = 0) -> np.ndarray:
 def tsne_embedding(df: pd.DataFrame, n_samples: int = 2000, seed: int = 0) -> pd.DataFrame:
     """2-D t-SNE of the dataset standard's features (signed log, standardised) on a seeded subsample stratified
     by class (`stratified_sample`)."""
+    # on use: scikit-learn's manifold module is slow to import and only this figure needs it
     from sklearn.manifold import TSNE
     from sklearn.preprocessing import StandardScaler
 

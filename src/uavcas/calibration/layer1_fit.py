@@ -51,7 +51,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy.constants import c as SPEED_OF_LIGHT_M_S
-from scipy.optimize import least_squares
+from scipy.optimize import curve_fit, least_squares
 
 from uavcas.channel import LinkGeometry, LogDistance, PathLossProfile, TwoRay, UMaAV, free_space_loss_db
 
@@ -210,8 +210,6 @@ def logdist_loss_db(profile: PathLossProfile, g: Group, mask=slice(None), at_pro
 
 def fit_decorrelation_m(groups: list[Group], fit: LogDistanceFit, max_lag_m: float = 200.0) -> float:
     """Median over files of the fitted Gudmundson decorrelation distance (module docstring)."""
-    from scipy.optimize import curve_fit
-
     out = []
     for i, g in enumerate(groups):
         s = g.samples

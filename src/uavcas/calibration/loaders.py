@@ -30,6 +30,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
+import scipy.io
+from scipy.optimize import least_squares
 
 
 class CalibrationDataError(ValueError):
@@ -42,8 +45,6 @@ class CalibrationDataError(ValueError):
 
 
 def _read_mat(path: Path) -> dict[str, np.ndarray]:
-    import scipy.io
-
     try:
         raw = scipy.io.loadmat(str(path), squeeze_me=True)
     except NotImplementedError:  # scipy says so for v7.3 files: they are HDF5
@@ -69,8 +70,6 @@ def _read_mat73(path: Path) -> dict[str, np.ndarray]:
 
 
 def _read_csv(path: Path) -> dict[str, np.ndarray]:
-    import pandas as pd
-
     try:
         if path.name.endswith(".gz"):
             with gzip.open(path, "rb") as fh:
@@ -284,8 +283,6 @@ def local_xy_m(lon_deg, lat_deg, lon0: float, lat0: float) -> tuple[np.ndarray, 
 def _rover_from_processed(p: Path) -> tuple[tuple[float, float], float]:
     """Rover lon/lat by least-squares trilateration of the processed file's 2-D distances,
     and its antenna height from the 3-D distances (h_rover = h_UAV - sqrt(d3^2 - d2^2))."""
-    from scipy.optimize import least_squares
-
     c = finite_rows(columns(p, read_table(p), AFAR_PROC_COLUMNS))
     lon0, lat0 = float(np.mean(c["lon_all"])), float(np.mean(c["lat_all"]))
     x, y = local_xy_m(c["lon_all"], c["lat_all"], lon0, lat0)

@@ -68,6 +68,7 @@ def run_dask(
     mavlink_signing: bool = False,
 ) -> Iterator[RunOutcome]:
     """Submit every entry to the scheduler at `address` (tcp://HOST:8786); yield as they finish."""
+    # on use: dask's distributed is heavy and only a campaign on a scheduler needs it
     from distributed import Client, as_completed
 
     with Client(address, timeout=connect_timeout_s) as client:

@@ -16,6 +16,8 @@ import time
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
+import pyarrow.parquet as pq
+
 from uavcas.dataset.parquet import to_table
 from uavcas.extract import EXTRACT_VIEWS, extract
 from uavcas.flows import TERMINATIONS
@@ -91,8 +93,6 @@ def execute_entry(
     `fidelity`: what a run whose fidelity audit failed becomes: "flag" (kept, its verdict in the
     dataset card) or "retry" (tried again like a failed run; the last try is kept, flagged).
     """
-    import pyarrow.parquet as pq
-
 
     if isinstance(entry, dict):
         entry = ManifestEntry(**entry)

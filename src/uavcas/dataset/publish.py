@@ -26,6 +26,7 @@ import json
 import os
 import shutil
 from dataclasses import dataclass
+from importlib.metadata import version as installed
 from pathlib import Path
 
 import jinja2
@@ -160,8 +161,6 @@ def _card_text(card: dict, dataset_dir: Path, info: DatasetInfo, files: list[Fil
 def publish(dataset_dir: str | Path, out: str | Path, name: str | None = None, license: str = DEFAULT_LICENSE,
             version: str = "1.0.0", url: str | None = None) -> Published:
     """Publish DATASET_DIR into OUT (absent or an empty directory); see the module docstring."""
-    from importlib.metadata import version as installed
-
 
     dataset_dir, out = Path(dataset_dir), Path(out)
     card = read_card(dataset_dir)

@@ -302,6 +302,7 @@ def _fit_one(res: ProtocolResult, task: Task, sp: Split, name: str, seed: int, c
 def _importance(est, tf, task: Task, rows: np.ndarray, seed: int, model: str, cfg: BenchConfig,
                 features: list[str]) -> list[Importance]:
     """Drop in macro-F1 (declared classes) when one feature's test values are shuffled."""
+    # on use: only the importance table needs them
     from sklearn.inspection import permutation_importance
     from sklearn.metrics import f1_score
 

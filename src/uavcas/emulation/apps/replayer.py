@@ -96,6 +96,7 @@ def new_seq(orig: int, k: int, mode: str, rng: random.Random) -> int:
 
 def mutate(frame: bytes, k: int, mode: str, ttl_dec: int, rng: random.Random) -> tuple[bytes, int | None]:
     """The injected frame: TTL - ttl_dec, TCP seq per mode, checksums recomputed (scapy)."""
+    # scapy is slow to import; `run` imports it before the replayer says ready
     from scapy.layers.inet import IP, TCP, UDP
     from scapy.layers.l2 import Ether
 
