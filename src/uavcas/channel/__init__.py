@@ -9,10 +9,11 @@ median loss (`uavcas channel predict`).
 """
 
 from .airtime import CCA_DBM, hears_matrix, shared_rate_mbps
-from .budget import LinkBudget, LinkLayer, LinkParams, link_params
+from .budget import LinkBudget, LinkParams, link_params
 from .fading import TR36777_UMA_AV_K, KFactorProfile
 from .geometry import LinkGeometry, PathLossResult
 from .linkchain import ChainedLinks, LinkChain, predict_links
+from .linklayer import LinkLayer
 from .mcs import MCS_80211AG, McsTable, ber, parse_modulation, per
 from .model import Channel, LinkArrays
 from .pathloss import (

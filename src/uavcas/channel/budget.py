@@ -77,10 +77,11 @@ from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, ConfigDict
 from scipy.constants import c as SPEED_OF_LIGHT_M_S
 
 from .frames import attempt_levels, attempt_reach
+from .linklayer import DEFAULT_LINK_LAYER, LinkLayer
 from .mcs import MCS_80211AG, McsTable
 
 # IEEE 802.11-2020 Clause 17 OFDM PHY characteristics (20 MHz) and Clause 10 DCF timing.
@@ -113,28 +114,6 @@ class LinkBudget(BaseModel):
     def snr_db(self, loss_db) -> np.ndarray:
         """SNR for a total loss (path loss + shadowing) in dB."""
         return self.rx_power_dbm(loss_db) - self.noise_dbm
-
-
-class LinkLayer(BaseModel):
-    """802.11 DCF link-layer assumptions turning PER into rate, delay and residual loss."""
-
-    model_config = ConfigDict(frozen=True, extra="forbid")
-
-    packet_bytes: int = Field(1500, gt=0)
-    mac_overhead_bytes: int = Field(36, ge=0)
-    retry_limit: int = Field(6, ge=0)  # retransmissions; dot11ShortRetryLimit 7 = 7 attempts
-    rate_model: Literal["dcf", "phy"] = "dcf"
-    processing_delay_ms: float = Field(0.1, ge=0)
-    coding: Literal["bcc", "uncoded"] = "bcc"
-    implementation_loss_db: float = Field(5.0, ge=0)
-    fallback_after: int | None = Field(4, ge=1)  # attempts at the chosen level before the base rate
-
-    @property
-    def mpdu_bits(self) -> int:
-        return 8 * (self.packet_bytes + self.mac_overhead_bytes)
-
-
-DEFAULT_LINK_LAYER = LinkLayer()
 
 
 @dataclass(frozen=True, eq=False)

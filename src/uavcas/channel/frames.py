@@ -22,15 +22,13 @@ over the Rician distribution of `uavcas.channel.fading` (no fading: g = 1).
 from __future__ import annotations
 
 from functools import lru_cache
-from typing import TYPE_CHECKING
 
 import numpy as np
 
 from .fading import fading_nodes
+from .linklayer import LinkLayer
 from .mcs import McsTable, per
 
-if TYPE_CHECKING:
-    from .budget import LinkLayer
 
 _PER_GRID_DB = (-40.0, 80.0, 0.005)  # SNR span and step of the tabulated PER
 

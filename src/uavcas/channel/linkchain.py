@@ -29,7 +29,8 @@ from typing import Literal
 import numpy as np
 
 from .airtime import CCA_DBM, hears_matrix, shared_rate_mbps
-from .budget import DEFAULT_LINK_LAYER, LinkBudget, LinkLayer, LinkParams, link_chain
+from .budget import LinkBudget, LinkParams, link_chain
+from .linklayer import DEFAULT_LINK_LAYER, LinkLayer
 from .fading import KFactorProfile
 from .geometry import LinkGeometry
 from .mcs import DEFAULT_MARGIN_DB, MCS_80211AG, McsTable, parse_modulation
@@ -72,7 +73,7 @@ class LinkChain:
     """The radio and link-layer settings of a run and the chain over them (module docstring).
 
     budget: transmit power, antenna gains and noise floor (dBm, dBi).
-    link_layer: 802.11 DCF assumptions (`budget.LinkLayer`).
+    link_layer: 802.11 DCF assumptions (`linklayer.LinkLayer`).
     mcs_table: the MCS levels (802.11a/g by default).
     fading: Rician K(h) profile (None: no small-scale fading).
     fixed_mcs: the scenario's fixed level, or None for adaptive.

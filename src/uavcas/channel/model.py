@@ -42,7 +42,7 @@ import numpy as np
 from scipy.special import ndtr
 
 from .airtime import CCA_DBM
-from .budget import LinkLayer
+from .linklayer import LinkLayer
 from .fading import KFactorProfile
 from .geometry import LinkGeometry
 from .linkchain import ChainedLinks, LinkChain, Selection
@@ -82,7 +82,7 @@ class Channel:
     d_corr_m: shadowing decorrelation distance (paper: 50 m).
     los_corr_m: LOS-state correlation distance (3GPP models; default: the model's).
     sample_los: draw a LOS state (3GPP models) rather than use the LOS-weighted mean loss.
-    link_layer: 802.11 DCF assumptions (`budget.LinkLayer`).
+    link_layer: 802.11 DCF assumptions (`linklayer.LinkLayer`).
     fading: Rician K(h) profile (None: no small-scale fading).
     cca_dbm: carrier-sense threshold of the hearing matrix (`LinkChain.hears`).
 
