@@ -12,7 +12,7 @@ from typer.testing import CliRunner
 
 from uavcas import vocabulary
 from uavcas.cli import app
-from uavcas.dataset import dictionary
+from uavcas.dataset import dictionary, dictionary_docs
 from uavcas.dataset.parquet import arrow_schema, episode_arrow_schema
 from uavcas.dataset.store import extract_run
 from uavcas.flows.standards import names
@@ -67,7 +67,7 @@ def test_family_columns_follow_the_vocabulary():
 
 def test_docs_section_is_the_generated_one():
     text = DOCS.read_text()
-    assert dictionary.with_docs_section(text) == text, "run: python -m uavcas.dataset.dictionary docs/formats.md"
+    assert dictionary_docs.with_docs_section(text) == text, "run: python -m uavcas.dataset.dictionary_docs docs/formats.md"
 
 
 def test_info_columns_lists_every_column_with_unit_and_meaning(synth_run_dir, tmp_path):

@@ -42,6 +42,8 @@ from uavcas.schema import (
     TRUTH_COLUMNS,
 )
 
+from .dictionary import field_metadata
+
 _ID_TYPES = {
     "run_id": pa.string(),
     "config": pa.string(),
@@ -82,8 +84,6 @@ META_KEY = b"uavcas"
 
 def _described(fields: list[pa.Field], standard: str, episodes: bool) -> pa.Schema:
     """The fields with their data-dictionary entry (unit, meaning) as Parquet field metadata."""
-    from .dictionary import field_metadata
-
     return pa.schema([f.with_metadata(field_metadata(f.name, standard, episodes)) for f in fields])
 
 

@@ -11,14 +11,12 @@ from __future__ import annotations
 import importlib
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, ClassVar, Protocol, runtime_checkable
+from typing import ClassVar, Protocol, runtime_checkable
 
 import numpy as np
+from pydantic import BaseModel
 
 from ..geometry import LinkGeometry, PathLossResult
-
-if TYPE_CHECKING:
-    from .logdist import PathLossProfile
 
 DEFAULT_FC_GHZ = 3.51  # AERPAW measurement carrier (Maeng et al.): the default of every model
 
@@ -49,12 +47,14 @@ class LosPathLossModel(PathLossModel, Protocol):
 class PathLossOptions:
     """What `make_pathloss` passes a model's `build`; each model uses the options it has.
 
-    profile: log-distance parameters (object, a name of `logdist.PROFILES`, or None: paper-anchored).
+    profile: log-distance parameters (a `logdist.PathLossProfile`, a name of `logdist.PROFILES`, or
+    None: paper-anchored). Typed as its base class: the profile is the log-distance model's own
+    record, and naming it here would make this module, which every model imports, import one.
     fc_ghz: carrier (None: the model's default, 3.51 GHz, or the log-distance profile's own).
     h_bs_m: BS antenna height where a model must assume one (None: the model's default).
     """
 
-    profile: PathLossProfile | str | None = None
+    profile: BaseModel | str | None = None
     fc_ghz: float | None = None
     h_bs_m: float | None = None
 
