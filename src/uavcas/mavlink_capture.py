@@ -62,6 +62,7 @@ from uavcas.twin.track import Track, geodetic_to_local
 from uavcas.vocabulary import EFFECTS, FAMILIES
 
 MAVLINK_PORT = 14550
+TABLE_SUFFIXES = (".parquet", ".csv")  # what `write_table` writes, by the file's suffix
 DEFAULT_DIALECT = "ardupilotmega"  # pymavlink's own default; a superset of common
 POSITION_FIELDS: tuple[str, ...] = ("lat", "lon", "alt", "relative_alt", "vx", "vy", "vz", "hdg")
 # Every unit these fields carry in pymavlink's dialects, and the column's dtype: integer units
@@ -349,3 +350,22 @@ def message_counts(table: pd.DataFrame, point: str | None = None) -> pd.DataFram
     sec = (t["ts_ns"] // 1_000_000_000).rename("second")
     return (t.groupby([t["sysid"], t["msg_name"], sec]).size().rename("messages").reset_index()
             .astype({"sysid": "UInt8", "second": "int64", "messages": "int64"}))
+
+
+def write_table(table: pd.DataFrame, path: str | Path) -> Path:
+    """The table as Parquet (zstd) or CSV, by the suffix of `path` (`TABLE_SUFFIXES`), atomically."""
+    from uavcas.atomic import atomic_path
+
+    path = Path(path)
+    suffix = path.suffix.lower()
+    if suffix not in TABLE_SUFFIXES:
+        raise MavlinkError(f"{path} must end in {' or '.join(TABLE_SUFFIXES)}")
+    with atomic_path(path) as tmp:
+        if suffix == ".parquet":
+            import pyarrow as pa
+            import pyarrow.parquet as pq
+
+            pq.write_table(pa.Table.from_pandas(table, preserve_index=False), tmp, compression="zstd")
+        else:
+            table.to_csv(tmp, index=False)
+    return path

@@ -1,4 +1,7 @@
-"""The `uavcas` command. Each sub-command lives in its own module with a `register(app)`."""
+"""The `uavcas` command. Each top-level command or group lives in the module of its name (`import`
+in `import_`, a keyword), parses its arguments and calls the library; each module's `register(app)`
+adds its command, and the tuple below, the one place they are registered, gives their order in the
+help. Options and checks several commands share are in `common`."""
 
 from __future__ import annotations
 
@@ -20,7 +23,11 @@ from . import channel as _channel
 from . import clean as _clean
 from . import dataset as _dataset
 from . import doctor as _doctor
+from . import export as _export
+from . import extract as _extract
 from . import flows as _flows
+from . import import_ as _import
+from . import info as _info
 from . import mavlink as _mavlink
 from . import plan as _plan
 from . import publish as _publish
@@ -66,8 +73,8 @@ app = typer.Typer(
     pretty_exceptions_enable=False,
 )
 
-for _module in (_plan, _campaign, _dataset, _flows, _doctor, _clean, _analyze, _bench, _report, _run, _calibrate,
-                _channel, _audit, _mavlink, _publish):
+for _module in (_plan, _campaign, _dataset, _flows, _extract, _export, _import, _info, _doctor, _clean, _analyze,
+                _bench, _report, _run, _calibrate, _channel, _audit, _mavlink, _publish):
     _module.register(app)
 
 

@@ -8,15 +8,14 @@ from pathlib import Path
 import typer
 
 from uavcas.analysis.iat import IAT_SOURCES
-from uavcas.flows.assemble import VIEWS
 
-from .common import atomic_write_text, check_output, console, dataset_argument, err_console, fail, one_of, path_fail, seed_option
+from .common import (View, atomic_write_text, check_output, console, dataset_argument, err_console, fail, one_of,
+                     path_fail, seed_option)
 
 analyze_app = typer.Typer(help="Measure a dataset: diversity, per-axis diversity, separability.", no_args_is_help=True)
 
 
 VIEW_HELP = "Flow view to use when the dataset holds several."
-View = one_of(VIEWS)
 IatSource = one_of((*IAT_SOURCES, "auto"))
 IAT_HELP = ("packet (every IAT, needs per-packet sequences) | flow-mean (one mean IAT per flow) | auto "
             "(packet when every dataset has sequences, else flow-mean); one source for all datasets compared.")

@@ -9,11 +9,10 @@ from pathlib import Path
 import typer
 
 from uavcas.dataset.read import FORMATS
-from uavcas.flows.assemble import VIEWS
 from uavcas.ids.detectors import KIND_NEEDS, KINDS, baselines, detector, detectors, names
 from uavcas.vocabulary import TORCH_DEVICES
 
-from .common import atomic_write_text, check_output, dataset_argument, err_console, fail, one_of, path_fail
+from .common import View, check_output, dataset_argument, err_console, fail, one_of, path_fail
 
 BenchFormat = one_of(("auto", *FORMATS))
 TorchDevice = one_of(TORCH_DEVICES)
@@ -60,14 +59,6 @@ def _parse_list(text: str, known: tuple[str, ...], option: str) -> tuple[str, ..
     return names
 
 
-def _write_leaderboard(out: Path, results, notes: list[str]) -> None:
-    from uavcas.ids.leaderboard import leaderboard_markdown, summarize
-
-    summary = summarize(results)
-    atomic_write_text(out / "leaderboard.csv", summary.to_csv(index=False))
-    atomic_write_text(out / "leaderboard.md", leaderboard_markdown(summary, notes=notes))
-
-
 @bench_app.command("ids")
 def ids_cmd(
     dataset: Path = dataset_argument("Dataset directory (flows.parquet), the authors' CSV (*_ts.csv) or a CICIDS2017/UNSW-NB15 sample."),
@@ -86,7 +77,7 @@ def ids_cmd(
     device: TorchDevice = typer.Option("auto", "--device", help="Where the torch models train: auto (CUDA when torch "
                                                                 "sees a GPU, else the CPU), cpu or cuda. Recorded per fit."),
     fmt: BenchFormat = typer.Option("auto", "--format", help="What DATASET is (auto: by its files)."),
-    view: one_of(VIEWS) | None = typer.Option(None, "--view", help="Flow view when the dataset holds several."),
+    view: View | None = typer.Option(None, "--view", help="Flow view when the dataset holds several."),
 ) -> None:
     """Train and evaluate the baselines; writes results/summary/splits/confusion CSVs, figures,
     results.md per protocol and leaderboard.csv/md."""
@@ -94,7 +85,7 @@ def ids_cmd(
 
     from uavcas.dataset.read import load_any
     from uavcas.ids.protocols import PROTOCOLS, SCALERS, BenchConfig, execute, prepare
-    from uavcas.ids.results import results_frame, write_results
+    from uavcas.ids.results import results_frame, write_leaderboard, write_results
     from uavcas.ids.torch_estimator import DL_MISSING
 
     check_output(out, "dir")
@@ -134,7 +125,7 @@ def ids_cmd(
         write_results(res, where, meta)
         frames.append(results_frame(res))
         notes += [f"{prep.protocol}: {n}" for n in res.notes]
-    _write_leaderboard(out, pd.concat(frames, ignore_index=True), notes)
+    write_leaderboard(out, pd.concat(frames, ignore_index=True), notes)
     typer.echo((out / "leaderboard.md").read_text())
 
 
@@ -144,30 +135,14 @@ def leaderboard_cmd(
     out: Path = typer.Option(..., "--out", help="Output directory for leaderboard.csv and leaderboard.md."),
 ) -> None:
     """One leaderboard (mean ± std over seeds) from several `bench ids` outputs."""
-    import pandas as pd
+    from uavcas.ids.results import ResultsError, collect_results, write_leaderboard
 
     check_output(out, "dir")
-
-    from uavcas.ids.results import RESULT_COLUMNS
-
-    files = []
-    for r in results:
-        found = sorted(r.rglob("results.csv")) if r.is_dir() else ([r] if r.name == "results.csv" else [])
-        if not found:
-            raise fail(f"{r}: no results.csv (expected a `bench ids` output directory)")
-        files += found
-    frames = []
-    for f in files:
-        df = pd.read_csv(f, keep_default_na=False, na_values=[""], dtype={"class": str})
-        if list(df.columns) != list(RESULT_COLUMNS):
-            raise fail(f"{f}: not a `bench ids` results.csv (columns {list(df.columns)})")
-        frames.append(df.fillna({"class": ""}))
-    allr = pd.concat(frames, ignore_index=True)
-    dup = allr.duplicated(["protocol", "seed", "model", "metric", "class"])
-    if dup.any():
-        p = allr.loc[dup, "protocol"].iloc[0]
-        raise fail(f"protocol {p!r} appears in more than one results.csv: pass each protocol once")
-    _write_leaderboard(out, allr, [f"from {f}" for f in files])
+    try:
+        allr, files = collect_results(results)
+    except ResultsError as e:
+        raise fail(str(e)) from None
+    write_leaderboard(out, allr, [f"from {f}" for f in files])
     typer.echo((out / "leaderboard.md").read_text())
 
 

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import typer
 
-from .common import check_output, console, fail, one_of
+from .common import check_output, console, fail, one_of, seed_option
 
 _LAYERS = ("pathloss", "mobility", "link", "fidelity", "all")
 
@@ -17,7 +17,7 @@ def calibrate_cmd(
     data: Path = typer.Option(..., "--data", help="Folder with the AERPAW data (shared layout or the original downloads)."),
     out: Path = typer.Option(..., "--out", help="Output folder for JSON, markdown and figures."),
     write_profile: str = typer.Option(None, "--write-profile", help="Save the fitted twin profile (with provenance) under this name, or to a path ending in .json."),
-    seed: int = typer.Option(0, "--seed", min=0, help="Seed of the splits and simulations."),
+    seed: int = seed_option("Seed of the splits and simulations."),
     missions: str = typer.Option(None, "--missions", help="AFAR team -> mission, e.g. '301=spiral,328=grid' (default: the paper's)."),
 ) -> None:
     """Calibrate the digital twin against real AERPAW measurements (paper sec. 4)."""

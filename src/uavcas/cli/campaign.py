@@ -8,13 +8,11 @@ from pathlib import Path
 import typer
 from rich.table import Table
 
-from uavcas.flows.assemble import VIEWS
-from uavcas.flows.termination import TERMINATIONS
 from uavcas.scenario import PRESETS, manifest, parse_shard, select_shard
-from uavcas.schema import EPISODE_VIEW
 from uavcas.vocabulary import FIDELITY_POLICIES
 
-from .common import TERMINATION_HELP, atomic_write_text, check_output, console, fail, one_of, profile_option, seed_option
+from .common import (ExtractView, Termination, atomic_write_text, check_output, console, fail,
+                     min_attack_fraction_option, one_of, profile_option, seed_option, termination_option)
 
 Preset = one_of(PRESETS)
 
@@ -54,12 +52,10 @@ def run_cmd(
                                  help="A run whose fidelity audit fails: 'flag' (keep it, counted in dataset.json) "
                                       "or 'retry' (try again up to --retries, then keep the last, flagged)."),
     report: bool = typer.Option(True, "--report/--no-report", help="Write DATASET_DIR/report/index.html at the end."),
-    min_attack_fraction: float = typer.Option(
-        0.0, "--min-attack-fraction", min=0.0, max=1.0,
-        help="Leave out flows whose share of attack packets is above 0 but below this (default 0: keep all)."),
-    view: one_of((*VIEWS, EPISODE_VIEW)) = typer.Option("5tuple", "--view", help="What each run is extracted to: 5tuple, hostpair, window-hostpair "
+    min_attack_fraction: float = min_attack_fraction_option(),
+    view: ExtractView = typer.Option("5tuple", "--view", help="What each run is extracted to: 5tuple, hostpair, window-hostpair "
                                                       "(flows) or window-host (one row per node per plan window)."),
-    termination: one_of(TERMINATIONS) | None = typer.Option(None, "--termination", help=TERMINATION_HELP),
+    termination: Termination | None = termination_option(),
     mavlink_signing: bool = typer.Option(False, "--mavlink-signing/--no-mavlink-signing",
                                          help="Every run signs its MAVLink (MAVLink 2 signing, a per-run key): "
                                               "the defended twin."),

@@ -13,6 +13,10 @@ from rich.console import Console
 from rich.markup import escape
 
 from uavcas.atomic import atomic_path, atomic_write_bytes, atomic_write_text  # noqa: F401
+from uavcas.flows.assemble import VIEWS
+from uavcas.flows.standards import DEFAULT_STANDARD, names, standards
+from uavcas.flows.termination import TERMINATIONS
+from uavcas.schema import EPISODE_VIEW
 
 
 def _console(stderr: bool = False) -> Console:
@@ -30,6 +34,8 @@ TERMINATION_HELP = ("How a TCP flow ends: connection (default: one connection on
                     "first backward FIN or RST closes, duplicate forward FIN dropped, no 1-packet flows; reproduces "
                     "its 'TCP appendix' flows) or timeout (nfstream's: idle/active timeouts only).")
 
+FEATURES_HELP = "Feature standard: " + "; ".join(f"{s.name} ({s.summary})" for s in standards()) + "."
+
 # --- choices, arguments and options shared by several commands ------------------------------------
 MIN_WINDOW_S = 0.5  # a plan is made to be run: the emulation's shortest window (the same for plan and run)
 
@@ -38,6 +44,12 @@ def one_of(values) -> Any:
     """The annotation of an option taking one of these words: typer lists them in the help,
     completes them, and refuses any other in one line."""
     return Literal[tuple(values)]
+
+
+View = one_of(VIEWS)  # a flow view of `uavcas.flows.assemble`
+ExtractView = one_of((*VIEWS, EPISODE_VIEW))  # ... or episodes: one row per node per plan window
+Standard = one_of(names())  # a feature standard of the registry `uavcas.flows.standards`
+Termination = one_of(TERMINATIONS)
 
 
 def config_argument() -> Any:
@@ -75,6 +87,40 @@ def profile_option() -> Any:
                                                 "(default: the calibrated one).")
 
 
+def features_option() -> Any:
+    return typer.Option(DEFAULT_STANDARD, "--features", help=FEATURES_HELP)
+
+
+def termination_option() -> Any:
+    return typer.Option(None, "--termination", help=TERMINATION_HELP)
+
+
+def allow_truncated_option() -> Any:
+    return typer.Option(False, "--allow-truncated", help="Keep the packets before a truncation.")
+
+
+def min_attack_fraction_option() -> Any:
+    return typer.Option(0.0, "--min-attack-fraction", min=0.0, max=1.0,
+                        help="Leave out flows whose share of attack packets is above 0 but below this "
+                             "(default 0: keep all).")
+
+
+def prefix_option(help: str) -> Any:
+    return typer.Option(None, "--prefix", help=help)
+
+
+def prefix_or_fail(prefix: str | None) -> str | None:
+    """A `--prefix` the emulation can use (`uavcas.emulation.naming`), or a one-line error (exit 2)."""
+    if prefix is not None:
+        from uavcas.emulation.naming import check_prefix as check
+
+        try:
+            check(prefix)
+        except ValueError as e:
+            raise fail(f"--prefix: {e}") from None
+    return prefix
+
+
 def check_output(path: Path, kind: Literal["file", "dir"], option: str = "--out") -> Path:
     """Check an output the user named before any work starts (a one-line error, exit 2, if bad).
 
@@ -101,6 +147,23 @@ def fail(message: str, code: int = 2) -> "typer.Exit":
     they are instead of being taken for console markup."""
     err_console.print(f"[bold red]error:[/] {escape(message)}", highlight=False, soft_wrap=True)
     return typer.Exit(code)
+
+
+def dataset_errors() -> tuple[type[Exception], ...]:
+    """What reading captures, runs and datasets raises on bad input: each is a one-line error."""
+    from uavcas.dataset.external import ExternalFormatError
+    from uavcas.dataset.store import DatasetError
+    from uavcas.dataset.uavcas_csv import CsvFormatError
+    from uavcas.flows import CaptureError
+    from uavcas.labels import LabelError
+
+    return (CaptureError, DatasetError, LabelError, CsvFormatError, ExternalFormatError, ValueError, OSError)
+
+
+def warn(lines) -> None:
+    """Each line as a warning on stderr."""
+    for line in lines:
+        err_console.print(f"[yellow]warning:[/] {line}", highlight=False, soft_wrap=True)
 
 
 def path_fail(path: Path, error: Exception) -> "typer.Exit":

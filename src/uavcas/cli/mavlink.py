@@ -7,10 +7,9 @@ from pathlib import Path
 import typer
 from rich.table import Table
 
-from .common import atomic_path, check_output, console, err_console, fail, run_dir_argument
+from .common import allow_truncated_option, check_output, console, err_console, fail, run_dir_argument, warn
 
 TABLE_ROWS = 50  # the terminal table shows this many messages; --out has them all
-OUT_SUFFIXES = (".parquet", ".csv")
 
 
 def mavlink_cmd(
@@ -20,33 +19,25 @@ def mavlink_cmd(
     point: str = typer.Option(None, "--point", help="Keep one capture point (e.g. s-uav0). Without it a packet "
                                                     "seen at k switches lists its messages k times, once per point."),
     dialect: str = typer.Option("ardupilotmega", "--dialect", help="pymavlink dialect (pymavlink.dialects.v20)."),
-    allow_truncated: bool = typer.Option(False, "--allow-truncated", help="Keep the packets before a truncation."),
+    allow_truncated: bool = allow_truncated_option(),
 ) -> None:
     """Decode every MAVLink message of a run's captures: one row per message and capture point, with
     time, addresses, header, fields (JSON and position columns in the message's units), CRC check,
     a position report's offset from the plan's track (claimed minus true, metres east/north/up: a
     spoofed GPS's drift) and the packet's effect and family from the ground truth."""
-    from uavcas.mavlink_capture import mavlink_table, problems
+    from uavcas.mavlink_capture import TABLE_SUFFIXES, mavlink_table, problems, write_table
 
-    if out is not None and out.suffix.lower() not in OUT_SUFFIXES:
-        raise fail(f"--out: {out} must end in .parquet or .csv")
+    if out is not None and out.suffix.lower() not in TABLE_SUFFIXES:
+        raise fail(f"--out: {out} must end in {' or '.join(TABLE_SUFFIXES)}")
     if out is not None:
         check_output(out, "file")
     try:
         df = mavlink_table(run_dir, port=port, point=point, dialect=dialect, allow_truncated=allow_truncated)
         if out is not None:
-            with atomic_path(out) as tmp:
-                if out.suffix.lower() == ".parquet":
-                    import pyarrow as pa
-                    import pyarrow.parquet as pq
-
-                    pq.write_table(pa.Table.from_pandas(df, preserve_index=False), tmp, compression="zstd")
-                else:
-                    df.to_csv(tmp, index=False)
+            write_table(df, out)
     except (ValueError, OSError) as exc:  # RunDirError, LabelError, CaptureError, MavlinkError: one line
         raise fail(str(exc).splitlines()[0] if str(exc) else type(exc).__name__) from None
-    for line in problems(df):
-        err_console.print(f"[yellow]warning:[/] {line}", highlight=False, soft_wrap=True)
+    warn(problems(df))
     if out is not None:
         err_console.print(f"wrote {len(df)} MAVLink rows to {out}", highlight=False)
         return

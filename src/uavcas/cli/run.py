@@ -16,8 +16,8 @@ from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 from uavcas.vocabulary import MAVLINK_PAYLOADS
 
 from .audit import fidelity_line
-from .common import (check_output, config_argument, console, fail, plan_or_fail, profile_option, seed_option,
-                     window_s_option, windows_option, episodes_option)
+from .common import (check_output, config_argument, console, episodes_option, fail, plan_or_fail, prefix_option,
+                     prefix_or_fail, profile_option, seed_option, window_s_option, windows_option)
 
 
 def run_cmd(
@@ -28,7 +28,7 @@ def run_cmd(
     window_s: float = window_s_option(),
     episodes: int = episodes_option(),
     profile: str = profile_option(),
-    prefix: str = typer.Option(None, "--prefix", help="Namespace prefix (default: random)."),
+    prefix: str = prefix_option("Namespace prefix (default: random)."),
     think_s: float = typer.Option(0.5, "--think-s", min=0.0, help="Mean pause between a BS's image fetches."),
     video_kbps: int = typer.Option(None, "--video-kbps", min=1,
                                    help="H.264 bitrate of each UAV's video in kbit/s (payload video, mixed; default 500)."),
@@ -44,13 +44,7 @@ def run_cmd(
     if mavlink_signing and p.scenario is not None and p.scenario.payload not in MAVLINK_PAYLOADS:
         raise fail(f"--mavlink-signing: payload {p.scenario.payload!r} carries no MAVLink "
                    f"(use {', '.join(MAVLINK_PAYLOADS)})")
-    if prefix is not None:
-        from uavcas.emulation.naming import check_prefix
-
-        try:
-            check_prefix(prefix)
-        except ValueError as e:
-            raise fail(f"--prefix: {e}") from None
+    prefix_or_fail(prefix)
     from uavcas.emulation.preflight import preflight
 
     reason = preflight(p, out)

@@ -6,7 +6,8 @@ groups packets into flows (termination.py: the `connection`, `cic` and `timeout`
 `flow_frame` (features.py) computes one row per flow with the features of a standard
 (`standards`: one module per standard; cic: CICFlowMeter's, paper: the authors'). `extract_flows`
 (`flows_of` for a table already read) chains the three in memory (the extraction stage needs the packets for its labels);
-`iter_flow_frames` (stream.py) streams one capture with bounded memory.
+`iter_flow_frames` (stream.py) streams one capture with bounded memory; `uavcas.dataset.flow_files`
+writes such a stream to Parquet or CSV.
 """
 
 from __future__ import annotations
@@ -22,13 +23,13 @@ from .features import CSV_LEAD_COLUMNS, flow_frame
 from .packets import CaptureStats, PacketTable, read_packets
 from .pcapio import CaptureError
 from .standards import DEFAULT_STANDARD
-from .stream import StreamReport, iter_flow_frames
+from .stream import StreamReport, empty_flow_frame, iter_flow_frames
 from .termination import TERMINATIONS
 
 __all__ = [
     "CSV_LEAD_COLUMNS", "MAX_PACKETS_PER_FLOW", "TERMINATIONS", "VIEWS", "CaptureError",
     "CaptureStats", "Extraction", "FlowConfig", "Flows", "PacketTable", "StreamReport", "assemble",
-    "extract_flows", "flow_frame", "flows_of", "iter_flow_frames", "read_packets",
+    "empty_flow_frame", "extract_flows", "flow_frame", "flows_of", "iter_flow_frames", "read_packets",
 ]  # fmt: skip
 
 

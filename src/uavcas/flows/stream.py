@@ -125,6 +125,13 @@ def _stream_one(
         cols = nxt
 
 
+def empty_flow_frame(standard: str = DEFAULT_STANDARD, sequences: bool = True) -> pd.DataFrame:
+    """The columns of a flow frame with no rows: what a capture without a single flow yields
+    (its files still carry the schema: a Parquet file with no row, a CSV header)."""
+    empty = PacketTable(empty_columns(), ("none",))
+    return flow_frame(empty, assemble(empty), sequences=sequences, standard=standard)
+
+
 def iter_flow_frames(
     paths: Sequence[str | Path],
     cfg: FlowConfig = FlowConfig(),

@@ -28,6 +28,10 @@ RESULT_COLUMNS = ("protocol", "seed", "model", "metric", "class", "value")
 TOP_FEATURES = 10
 
 
+class ResultsError(ValueError):
+    """Benchmark outputs that cannot be put on one leaderboard; one line."""
+
+
 def results_frame(res: ProtocolResult) -> pd.DataFrame:
     df = pd.DataFrame([asdict(s) for s in res.scores], columns=["protocol", "seed", "model", "metric", "cls", "value"])
     return df.rename(columns={"cls": "class"})[list(RESULT_COLUMNS)]
@@ -123,3 +127,35 @@ def write_results(res: ProtocolResult, out: str | Path, meta: dict) -> list[Path
         title = f"{res.protocol}: {model} (counts, {len(res.sizes)} seeds)"
         written.append(confusion_figure(res.declared, cm, title, out / f"confusion_{_safe(model)}.png"))
     return written
+
+
+def write_leaderboard(out: str | Path, results: pd.DataFrame, notes: list[str]) -> list[Path]:
+    """leaderboard.csv (`summarize`) and leaderboard.md of results of one or more protocols."""
+    out = Path(out)
+    summary = summarize(results)
+    return [atomic_write_text(out / "leaderboard.csv", summary.to_csv(index=False)),
+            atomic_write_text(out / "leaderboard.md", leaderboard_markdown(summary, notes=notes))]
+
+
+def collect_results(outputs: list[Path]) -> tuple[pd.DataFrame, list[Path]]:
+    """The results.csv files of `bench ids` outputs (directories, searched recursively, or the
+    files themselves), read into one frame, and the files read. Each protocol must come from one
+    file only: its seeds' mean and std would otherwise mix two benchmarks."""
+    files: list[Path] = []
+    for r in map(Path, outputs):
+        found = sorted(r.rglob("results.csv")) if r.is_dir() else ([r] if r.name == "results.csv" else [])
+        if not found:
+            raise ResultsError(f"{r}: no results.csv (expected a `bench ids` output directory)")
+        files += found
+    frames = []
+    for f in files:
+        df = pd.read_csv(f, keep_default_na=False, na_values=[""], dtype={"class": str})
+        if list(df.columns) != list(RESULT_COLUMNS):
+            raise ResultsError(f"{f}: not a `bench ids` results.csv (columns {list(df.columns)})")
+        frames.append(df.fillna({"class": ""}))
+    allr = pd.concat(frames, ignore_index=True)
+    dup = allr.duplicated(["protocol", "seed", "model", "metric", "class"])
+    if dup.any():
+        p = allr.loc[dup, "protocol"].iloc[0]
+        raise ResultsError(f"protocol {p!r} appears in more than one results.csv: pass each protocol once")
+    return allr, files

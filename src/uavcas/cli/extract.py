@@ -1,0 +1,55 @@
+"""`uavcas extract RUN_DIR --out DATASET`: one run's labelled flows added to a dataset
+(`uavcas.dataset.store.extract_run`)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import typer
+
+from uavcas.schema import EPISODE_VIEW
+from uavcas.vocabulary import LABEL_MODES
+
+from .common import (ExtractView, Standard, Termination, allow_truncated_option, check_output, console,
+                     dataset_errors, err_console, fail, features_option, min_attack_fraction_option, one_of,
+                     run_dir_argument, termination_option)
+
+
+def extract_cmd(
+    run_dir: Path = run_dir_argument(),
+    out: Path = typer.Option(..., "--out", help="Dataset directory to add the run's shard to."),
+    view: ExtractView = typer.Option("5tuple", "--view", help="Flow key: 5tuple, hostpair or window-hostpair (one flow per host pair per plan window); "
+                                                   "or window-host: episodes, one row per node per plan window (collaborative classes)."),
+    features: Standard = features_option(),
+    labels: one_of(LABEL_MODES) = typer.Option("ours", "--labels", help="ours (from each packet's effect) or paper (IP membership)."),
+    min_packets: int = typer.Option(None, "--min-packets", help="Drop smaller flows (default by view)."),
+    termination: Termination | None = termination_option(),
+    allow_truncated: bool = allow_truncated_option(),
+    min_attack_fraction: float = min_attack_fraction_option(),
+    allow_incomplete: bool = typer.Option(False, "--allow-incomplete",
+                                          help="Also extract a run that was killed or failed (marked incomplete)."),
+) -> None:
+    """Extract one run into the dataset directory --out (its shard is replaced if it was extracted before)."""
+    check_output(out, "dir")
+    from uavcas.dataset.store import extract_run
+
+    try:
+        info = extract_run(run_dir, out, view=view, labels=labels, min_packets=min_packets, termination=termination,
+                           allow_truncated=allow_truncated, features=features,
+                           min_attack_fraction=min_attack_fraction, allow_incomplete=allow_incomplete)  # fmt: skip
+    except dataset_errors() as exc:
+        raise fail(str(exc)) from None
+    for t in info.truncations:
+        err_console.print(f"[yellow]warning:[/] truncated capture {t}; kept the packets before it", highlight=False)
+    if not info.complete:
+        err_console.print(f"[yellow]warning:[/] run {info.run_id} is incomplete (exit status "
+                          f"{info.run_exit_status}); its shard is marked so", highlight=False)
+    counts = ", ".join(f"{k} {v}" for k, v in sorted(info.class_counts.items()))
+    unit = "host-window rows" if info.view == EPISODE_VIEW else "flows"
+    console.print(f"run [bold]{info.run_id}[/]: {info.n_flows} {unit} from {info.n_packets} packets ({counts}) -> {out}", highlight=False)
+    if info.impure_dropped:
+        console.print(f"{info.impure_dropped} flow(s) left out: attack_fraction below {min_attack_fraction:g}")
+
+
+def register(app: typer.Typer) -> None:
+    app.command("extract")(extract_cmd)
