@@ -12,7 +12,8 @@ import pandas as pd
 import pytest
 
 from helpers.synth_run import IPS, MAV_BLACKHOLED_T, MAV_LAT, MAV_LON, T0, add_mavlink, build_run, mavlink_datagrams
-from uavcas.mavlink_capture import ALL_COLUMNS, decode_datagrams, mavlink_table, message_counts, problems
+from uavcas.mavlink_capture import (ALL_COLUMNS, MavlinkError, decode_datagrams, mavlink_table, message_counts, problems,
+                                    write_table)
 
 UAVCAS = str(Path(sys.executable).parent / "uavcas")
 
@@ -107,6 +108,19 @@ def test_decode_datagrams_keeps_the_order_and_flags_a_cut_frame():
     df = decode_datagrams([payloads[0][:-3], payloads[1]])
     assert df["datagram"].tolist() == [0, 1]
     assert df["crc_ok"].tolist() == [False, True] and "cut" in df["error"].iloc[0]
+
+
+def test_the_table_is_written_as_parquet_or_csv_by_suffix(table, tmp_path):
+    assert write_table(table, tmp_path / "m.PARQUET") == tmp_path / "m.PARQUET"
+    back = pd.read_parquet(tmp_path / "m.PARQUET")
+    assert list(back.columns) == list(ALL_COLUMNS) and len(back) == len(table)
+    assert back["fields_json"].fillna("-").tolist() == table["fields_json"].fillna("-").tolist()
+    write_table(table, tmp_path / "m.csv")
+    csv = pd.read_csv(tmp_path / "m.csv")
+    assert list(csv.columns) == list(ALL_COLUMNS) and csv["ts_ns"].tolist() == table["ts_ns"].tolist()
+    with pytest.raises(MavlinkError, match=r"m.json must end in .parquet or .csv"):
+        write_table(table, tmp_path / "m.json")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["m.PARQUET", "m.csv"]  # nothing else, no temporary
 
 
 def test_cli_writes_parquet_and_refuses_a_bad_run_dir(mav_run, tmp_path):

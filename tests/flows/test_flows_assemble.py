@@ -155,3 +155,17 @@ def test_streaming_gives_the_same_flows(tmp_path, chunk, termination):
     pd.testing.assert_frame_equal(whole[flat], streamed[flat], check_dtype=False)
     for c in ("seq_time_s", "seq_size", "seq_flags", "seq_dir"):
         assert whole[c].tolist() == streamed[c].tolist(), c
+
+
+@pytest.mark.parametrize("standard", ["cic", "paper"])
+@pytest.mark.parametrize("sequences", [True, False])
+def test_the_empty_flow_frame_has_the_columns_and_dtypes_of_a_stream(tmp_path, standard, sequences):
+    from uavcas.flows import empty_flow_frame
+
+    pcap = write(tmp_path / "a.pcap", http_session())
+    (df,) = iter_flow_frames([pcap], FlowConfig(), standard=standard, sequences=sequences)
+    empty = empty_flow_frame(standard, sequences=sequences)
+    assert len(empty) == 0 and len(df) > 0
+    assert list(empty.columns) == list(df.columns)
+    assert {c: str(t) for c, t in empty.dtypes.items() if c != "flow_id"} == \
+           {c: str(t) for c, t in df.dtypes.items() if c != "flow_id"}
