@@ -11,10 +11,14 @@ of the low and the high group is computed; those at or above `CONFOUND_TV` are l
 
 from __future__ import annotations
 
+import json
+from pathlib import Path
+
 import numpy as np
 import pandas as pd
 
 from uavcas import schema
+from uavcas.atomic import atomic_write_text
 from uavcas.stats.divergence import DEFAULT_BINS, compare_pooled, flow_counts, log_bins
 
 from .diversity import size_matched_baseline
@@ -103,3 +107,13 @@ def axis_diversity(
                      "confounded_with": ", ".join(f"{a}:{tv:.2f}" for a, tv in conf), "iat_source": ia.source})
         bins[axis] = edges.tolist()
     return pd.DataFrame(rows).reindex(columns=list(COLUMNS)), bins
+
+
+def write_axes(out: str | Path, table: pd.DataFrame, edges, iat_source: str) -> list[Path]:
+    """`uavcas analyze axes`'s files in `out`: axes.csv and axes.json (the IAT source, the confounding
+    threshold, the bin edges, the table as records)."""
+    out = Path(out)
+    payload = {"iat_source": iat_source, "confound_tv": CONFOUND_TV, "bins": edges,
+               "table": json.loads(table.to_json(orient="records"))}
+    return [atomic_write_text(out / "axes.csv", table.to_csv(index=False)),
+            atomic_write_text(out / "axes.json", json.dumps(payload, indent=2, default=str, allow_nan=True))]

@@ -12,12 +12,15 @@ Like for like:
 
 from __future__ import annotations
 
+import json
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
 from uavcas import schema
+from uavcas.atomic import atomic_write_text
 from uavcas.stats.divergence import DEFAULT_BINS, compare_pairwise, compare_pooled, flow_counts, hellinger, jsd, log_bins
 
 from .iat import FlowIATs, flow_iats
@@ -171,3 +174,17 @@ def diversity_table(df: pd.DataFrame, dataset: str = "dataset", opt: DiversityOp
         "n_flows_without_iat": int(sum(v.n_flows_no_iat for v in iats.values())),
     }
     return DiversityResult(table, {dataset: edges.tolist()}, {dataset: info})
+
+
+def write_diversity(out: str | Path, table: pd.DataFrame, opt: DiversityOptions,
+                    results: list[DiversityResult]) -> list[Path]:
+    """`uavcas analyze diversity`'s files in `out`: diversity.csv (the table of every dataset) and
+    diversity.json (the options, each dataset's bins and info, the table as records)."""
+    out = Path(out)
+    payload: dict = {"options": vars(opt), "bins": {}, "info": {}}
+    for res in results:
+        payload["bins"].update(res.bins)
+        payload["info"].update(res.info)
+    payload["table"] = json.loads(table.to_json(orient="records"))
+    return [atomic_write_text(out / "diversity.csv", table.to_csv(index=False)),
+            atomic_write_text(out / "diversity.json", json.dumps(payload, indent=2, default=str, allow_nan=True))]

@@ -7,6 +7,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from uavcas.atomic import atomic_write_text
 from uavcas.flows.standards import DEFAULT_STANDARD, feature_columns
 from uavcas.report.figure import plt, save_png
 
@@ -127,3 +128,12 @@ def distributions_figure(df: pd.DataFrame, path: str | Path) -> Path:
         ax.set_title(f"{name} (flows with value > 0)")
     axes[0, 0].legend(fontsize=6, ncol=2)
     return save_png(fig, path)
+
+
+def write_separability(out: str | Path, df: pd.DataFrame, stats: pd.DataFrame, emb: pd.DataFrame) -> list[Path]:
+    """`uavcas analyze separability`'s files in `out`: separability.csv (`separability_stats`),
+    tsne.csv (`tsne_embedding`), tsne.png and distributions.png (of the flows `df`)."""
+    out = Path(out)
+    return [atomic_write_text(out / "separability.csv", stats.to_csv(index=False)),
+            atomic_write_text(out / "tsne.csv", emb.to_csv(index=False)),
+            tsne_figure(emb, out / "tsne.png"), distributions_figure(df, out / "distributions.png")]

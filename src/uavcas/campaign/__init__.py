@@ -1,6 +1,6 @@
 """Campaigns: a manifest of scenarios -> runs (local pool or Dask) -> one resumable dataset."""
 
-from .layout import CampaignDir, CampaignError, read_manifest
+from .layout import CampaignDir, CampaignError, read_manifest, write_manifest
 from .run import CampaignResult, run_campaign
 from .task import Extraction, RunOutcome, execute_entry
 
@@ -13,4 +13,5 @@ __all__ = [
     "execute_entry",
     "read_manifest",
     "run_campaign",
+    "write_manifest",
 ]

@@ -120,7 +120,7 @@ class CampaignDir:
 
         Resuming relies on index -> (config, seed) being the same as the first time.
         """
-        text = "".join(json.dumps(e.to_dict(), sort_keys=True) + "\n" for e in entries)
+        text = manifest_text(entries)
         if self.manifest_path.exists():
             old = {json.loads(line)["index"]: json.loads(line) for line in self.manifest_path.read_text().splitlines() if line}
             for e in entries:
@@ -133,6 +133,16 @@ class CampaignDir:
             merged = {**old, **{e.index: e.to_dict() for e in entries}}
             text = "".join(json.dumps(merged[k], sort_keys=True) + "\n" for k in sorted(merged))
         atomic_write_text(self.manifest_path, text)
+
+
+def manifest_text(entries: list[ManifestEntry]) -> str:
+    """A manifest's JSONL: one entry per line, keys sorted (what `read_manifest` reads)."""
+    return "".join(json.dumps(e.to_dict(), sort_keys=True) + "\n" for e in entries)
+
+
+def write_manifest(path: Path, entries: list[ManifestEntry]) -> Path:
+    """Write a manifest file (atomically): `uavcas campaign manifest`."""
+    return atomic_write_text(path, manifest_text(entries))
 
 
 def read_manifest(path: Path) -> list[ManifestEntry]:

@@ -2,15 +2,13 @@
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 import typer
 
 from uavcas.analysis.iat import IAT_SOURCES
 
-from .common import (View, atomic_write_text, check_output, console, dataset_argument, err_console, fail, one_of,
-                     path_fail, seed_option)
+from .common import View, check_output, console, dataset_argument, err_console, fail, one_of, path_fail, seed_option
 
 analyze_app = typer.Typer(help="Measure a dataset: diversity, per-axis diversity, separability.", no_args_is_help=True)
 
@@ -28,10 +26,6 @@ def _load(path: Path, view: str | None = None):
         return load_any(path, view=view)
     except (FileNotFoundError, ValueError, KeyError, OSError) as e:
         raise path_fail(path, e) from None
-
-
-def _json(path: Path, payload: dict) -> None:
-    atomic_write_text(path, json.dumps(payload, indent=2, default=str, allow_nan=True))
 
 
 @analyze_app.command("diversity")
@@ -52,7 +46,7 @@ def diversity_cmd(
     baseline drawn at the class's sample size."""
     import pandas as pd
 
-    from uavcas.analysis.diversity import DiversityOptions, diversity_table
+    from uavcas.analysis.diversity import DiversityOptions, diversity_table, write_diversity
     from uavcas.analysis.iat import choose_source
 
     check_output(out, "dir")
@@ -64,20 +58,15 @@ def diversity_cmd(
         raise fail(str(e)) from None
     opt = DiversityOptions(n_bins=bins, n_boot=boot, seed=seed, pairwise=pairwise, legacy=legacy,
                            iat_source=source, baseline_draws=baseline_draws)
-    tables, payload = [], {"options": vars(opt), "bins": {}, "info": {}}
+    results = []
     for path, df in zip(paths, frames):
         name = path.name if path.name != "flows.parquet" else path.parent.name
         try:
-            res = diversity_table(df, dataset=name, opt=opt)
+            results.append(diversity_table(df, dataset=name, opt=opt))
         except ValueError as e:
             raise fail(f"{path}: {e}") from None
-        tables.append(res.table)
-        payload["bins"].update(res.bins)
-        payload["info"].update(res.info)
-    table = pd.concat(tables, ignore_index=True)
-    atomic_write_text(out / "diversity.csv", table.to_csv(index=False))
-    payload["table"] = json.loads(table.to_json(orient="records"))
-    _json(out / "diversity.json", payload)
+    table = pd.concat([res.table for res in results], ignore_index=True)
+    write_diversity(out, table, opt, results)
     typer.echo(table[["dataset", "class", "hellinger", "jsd", "baseline_hellinger", "legacy_hellinger"]].to_string(index=False))
     console.print(f"IAT source: {source} (every dataset); wrote {out / 'diversity.csv'} and diversity.json")
 
@@ -94,7 +83,7 @@ def axes_cmd(
 ) -> None:
     """Internal diversity per configuration axis on benign flows (extreme values), with a
     size-matched baseline; axes confounded with others in this dataset are flagged."""
-    from uavcas.analysis.axes import CONFOUND_TV, axis_diversity
+    from uavcas.analysis.axes import axis_diversity, write_axes
     from uavcas.analysis.iat import choose_source
 
     check_output(out, "dir")
@@ -106,9 +95,7 @@ def axes_cmd(
         raise fail(f"{dataset}: {e}") from None
     if table.empty:
         raise fail(f"{dataset}: no configuration axis has two values among benign flows")
-    atomic_write_text(out / "axes.csv", table.to_csv(index=False))
-    _json(out / "axes.json", {"iat_source": source, "confound_tv": CONFOUND_TV, "bins": edges,
-                              "table": json.loads(table.to_json(orient="records"))})
+    write_axes(out, table, edges, source)
     typer.echo(table[["axis", "low", "high", "hellinger", "jsd", "baseline_hellinger", "baseline_jsd"]].to_string(index=False))
     for r in table.itertuples():
         if r.confounded_with:
@@ -125,7 +112,7 @@ def separability_cmd(
     view: View | None = typer.Option(None, "--view", help=VIEW_HELP),
 ) -> None:
     """Per-class mean/std of IAT, packet rate, packet size, duration; t-SNE and distribution figures."""
-    from uavcas.analysis.separability import distributions_figure, separability_stats, tsne_embedding, tsne_figure
+    from uavcas.analysis.separability import separability_stats, tsne_embedding, write_separability
 
     check_output(out, "dir")
     df = _load(dataset, view)
@@ -134,10 +121,7 @@ def separability_cmd(
         emb = tsne_embedding(df, n_samples=tsne_samples, seed=seed)
     except ValueError as e:
         raise fail(f"{dataset}: {e}") from None
-    atomic_write_text(out / "separability.csv", stats.to_csv(index=False))
-    atomic_write_text(out / "tsne.csv", emb.to_csv(index=False))
-    tsne_figure(emb, out / "tsne.png")
-    distributions_figure(df, out / "distributions.png")
+    write_separability(out, df, stats, emb)
     typer.echo(stats.to_string(index=False))
     console.print(f"wrote separability.csv, tsne.png, distributions.png to {out}")
 

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 import typer
@@ -11,7 +10,7 @@ from rich.table import Table
 from uavcas.scenario import PRESETS, manifest, parse_shard, select_shard
 from uavcas.vocabulary import FIDELITY_POLICIES
 
-from .common import (ExtractView, Termination, atomic_write_text, check_output, console, fail,
+from .common import (ExtractView, Termination, check_output, console, fail,
                      min_attack_fraction_option, one_of, profile_option, seed_option, termination_option)
 
 Preset = one_of(PRESETS)
@@ -32,8 +31,10 @@ def manifest_cmd(
         sh = parse_shard(shard) if shard is not None else None
     except ValueError as e:
         raise fail(f"--{e}") from None
+    from uavcas.campaign import write_manifest
+
     entries = manifest(preset, seed=seed, shard=sh)
-    atomic_write_text(out, "".join(json.dumps(e.to_dict(), sort_keys=True) + "\n" for e in entries))
+    write_manifest(out, entries)
     console.print(f"wrote {len(entries)} scenarios of preset [bold]{preset}[/] to {out}")
 
 
