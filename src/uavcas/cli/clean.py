@@ -6,24 +6,19 @@ import os
 
 import typer
 
-from .common import console, fail
+from .common import console, fail, prefix_option, prefix_or_fail
 
 
 def clean(
-    prefix: str = typer.Option(None, "--prefix", help="Only this run's prefix (default: every dead registered run)."),
+    prefix: str = prefix_option("Only this run's prefix (default: every dead registered run)."),
     force: bool = typer.Option(False, "--force", help="Also clean a run that is still alive."),
 ) -> None:
     """Remove what crashed emulation runs left: processes, namespaces (with their links and rules), cgroups."""
     from uavcas.emulation.cleanup import clean as do_clean
-    from uavcas.emulation.naming import check_prefix
 
     if os.geteuid() != 0:
         raise fail("clean needs root")
-    if prefix is not None:
-        try:
-            check_prefix(prefix)
-        except ValueError as e:
-            raise fail(f"--prefix: {e}") from None
+    prefix_or_fail(prefix)
     reports = do_clean(prefix, force=force)
     if not reports:
         console.print("nothing to clean")

@@ -11,7 +11,7 @@ import typer
 from rich.markup import escape
 from rich.table import Table
 
-from .common import atomic_write_text, check_output, console, fail, one_of
+from .common import atomic_write_text, check_output, console, fail, one_of, prefix_option, prefix_or_fail
 
 VmAccel = one_of(("auto", "kvm", "tcg"))
 HOST_SAMPLE_S = 2.0  # the host's contention, measured before a VM boots
@@ -21,7 +21,7 @@ TOOLS_SHOWN = ("nginx", "hping3", "tcpdump", "curl", "wget", "iperf3", "nft", "i
 def doctor(
     no_measure: bool = typer.Option(False, "--no-measure", help="Only report features and tools."),
     json_out: Path = typer.Option(None, "--json", help="Also write the result as JSON here."),
-    prefix: str = typer.Option(None, "--prefix", help="Prefix for the test emulation (default: random)."),
+    prefix: str = prefix_option("Prefix for the test emulation (default: random)."),
     vm: bool = typer.Option(False, "--vm", help="Run the self-test with the netem backend in a stock Debian kernel "
                                                 "under QEMU (this checkout over 9p; ~0.5-3 min)."),
     vm_accel: VmAccel = typer.Option("auto", "--vm-accel",
@@ -29,15 +29,10 @@ def doctor(
 ) -> None:
     """Report kernel features, the chosen shaper and tools; measure a two-hop shaped path."""
     from uavcas.diagnostics.doctor import run_doctor
-    from uavcas.emulation.naming import check_prefix
 
     if json_out is not None:
         check_output(json_out, "file", "--json")
-    if prefix is not None:
-        try:
-            check_prefix(prefix)
-        except ValueError as e:
-            raise fail(f"--prefix: {e}") from None
+    prefix_or_fail(prefix)
     if vm:
         return _doctor_vm(vm_accel, json_out)
     if os.geteuid() != 0 and not no_measure:
