@@ -161,9 +161,10 @@ def dataset_errors() -> tuple[type[Exception], ...]:
 
 
 def warn(lines) -> None:
-    """Each line as a warning on stderr."""
+    """Each line as a warning on stderr, as plain text like `fail`'s (a path or a list in brackets
+    is printed as it is, not taken for console markup)."""
     for line in lines:
-        err_console.print(f"[yellow]warning:[/] {line}", highlight=False, soft_wrap=True)
+        err_console.print(f"[yellow]warning:[/] {escape(str(line))}", highlight=False, soft_wrap=True)
 
 
 def path_fail(path: Path, error: Exception) -> "typer.Exit":

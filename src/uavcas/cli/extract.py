@@ -11,8 +11,8 @@ from uavcas.schema import EPISODE_VIEW
 from uavcas.vocabulary import LABEL_MODES
 
 from .common import (ExtractView, Standard, Termination, allow_truncated_option, check_output, console,
-                     dataset_errors, err_console, fail, features_option, min_attack_fraction_option, one_of,
-                     run_dir_argument, termination_option)
+                     dataset_errors, fail, features_option, min_attack_fraction_option, one_of, run_dir_argument,
+                     termination_option, warn)
 
 
 def extract_cmd(
@@ -39,11 +39,9 @@ def extract_cmd(
                            min_attack_fraction=min_attack_fraction, allow_incomplete=allow_incomplete)  # fmt: skip
     except dataset_errors() as exc:
         raise fail(str(exc)) from None
-    for t in info.truncations:
-        err_console.print(f"[yellow]warning:[/] truncated capture {t}; kept the packets before it", highlight=False)
+    warn(f"truncated capture {t}; kept the packets before it" for t in info.truncations)
     if not info.complete:
-        err_console.print(f"[yellow]warning:[/] run {info.run_id} is incomplete (exit status "
-                          f"{info.run_exit_status}); its shard is marked so", highlight=False)
+        warn([f"run {info.run_id} is incomplete (exit status {info.run_exit_status}); its shard is marked so"])
     counts = ", ".join(f"{k} {v}" for k, v in sorted(info.class_counts.items()))
     unit = "host-window rows" if info.view == EPISODE_VIEW else "flows"
     console.print(f"run [bold]{info.run_id}[/]: {info.n_flows} {unit} from {info.n_packets} packets ({counts}) -> {out}", highlight=False)
