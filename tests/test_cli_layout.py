@@ -55,15 +55,9 @@ def test_the_shared_options_are_declared_once_in_common():
             f"{path.name}: output checks go through cli.common.check_output"
 
 
-# `channel predict` writes the frame the link chain gives it: issue 26 item 3 reworks that command.
-WRITES_ITS_FRAME = {"channel.py"}
-
-
 def test_no_file_writer_in_the_cli():
     writers = re.compile(r"ParquetWriter|CSVWriter|\bpq\.write_table|\bpacsv\.|\.to_parquet\(|\.to_csv\(")
     for path in sorted(CLI_DIR.glob("*.py")):
-        if path.name in WRITES_ITS_FRAME:
-            continue
         found = writers.findall(path.read_text())
         assert not found, f"{path.name} writes files itself ({found}): move the writer into the library"
 

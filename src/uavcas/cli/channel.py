@@ -6,7 +6,8 @@
 
 GEOM.csv has one row per link (or flight-log sample) with columns d3d_m, d2d_m, h_uav_m,
 h_bs_m (metres) and optionally fc_ghz (default: the profile's carrier); any other column is
-passed through. OUT.csv is GEOM.csv plus:
+passed through (read, checked, predicted and written by `uavcas.channel.predict`). OUT.csv is
+GEOM.csv plus:
 
 * pathloss_db - the model's median loss (`PathLossModel.loss_db`): no shadowing, no fading; for
   a model with a LOS state the LOS-probability-weighted mean P PL_LOS + (1 - P) PL_NLOS;
@@ -22,7 +23,6 @@ passed through. OUT.csv is GEOM.csv plus:
 
 from __future__ import annotations
 
-import io
 from pathlib import Path
 
 import typer
@@ -30,77 +30,9 @@ import typer
 from uavcas.channel.pathloss import help_text as pathloss_help
 from uavcas.channel.pathloss import names as pathloss_names
 
-from .common import atomic_write_text, check_output, console, err_console, fail, one_of, profile_option
-
-REQUIRED = ("d3d_m", "d2d_m", "h_uav_m", "h_bs_m")
-# A 2-D distance longer than the 3-D one is impossible, but rounded coordinates give it by a little
-# (positions to the metre: up to ~0.5 m); within this, d2d_m is clamped to d3d_m and the rows counted.
-D2D_TOLERANCE_M = 0.5
-OUTPUT = ("pathloss_db", "snr_db", "mcs", "rate_mbps", "loss")
+from .common import check_output, console, err_console, fail, one_of, profile_option
 
 app = typer.Typer(help="The twin's channel on your own geometry.", no_args_is_help=True)
-
-
-def _read_geometry(path: Path):
-    import numpy as np
-    import pandas as pd
-
-    if not path.is_file():
-        raise fail(f"--in {path}: no such file")
-    try:
-        df = pd.read_csv(path)
-    except Exception as e:  # pandas raises several types on garbage
-        raise fail(f"--in {path}: not a readable CSV ({str(e).splitlines()[0] if str(e) else type(e).__name__})") from None
-    missing = [c for c in REQUIRED if c not in df.columns]
-    if missing:
-        raise fail(f"--in {path}: missing column(s) {', '.join(missing)} (need {', '.join(REQUIRED)}; fc_ghz optional)")
-    if df.empty:
-        raise fail(f"--in {path}: no rows")
-    clash = [c for c in OUTPUT if c in df.columns]
-    if clash:
-        raise fail(f"--in {path}: already has output column(s) {', '.join(clash)}")
-    for c in REQUIRED + (("fc_ghz",) if "fc_ghz" in df.columns else ()):
-        v = pd.to_numeric(df[c], errors="coerce")
-        bad = ~np.isfinite(v.to_numpy(dtype=float))
-        if bad.any():
-            raise fail(f"--in {path}: column {c} row {int(np.flatnonzero(bad)[0]) + 1}: not a finite number ({df[c].iloc[int(np.flatnonzero(bad)[0])]!r})")
-        df[c] = v.astype(float)
-    for c in ("d3d_m", "d2d_m", "h_uav_m", "h_bs_m"):
-        neg = df[c] < 0
-        if neg.any():
-            raise fail(f"--in {path}: column {c} row {int(neg.idxmax()) + 1}: negative ({df[c][neg.idxmax()]})")
-    if "fc_ghz" in df.columns and (df["fc_ghz"] <= 0).any():
-        raise fail(f"--in {path}: column fc_ghz row {int((df['fc_ghz'] <= 0).idxmax()) + 1}: must be > 0")
-    excess = df["d2d_m"] - df["d3d_m"]
-    impossible = excess > D2D_TOLERANCE_M
-    if impossible.any():
-        row = int(impossible.idxmax())
-        raise fail(f"--in {path}: row {row + 1}: d2d_m {df['d2d_m'][row]:g} exceeds d3d_m {df['d3d_m'][row]:g} by more "
-                   f"than {D2D_TOLERANCE_M:g} m")
-    clamp = excess > 0
-    if clamp.any():
-        df.loc[clamp, "d2d_m"] = df.loc[clamp, "d3d_m"]
-        err_console.print(f"note: {int(clamp.sum())} row(s) had d2d_m up to {D2D_TOLERANCE_M:g} m longer than d3d_m "
-                          f"(rounding); clamped to d3d_m", highlight=False)
-    return df
-
-
-def predict_frame(df, model_name: str, profile, tx_dbm: float, noise_dbm: float):
-    """The output columns for a validated geometry frame (see module docstring)."""
-    import numpy as np
-
-    from uavcas.channel import LinkChain, LinkGeometry, predict_links
-
-    fc = df["fc_ghz"].to_numpy(float) if "fc_ghz" in df.columns else np.full(len(df), profile.channel.fc_ghz)
-    geom = LinkGeometry(d3d_m=df["d3d_m"].to_numpy(float), d2d_m=df["d2d_m"].to_numpy(float),
-                        h_ground_m=df["h_bs_m"].to_numpy(float), h_air_m=df["h_uav_m"].to_numpy(float),
-                        air_to_air=np.zeros(len(df), dtype=bool))
-    chain = LinkChain.build(tx_power_dbm=tx_dbm, noise_dbm=noise_dbm, **profile.chain_kwargs())
-    res = predict_links(model_name, profile.pathloss, fc, geom, chain)
-    out = df.copy()
-    for col in OUTPUT:
-        out[col] = getattr(res, col)
-    return out
 
 
 @app.command("predict")
@@ -114,6 +46,7 @@ def predict_cmd(
     noise_dbm: float = typer.Option(-95.0, "--noise-dbm", help="Noise floor (dBm)."),
 ) -> None:
     """Evaluate a path-loss model and the link chain on your own geometry."""
+    from uavcas.channel.predict import D2D_TOLERANCE_M, GeometryError, predict_frame, read_geometry, write_prediction
     from uavcas.twin.profile import ProfileError, load_profile
 
     check_output(out, "file")
@@ -121,11 +54,15 @@ def predict_cmd(
         prof = load_profile(profile)
     except ProfileError as e:
         raise fail(f"--profile: {e}") from None
-    df = _read_geometry(geom)
+    try:
+        df, clamped = read_geometry(geom)
+    except GeometryError as e:
+        raise fail(f"--in {e}") from None
+    if clamped:
+        err_console.print(f"note: {clamped} row(s) had d2d_m up to {D2D_TOLERANCE_M:g} m longer than d3d_m "
+                          f"(rounding); clamped to d3d_m", highlight=False)
     res = predict_frame(df, model, prof, tx_dbm, noise_dbm)
-    buf = io.StringIO()
-    res.to_csv(buf, index=False, float_format="%.10g")
-    atomic_write_text(out, buf.getvalue())
+    write_prediction(res, out)
     console.print(f"{len(res)} rows, model {model}, profile {prof.name}: written to {out}", highlight=False)
 
 
