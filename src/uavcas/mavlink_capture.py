@@ -51,6 +51,10 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
+import pyarrow as pa
+import pyarrow.parquet as pq
+
+from uavcas.atomic import atomic_path
 
 from uavcas.extract import run_inputs, run_truth
 from uavcas.flows import read_packets
@@ -354,17 +358,12 @@ def message_counts(table: pd.DataFrame, point: str | None = None) -> pd.DataFram
 
 def write_table(table: pd.DataFrame, path: str | Path) -> Path:
     """The table as Parquet (zstd) or CSV, by the suffix of `path` (`TABLE_SUFFIXES`), atomically."""
-    from uavcas.atomic import atomic_path
-
     path = Path(path)
     suffix = path.suffix.lower()
     if suffix not in TABLE_SUFFIXES:
         raise MavlinkError(f"{path} must end in {' or '.join(TABLE_SUFFIXES)}")
     with atomic_path(path) as tmp:
         if suffix == ".parquet":
-            import pyarrow as pa
-            import pyarrow.parquet as pq
-
             pq.write_table(pa.Table.from_pandas(table, preserve_index=False), tmp, compression="zstd")
         else:
             table.to_csv(tmp, index=False)
