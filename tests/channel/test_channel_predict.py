@@ -7,7 +7,7 @@ import pandas as pd
 import pytest
 
 from uavcas.channel import LinkChain, LinkGeometry, predict_links
-from uavcas.channel.predict import OUTPUT, GeometryError, predict_frame, read_geometry, write_prediction
+from uavcas.channel.predict import OUTPUT, GeometryError, prediction_csv, predict_frame, read_geometry
 from uavcas.twin.profile import PAPER_PROFILE
 
 
@@ -51,7 +51,7 @@ def test_the_prediction_is_the_link_chain_on_the_profile_and_is_written_as_read(
     want = predict_links("freespace", PAPER_PROFILE.pathloss, df["fc_ghz"].to_numpy(), geom, chain)
     assert out["pathloss_db"].tolist() == list(want.pathloss_db) and out["mcs"].tolist() == list(want.mcs)
     assert out["snr_db"].tolist() == list(want.snr_db) and out["loss"].tolist() == list(want.loss)
-    write_prediction(out, tmp_path / "out.csv")
+    (tmp_path / "out.csv").write_text(prediction_csv(out))
     back = pd.read_csv(tmp_path / "out.csv")
     assert list(back.columns) == list(out.columns)
     assert back["pathloss_db"].tolist() == pytest.approx(out["pathloss_db"].tolist(), rel=1e-9)

@@ -4,7 +4,8 @@ GEOM.csv has one row per link (or flight-log sample) with columns d3d_m, d2d_m, 
 (metres) and optionally fc_ghz (default: the profile's carrier); any other column is passed
 through. `read_geometry` checks it (a `GeometryError` of one line naming the row and column),
 `predict_frame` adds `OUTPUT` (`linkchain.predict_links`: the model's median loss, the SNR, the
-link chain's MCS, rate and loss), `write_prediction` writes the result.
+link chain's MCS, rate and loss), `prediction_csv` is the text of the output file (the package
+imports nothing of uavcas: the caller writes the text, atomically).
 """
 
 from __future__ import annotations
@@ -13,8 +14,6 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
-
-from uavcas.atomic import atomic_write_text
 
 from .geometry import LinkGeometry
 from .linkchain import LinkChain, predict_links
@@ -90,6 +89,6 @@ def predict_frame(df: pd.DataFrame, model_name: str, profile, tx_dbm: float, noi
     return out
 
 
-def write_prediction(frame: pd.DataFrame, path: Path) -> Path:
-    """The frame as CSV (10 significant digits: well below any model's error), atomically."""
-    return atomic_write_text(path, frame.to_csv(index=False, float_format="%.10g"))
+def prediction_csv(frame: pd.DataFrame) -> str:
+    """The frame as CSV text, floats to 10 significant digits (well below any model's error)."""
+    return frame.to_csv(index=False, float_format="%.10g")

@@ -30,7 +30,7 @@ import typer
 from uavcas.channel.pathloss import help_text as pathloss_help
 from uavcas.channel.pathloss import names as pathloss_names
 
-from .common import check_output, console, err_console, fail, one_of, profile_option
+from .common import atomic_write_text, check_output, console, err_console, fail, one_of, profile_option
 
 app = typer.Typer(help="The twin's channel on your own geometry.", no_args_is_help=True)
 
@@ -46,7 +46,7 @@ def predict_cmd(
     noise_dbm: float = typer.Option(-95.0, "--noise-dbm", help="Noise floor (dBm)."),
 ) -> None:
     """Evaluate a path-loss model and the link chain on your own geometry."""
-    from uavcas.channel.predict import D2D_TOLERANCE_M, GeometryError, predict_frame, read_geometry, write_prediction
+    from uavcas.channel.predict import D2D_TOLERANCE_M, GeometryError, prediction_csv, predict_frame, read_geometry
     from uavcas.twin.profile import ProfileError, load_profile
 
     check_output(out, "file")
@@ -62,7 +62,7 @@ def predict_cmd(
         err_console.print(f"note: {clamped} row(s) had d2d_m up to {D2D_TOLERANCE_M:g} m longer than d3d_m "
                           f"(rounding); clamped to d3d_m", highlight=False)
     res = predict_frame(df, model, prof, tx_dbm, noise_dbm)
-    write_prediction(res, out)
+    atomic_write_text(out, prediction_csv(res))
     console.print(f"{len(res)} rows, model {model}, profile {prof.name}: written to {out}", highlight=False)
 
 
