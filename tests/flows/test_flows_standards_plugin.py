@@ -1,0 +1,88 @@
+"""A feature standard is added by dropping one module into `uavcas.flows.standards`: a temporary
+copy of the package with one new module, and the registry, the CLI choices, the flows it computes
+and the dataset card's column entries all know it, with no other edit."""
+
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+import pandas as pd
+import pytest
+
+import uavcas
+from helpers.pcapgen import http_session, write
+
+PLUGIN = '''
+"""Feature standard `tiny` (test only): a flow's packets and frame bytes."""
+import numpy as np
+
+from .base import FeatureStandard
+from .registry import register
+
+COLUMNS = ("Tiny Packets", "Tiny Bytes")
+
+
+def compute(fp):
+    n = fp.flows.n_flows
+    return {"Tiny Packets": np.bincount(fp.flows.flow, minlength=n).astype(np.float64),
+            "Tiny Bytes": np.bincount(fp.flows.flow, weights=fp.ordered("frame_len"), minlength=n)}
+
+
+STANDARD = register(FeatureStandard(
+    name="tiny", columns=COLUMNS, units={"Tiny Packets": "packets", "Tiny Bytes": "bytes"},
+    meanings={"Tiny Packets": "packets of the flow", "Tiny Bytes": "frame bytes of the flow"},
+    source="test only", summary="two counts, no time", compute=compute,
+    episode_summary={"Tiny Bytes": "tiny_bytes"}))
+'''
+
+CHECK = '''
+import sys
+import uavcas
+from uavcas.dataset.dictionary import card_columns, describe
+from uavcas.dataset.parquet import arrow_schema
+from uavcas.flows.standards import names, standard
+
+assert uavcas.__file__.startswith(sys.argv[1]), uavcas.__file__
+assert "tiny" in names() and standard("tiny").source == "test only"
+cols = card_columns(arrow_schema("tiny"), "tiny")
+assert cols["Tiny Bytes"]["unit"] == "bytes" and cols["Tiny Packets"]["meaning"].startswith("packets of the flow"), cols["Tiny Packets"]
+assert "Flow Duration" not in cols  # the card lists this standard's columns, not another's
+assert describe("tiny_bytes_max", "tiny", episodes=True)[0] == "bytes"
+print("ok")
+'''
+
+
+@pytest.fixture(scope="module")
+def plugged(tmp_path_factory) -> tuple[Path, dict]:
+    root = tmp_path_factory.mktemp("plug")
+    shutil.copytree(Path(uavcas.__file__).parent, root / "uavcas", ignore=shutil.ignore_patterns("__pycache__"))
+    (root / "uavcas" / "flows" / "standards" / "tiny.py").write_text(textwrap.dedent(PLUGIN))
+    env = {**os.environ, "PYTHONPATH": str(root), "COLUMNS": "250"}
+    return root, env
+
+
+def test_a_dropped_in_standard_is_in_the_registry_and_the_card(plugged):
+    root, env = plugged
+    r = subprocess.run([sys.executable, "-c", CHECK, str(root)], capture_output=True, text=True, env=env, timeout=300)
+    assert r.returncode == 0 and r.stdout.strip() == "ok", r.stderr[-2000:]
+
+
+def test_a_dropped_in_standard_is_offered_and_computed_by_the_cli(plugged, tmp_path):
+    root, env = plugged
+    r = subprocess.run([sys.executable, "-m", "uavcas", "flows", "--help"], capture_output=True, text=True, env=env,
+                       timeout=120)
+    assert r.returncode == 0 and "tiny" in r.stdout and "two counts, no time" in r.stdout, r.stdout
+    pk = http_session()
+    pcap = write(tmp_path / "h.pcap", pk)
+    out = tmp_path / "f.csv"
+    r = subprocess.run([sys.executable, "-m", "uavcas", "flows", str(pcap), "--features", "tiny", "--format", "csv",
+                        "--out", str(out)], capture_output=True, text=True, env=env, timeout=120)
+    assert r.returncode == 0, r.stderr
+    row = pd.read_csv(out).iloc[0]
+    assert row["Tiny Packets"] == len(pk) and row["Tiny Bytes"] == sum(len(p) for p in pk)
+    assert "Flow Duration" not in row.index
