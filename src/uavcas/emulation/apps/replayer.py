@@ -212,7 +212,7 @@ def run(args: argparse.Namespace) -> dict:
     return rep.stats
 
 
-def main(argv: list[str] | None = None) -> None:
+def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--iface", default="eth0")
     ap.add_argument("--victim", required=True)
@@ -228,7 +228,11 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--attack-id", required=True)
     ap.add_argument("--family", required=True, help="Attack family written into the inject records.")
     ap.add_argument("--log", required=True)
-    stats = run(ap.parse_args(argv))
+    return ap.parse_args(argv)
+
+
+def main(argv: list[str] | None = None) -> None:
+    stats = run(parse_args(argv))
     print(json.dumps({"stats": stats}), flush=True)
     sys.exit(0)
 
