@@ -17,7 +17,7 @@ BUILDS_ITS_OWN = {
     "ids/classical.py": "RandomState",
     # a scikit-learn estimator's random_state may be None (fresh entropy), which a named stream refuses
     "ids/base.py": "default_rng",
-    # test-fixture plans (random.Random): other tests assert on the plans these seeds give
+    # the emulation benchmark's hand-made plans (random.Random): its recorded figures were measured on them
     "testing/handmade_plans.py": "Random",
 }
 RNG_CALLS = {"default_rng", "SeedSequence", "PCG64", "Generator", "RandomState", "Random"}
