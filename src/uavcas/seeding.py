@@ -23,7 +23,9 @@ inside a mission) still come from `SeedSequence.spawn`, numpy's rule for childre
 Names are ASCII and say whose stream it is (`image-sizes`, `replayer`); a new consumer takes a
 new name, never another's, so adding a stream never shifts the numbers another one draws.
 scikit-learn and LightGBM estimators keep their integer `random_state` (their API takes an int
-and builds its own RandomState); `uavcas.ids` passes the seed through as it is.
+and builds its own RandomState); `uavcas.ids` passes the seed through as it is, and its
+early-stopping base builds `default_rng(random_state)` itself because scikit-learn allows None
+(fresh entropy), which a named stream refuses (`tests/test_seeding.py` lists these exceptions).
 """
 
 from __future__ import annotations
