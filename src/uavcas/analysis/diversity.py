@@ -20,6 +20,7 @@ import numpy as np
 import pandas as pd
 
 from uavcas import schema
+from uavcas import seeding
 from uavcas.atomic import atomic_write_text
 from uavcas.stats.divergence import DEFAULT_BINS, compare_pairwise, compare_pooled, flow_counts, hellinger, jsd, log_bins
 
@@ -63,7 +64,7 @@ def class_order(labels) -> list[str]:
 
 def split_by_run(df: pd.DataFrame, seed: int) -> tuple[pd.DataFrame, pd.DataFrame, str]:
     """Two halves of `df` by run (no run on both sides); by flow when there is a single run."""
-    a, b, by = halves(df["run_id"].to_numpy() if "run_id" in df.columns else None, len(df), np.random.default_rng(seed))
+    a, b, by = halves(df["run_id"].to_numpy() if "run_id" in df.columns else None, len(df), seeding.generator(seed))
     return df[a], df[b], by
 
 
@@ -92,7 +93,7 @@ def size_matched_baseline(counts: np.ndarray, runs: np.ndarray | None, n: int, d
                           seed: int) -> Baseline:
     """Divergence of n reference flows against the rest of the reference, by run halves (see the
     module docstring). `counts`: per-flow IAT counts of the reference (benign) flows."""
-    rng = np.random.default_rng(seed)
+    rng = seeding.generator(seed)
     hs, js, used, by = [], [], 0, "flow"
     for _ in range(draws):
         a, b, by = halves(runs, len(counts), rng)

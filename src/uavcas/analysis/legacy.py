@@ -20,6 +20,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from uavcas import seeding
+
 LEGACY_MIN_PACKETS = 100
 LEGACY_MAX_IATS = 5000
 LEGACY_FLOWS = 200
@@ -59,7 +61,7 @@ def legacy_divergence(
 ) -> LegacyResult:
     """Mean legacy "Hellinger" and "JSD" over all pairs; NaN (n_pairs 0) when a side has no flow
     of >= 100 packets."""
-    rng = np.random.default_rng(seed)
+    rng = seeding.generator(seed)
     a = _per_flow(flows_a, rng, n_flows)
     b = _per_flow(flows_b, rng, n_flows)
     if not a or not b:

@@ -7,6 +7,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from uavcas import seeding
 from uavcas.atomic import atomic_write_text
 from uavcas.flows.standards import DEFAULT_STANDARD, feature_columns
 from uavcas.report.figure import plt, save_png
@@ -51,7 +52,7 @@ def stratified_sample(labels, n: int, seed: int = 0) -> np.ndarray:
     labels = np.asarray(labels)
     if n >= len(labels):
         return np.arange(len(labels))
-    rng = np.random.default_rng(seed)
+    rng = seeding.generator(seed)
     classes, counts = np.unique(labels, return_counts=True)
     take = np.zeros(len(classes), dtype=int)
     left = n

@@ -155,7 +155,7 @@ class Replay(AttackFamily):
                     "--buffer", str(s.buffer_pkts), "--delay-ms", str(float(s.delay_ms)),
                     "--rate-pps", str(float(s.rate_pps)), "--ttl-dec", str(s.ttl_dec),
                     "--seq-mode", s.seq_mode, "--seconds", str(ex.duration_s + 30),
-                    "--seed", str(ex.plan.seed * 1000 + ex.index(attacker)), "--attack-id", attack.attack_id,
+                    "--seed", str(ex.plan.seed), "--index", str(ex.index(attacker)), "--attack-id", attack.attack_id,
                     "--family", attack.family, "--log", str(log)]
             proc = spawn(lambda av, t, **kw: ex.emu.popen(attacker, av, t, **kw),
                          f"replayer-{attack.attack_id}-{attacker}", argv, ex.log_dir, ex.duration_s + 40)

@@ -7,6 +7,7 @@ from pathlib import Path
 import numpy as np
 from matplotlib.ticker import NullFormatter
 
+from uavcas import seeding
 from uavcas.report.figure import plt, save_png
 
 from .layer1_pathloss import Layer1Result
@@ -30,7 +31,7 @@ def _binned_median(x, y, edges):
 
 
 def pathloss_figure(res: Layer1Result, path: Path, seed: int = 0) -> Path:
-    rng = np.random.default_rng(seed)
+    rng = seeding.generator(seed)
     k = len(res.groups)
     fig, axes = plt.subplots(2, k, figsize=(3.3 * k, 6), sharex="col", gridspec_kw={"height_ratios": [3, 1.3]}, squeeze=False)
     for i, g in enumerate(res.groups):

@@ -26,6 +26,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from uavcas import seeding
+
 from .layer1_fit import Group
 from .metrics import error_metrics
 from .segments import LOCAL_MEAN_S, TEST_FRACTION
@@ -81,7 +83,7 @@ def _gbm(groups: list[Group], train, test, seed: int) -> dict:
 
 
 def _per_sample_split(groups: list[Group], seed: int) -> tuple[list[np.ndarray], list[np.ndarray]]:
-    rng = np.random.default_rng([seed, 7043])
+    rng = seeding.generator(seed, 7043)
     train, test = [], []
     for g in groups:
         te = np.zeros(len(g.samples), bool)

@@ -53,6 +53,7 @@ import numpy as np
 from scipy.constants import c as SPEED_OF_LIGHT_M_S
 from scipy.optimize import curve_fit, least_squares
 
+from uavcas import seeding
 from uavcas.channel import LinkGeometry, LogDistance, PathLossProfile, TwoRay, UMaAV, free_space_loss_db
 
 from .linkbudget import MAENG_FC_GHZ, BudgetFit, PatternGain, absolute_pathloss_db, carrier_ghz
@@ -309,7 +310,7 @@ def fit_two_ray(groups: list[Group], pattern: PatternGain | None = None, max_sam
     soft-L1 loss on training samples (the model's nulls are deeper than any measurement)."""
     idx = [np.flatnonzero(g.train) for g in groups]
     per = max(1, max_samples // len(groups))
-    rng = np.random.default_rng(seed)
+    rng = seeding.generator(seed)
     idx = [np.sort(rng.choice(i, size=min(per, i.size), replace=False)) for i in idx]  # keeps the fit fast
 
     def make(p) -> TwoRayFit:

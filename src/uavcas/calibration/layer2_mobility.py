@@ -45,6 +45,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from uavcas import seeding
 from uavcas.mobility import (
     Area,
     GridParams,
@@ -236,7 +237,7 @@ class Layer2Result:
 def split_flights(names: list[str], seed: int, key: int, frac: float = 0.3) -> tuple[list[int], list[int]]:
     n = len(names)
     n_test = max(1, int(round(frac * n))) if n > 1 else 0
-    perm = np.random.default_rng(np.random.SeedSequence([seed, key])).permutation(n)
+    perm = seeding.generator(seed, key).permutation(n)
     test = sorted(perm[:n_test].tolist())
     return [i for i in range(n) if i not in test], test
 

@@ -32,6 +32,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.stats import ncx2
 
+from uavcas import seeding
 from uavcas.channel import GudmundsonShadowing, KFactorProfile, LogDistance, PathLossProfile
 
 from .layer1_fit import Group
@@ -60,11 +61,11 @@ def sim_over_groups(groups: list[Group], profile: PathLossProfile, fading: KFact
                     seed: int, max_samples: int = 4000) -> np.ndarray:
     """RSS of the twin's path loss + shadowing (+ fading) along each group's held-out samples."""
     out = []
-    rng = np.random.default_rng(np.random.SeedSequence([seed, 4]))
+    rng = seeding.generator(seed, 4)
     for i, g in enumerate(groups):
         idx = np.flatnonzero(g.test)[:max_samples]
         s = g.samples
-        shadow = GudmundsonShadowing(2, d_corr_m, np.random.SeedSequence([seed, 40 + i]))
+        shadow = GudmundsonShadowing(2, d_corr_m, seeding.seed_sequence(seed, 40 + i))
         z = np.empty(idx.size)
         for j, k in enumerate(idx):
             shadow.step(np.array([[0.0, 0.0, g.tx_height_m], [s.d2d_m[k], 0.0, s.height_m[k]]]))
@@ -87,7 +88,7 @@ class Layer4Result:
 
 def run_layer4(maeng_groups: list[Group], multibw_groups: list[Group], l3: Layer3Result, profile: PathLossProfile,
                fading: KFactorProfile | None = None, d_corr_m: float = 50.0, seed: int = 0) -> Layer4Result:
-    rng = np.random.default_rng(seed)
+    rng = seeding.generator(seed)
     test = [r for r in l3.replays if r.name in set(l3.test)]
     sim_afar = np.concatenate([r.rss_chain_dbm["logdistance"] for r in test])
     if fading is not None:

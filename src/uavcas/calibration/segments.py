@@ -33,6 +33,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from uavcas import seeding
+
 SAMPLE_INTERVAL_S = {"maeng": 0.1, "multibw": 0.25}  # median step of the raw files' time stamps
 BLOCK_S = 60.0
 GUARD_S = 5.0
@@ -56,7 +58,7 @@ def contiguous_split(n: int, interval_s: float, seed: int, key: int, block_s: fl
     guard = int(round(guard_s / interval_s))
     n_blocks = max(1, int(np.ceil(n / block)))
     n_test = min(n_blocks - 1, max(1, int(round(test_fraction * n_blocks)))) if n_blocks > 1 else 0
-    rng = np.random.default_rng(np.random.SeedSequence([seed, key]))
+    rng = seeding.generator(seed, key)
     test_blocks = np.sort(rng.permutation(n_blocks)[:n_test])
     is_test = np.zeros(n_blocks, dtype=bool)
     is_test[test_blocks] = True

@@ -41,6 +41,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.special import ndtr
 
+from uavcas import seeding
+
 from .airtime import CCA_DBM
 from .linklayer import LinkLayer
 from .fading import KFactorProfile
@@ -50,7 +52,7 @@ from .mcs import DEFAULT_MARGIN_DB, McsTable
 from .pathloss import PathLossModel, PathLossProfile, make_pathloss
 from .shadowing import DEFAULT_DECORRELATION_M, GudmundsonShadowing
 
-# SeedSequence([seed, stream]) streams; never renumber (it would change every plan).
+# Numbered streams of the channel's seed (uavcas.seeding, int keys); never renumber (it would change every plan).
 _SHADOW_STREAM, _LOS_STREAM = 1, 2
 
 
@@ -129,13 +131,13 @@ class Channel:
         )
         self.seed = int(seed)
         self._shadow = GudmundsonShadowing(
-            self.n_nodes, d_corr_m, np.random.SeedSequence([self.seed, _SHADOW_STREAM])
+            self.n_nodes, d_corr_m, seeding.seed_sequence(self.seed, _SHADOW_STREAM)
         )
         self._los = None
         if sample_los and self.model.samples_los:  # the model has a LOS state (pathloss.LosPathLossModel)
             corr_m = self.model.los_corr_m if los_corr_m is None else los_corr_m
             self._los = GudmundsonShadowing(
-                self.n_nodes, corr_m, np.random.SeedSequence([self.seed, _LOS_STREAM])
+                self.n_nodes, corr_m, seeding.seed_sequence(self.seed, _LOS_STREAM)
             )
 
     def _check(self, pos, pairs, node_is_bs) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -29,6 +29,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from uavcas import seeding
+
 DEFAULT_DECORRELATION_M = 50.0
 
 
@@ -52,8 +54,7 @@ class GudmundsonShadowing:
             raise ValueError("d_corr_m must be > 0")
         self.n_nodes = n_nodes
         self.d_corr_m = float(d_corr_m)
-        ss = seed if isinstance(seed, np.random.SeedSequence) else np.random.SeedSequence(seed)
-        self._rng = np.random.Generator(np.random.PCG64(ss))
+        self._rng = seeding.generator(seed)
         self._z: np.ndarray | None = None  # (n, n), upper triangle used
         self._pos: np.ndarray | None = None  # node positions at the last step
         self.steps = 0

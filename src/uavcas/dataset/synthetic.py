@@ -26,6 +26,7 @@ import numpy as np
 import pandas as pd
 
 from uavcas import schema
+from uavcas import seeding
 from uavcas.atomic import atomic_dir
 from uavcas.flows.assemble import FlowConfig, assemble
 from uavcas.flows.context import context_frame
@@ -173,7 +174,7 @@ def make_flows(runs: int = 48, flows_per_run: int = 60, seed: int = 0, sequences
     if runs < 1 or flows_per_run < 1:
         raise ValueError(f"need at least one run and one flow per run, got runs={runs}, flows_per_run={flows_per_run}")
     configs = MEDIUM_PAPER_CONFIGS
-    rng = np.random.default_rng(seed)
+    rng = seeding.generator(seed)
     rows, seqs, src_ips, src_ports = [], [], [], []
     base_ip = int(ipaddress.IPv4Address("10.1.0.0"))
     for r in range(runs):

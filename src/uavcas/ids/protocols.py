@@ -26,6 +26,7 @@ from sklearn.preprocessing import MinMaxScaler, RobustScaler, StandardScaler
 from threadpoolctl import threadpool_limits
 
 from uavcas import schema
+from uavcas import seeding
 from uavcas.vocabulary import families_of
 
 from .base import fit_model
@@ -307,7 +308,7 @@ def _importance(est, tf, task: Task, rows: np.ndarray, seed: int, model: str, cf
     from sklearn.metrics import f1_score
 
     if len(rows) > cfg.importance_rows:
-        rows = np.sort(np.random.default_rng(seed).choice(rows, cfg.importance_rows, replace=False))
+        rows = np.sort(seeding.generator(seed).choice(rows, cfg.importance_rows, replace=False))
     def scorer(model, x, y) -> float:  # a plain callable: make_scorer assumes pos_label=1 for two classes
         return f1_score(y, model.predict(x), average="macro", labels=task.declared, zero_division=0)
 

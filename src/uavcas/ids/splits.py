@@ -22,6 +22,8 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
+from uavcas import seeding
+
 MIN_RUNS = 2  # one run to train on, one to test on
 
 
@@ -145,7 +147,7 @@ def grouped_split(y, groups, seed: int = 0, test: float = 0.2, val: float = 0.1,
     by_key: dict[str, list[str]] = {}
     for g in uniq:
         by_key.setdefault(key_of[g], []).append(g)
-    rng = np.random.default_rng(seed)
+    rng = seeding.generator(seed)
     part = _deal(by_key, len(uniq), test, val, rng)
     _repair(part, classes_of, declared, rng)
     for c in declared:
@@ -166,7 +168,7 @@ def cap_rows(rows: np.ndarray, y: np.ndarray, groups: np.ndarray, cap: int, seed
     if cap is None or len(rows) == 0:
         return rows
     df = pd.DataFrame({"r": rows, "g": groups[rows], "y": y[rows]})
-    rng = np.random.default_rng(seed)
+    rng = seeding.generator(seed)
     df["k"] = rng.random(len(df))
     kept = df.sort_values("k").groupby(["g", "y"], sort=False).head(cap)
     return np.sort(kept["r"].to_numpy())

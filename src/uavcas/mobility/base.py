@@ -3,8 +3,8 @@
 Every mission answers `positions(t_s)`: (n_uav, 3) metres for a scalar time, (len(t), n_uav, 3)
 for a 1-D array of times, evaluated in closed form or from a cached simulation, so the answer
 for a time never depends on which other times were asked before (plans must be bit-for-bit
-reproducible). Randomness comes only from numpy Generators derived from an integer seed via
-SeedSequence (never Python's hash(), which is salted per process).
+reproducible). Randomness comes only from `uavcas.seeding` streams of an integer seed (never
+Python's hash(), which is salted per process).
 """
 
 from __future__ import annotations
@@ -15,8 +15,6 @@ import numpy as np
 
 from uavcas.mobility.area import Area
 
-SeedLike = int | np.random.SeedSequence
-
 
 @runtime_checkable
 class Mission(Protocol):
@@ -26,14 +24,6 @@ class Mission(Protocol):
     def positions(self, t_s: float | np.ndarray) -> np.ndarray:
         """(n_uav, 3) for a scalar time, (len(t), n_uav, 3) for a 1-D array of times (metres)."""
         ...
-
-
-def as_seed_sequence(seed: SeedLike) -> np.random.SeedSequence:
-    if isinstance(seed, np.random.SeedSequence):
-        return seed
-    if isinstance(seed, (bool, np.bool_)) or not isinstance(seed, (int, np.integer)) or seed < 0:
-        raise ValueError(f"seed must be a non-negative integer, got {seed!r}")
-    return np.random.SeedSequence(int(seed))
 
 
 class MissionBase:

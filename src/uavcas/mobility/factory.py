@@ -1,17 +1,17 @@
 """`make_mission`: the scenario's mission name + seed -> a ready mission object.
 
-Each kind draws from its own stream, SeedSequence([seed, crc32(kind)]), so changing the mission
-of a scenario does not reuse another mission's random numbers, and the result is identical
-across processes and machines (crc32 is stable, unlike Python's salted hash()).
+Each kind draws from its own stream, `uavcas.seeding` stream `kind` of the seed
+(SeedSequence([seed, crc32(kind)])), so changing the mission of a scenario does not reuse another
+mission's random numbers, and the result is identical across processes and machines.
 """
 
 from __future__ import annotations
 
-import zlib
 from typing import Any, Mapping
 
 import numpy as np
 
+from uavcas import seeding
 from uavcas.mobility.area import Area
 from uavcas.mobility.base import MissionBase
 from uavcas.mobility.gauss_markov import GaussMarkovMission
@@ -29,9 +29,7 @@ _CLASSES = {
 
 
 def mission_seed(kind: str, seed: int) -> np.random.SeedSequence:
-    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
-        raise ValueError(f"seed must be a non-negative integer, got {seed!r}")
-    return np.random.SeedSequence([int(seed), zlib.crc32(kind.encode("ascii"))])
+    return seeding.seed_sequence(seed, kind)
 
 
 def make_mission(

@@ -30,8 +30,9 @@ import numpy as np
 from scipy.optimize import brentq
 from scipy.special import i0e, i1e
 
+from uavcas import seeding
 from uavcas.mobility.area import Area, reflect_into
-from uavcas.mobility.base import MissionBase, SeedLike, as_seed_sequence, seeded_anchors
+from uavcas.mobility.base import MissionBase, seeded_anchors
 from uavcas.mobility.params import GaussMarkovParams
 
 _CHUNK_STEPS = 128  # fixed chunk of random draws (64 s at 0.5 s: one chunk covers a 60 s plan)
@@ -82,7 +83,8 @@ def _capped(v: np.ndarray, vmax: float) -> np.ndarray:
 class GaussMarkovMission(MissionBase):
     kind = "random"
 
-    def __init__(self, n_uav: int, params: GaussMarkovParams | None = None, area: Area | None = None, seed: SeedLike = 0):
+    def __init__(self, n_uav: int, params: GaussMarkovParams | None = None, area: Area | None = None,
+                 seed: seeding.SeedLike = 0):
         if n_uav < 1:
             raise ValueError(f"n_uav must be >= 1, got {n_uav}")
         self.n_uav = int(n_uav)
@@ -97,16 +99,16 @@ class GaussMarkovMission(MissionBase):
         self.sigma_mps = np.array([sigma_h, sigma_h, sigma_z])  # stationary sd per axis
         self._noise_sd = np.sqrt(1.0 - self.alpha_dt**2) * self.sigma_mps
 
-        anchors_ss, heading_ss, noise_ss = as_seed_sequence(seed).spawn(3)
+        anchors_ss, heading_ss, noise_ss = seeding.as_seed_sequence(seed).spawn(3)
         lo, hi = self.area.lo_m, self.area.hi_m
         pad = np.minimum(np.array([p.margin_m, p.margin_m, p.margin_m]), (hi - lo) / 2.0)
-        x0 = seeded_anchors(np.random.default_rng(anchors_ss), self.n_uav, lo + pad, hi - pad, p.min_separation_m)
-        heading = np.random.default_rng(heading_ss).random(self.n_uav) * 2.0 * np.pi
+        x0 = seeded_anchors(seeding.generator(anchors_ss), self.n_uav, lo + pad, hi - pad, p.min_separation_m)
+        heading = seeding.generator(heading_ss).random(self.n_uav) * 2.0 * np.pi
         mu = np.empty((self.n_uav, 3))
         mu[:, 0] = self.nu_mps * np.cos(heading)
         mu[:, 1] = self.nu_mps * np.sin(heading)
         mu[:, 2] = p.mean_vz_mps
-        self._rng = np.random.default_rng(noise_ss)
+        self._rng = seeding.generator(noise_ss)
         # Start in the stationary law so statistics hold from t = 0, not after a burn-in.
         v0 = mu + self.sigma_mps * self._rng.standard_normal((self.n_uav, 3))
         self._x = [x0[None]]  # chunks of positions at grid times k*dt, k = 0..K

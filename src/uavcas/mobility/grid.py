@@ -11,8 +11,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from uavcas import seeding
 from uavcas.mobility.area import Area
-from uavcas.mobility.base import MissionBase, SeedLike, anchor_box, as_seed_sequence, seeded_anchors
+from uavcas.mobility.base import MissionBase, anchor_box, seeded_anchors
 from uavcas.mobility.legs import LegFlight, back_and_forth
 from uavcas.mobility.params import GridParams
 
@@ -33,15 +34,16 @@ def boustrophedon(x0: float, y0: float, x1: float, y1: float, spacing_m: float, 
 class GridMission(MissionBase):
     kind = "grid"
 
-    def __init__(self, n_uav: int, params: GridParams | None = None, area: Area | None = None, seed: SeedLike = 0):
+    def __init__(self, n_uav: int, params: GridParams | None = None, area: Area | None = None,
+                 seed: seeding.SeedLike = 0):
         if n_uav < 1:
             raise ValueError(f"n_uav must be >= 1, got {n_uav}")
         self.n_uav = int(n_uav)
         self.params = p = params or GridParams()
         self.area = area or Area()
         self.altitude_m = self.area.clamp_altitude(p.altitude_m)
-        anchors_ss, phase_ss, *uav_ss = as_seed_sequence(seed).spawn(2 + self.n_uav)
-        rng = np.random.default_rng(phase_ss)
+        anchors_ss, phase_ss, *uav_ss = seeding.as_seed_sequence(seed).spawn(2 + self.n_uav)
+        rng = seeding.generator(phase_ss)
         along_x = rng.random(self.n_uav) < 0.5  # lane orientation per UAV, for variety
         size = np.array([self.area.x_max_m, self.area.y_max_m])
 
@@ -54,7 +56,7 @@ class GridMission(MissionBase):
             half = np.minimum(np.array([p.box_width_m, p.box_height_m]) / 2.0, size / 2.0 - p.margin_m)
             half = np.maximum(half, 0.0)
             alo, ahi = anchor_box(self.area, float(half.max()), p.margin_m)
-            centres = seeded_anchors(np.random.default_rng(anchors_ss), self.n_uav, alo, ahi, p.min_separation_m)
+            centres = seeded_anchors(seeding.generator(anchors_ss), self.n_uav, alo, ahi, p.min_separation_m)
             boxes = np.concatenate([np.maximum(centres - half, 0.0), np.minimum(centres + half, size)], axis=1)
         self.boxes_m = boxes
         self.paths = [boustrophedon(*boxes[i], p.lane_spacing_m, bool(along_x[i])) for i in range(self.n_uav)]
@@ -66,7 +68,7 @@ class GridMission(MissionBase):
             n_cycle = max(2 * len(path) - 2, 1)
             start = int((order[i] + rng.random()) / self.n_uav * n_cycle) % n_cycle
             self.flights.append(LegFlight(
-                back_and_forth(path, start), np.random.default_rng(uav_ss[i]), speed_mps=p.speed_mps,
+                back_and_forth(path, start), seeding.generator(uav_ss[i]), speed_mps=p.speed_mps,
                 speed_cv=p.speed_cv, accel_mps2=p.accel_mps2, altitude_m=self.altitude_m,
                 altitude_sd_m=p.altitude_sd_m, altitude_band=(self.area.z_min_m, self.area.z_max_m)))
 

@@ -9,8 +9,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from uavcas import seeding
 from uavcas.mobility.area import Area
-from uavcas.mobility.base import MissionBase, SeedLike, anchor_box, as_seed_sequence, seeded_anchors
+from uavcas.mobility.base import MissionBase, anchor_box, seeded_anchors
 from uavcas.mobility.legs import LegFlight, loop
 from uavcas.mobility.params import HoverTransitParams
 
@@ -18,14 +19,15 @@ from uavcas.mobility.params import HoverTransitParams
 class HoverTransitMission(MissionBase):
     kind = "hover_transit"
 
-    def __init__(self, n_uav: int, params: HoverTransitParams | None = None, area: Area | None = None, seed: SeedLike = 0):
+    def __init__(self, n_uav: int, params: HoverTransitParams | None = None, area: Area | None = None,
+                 seed: seeding.SeedLike = 0):
         if n_uav < 1:
             raise ValueError(f"n_uav must be >= 1, got {n_uav}")
         self.n_uav = int(n_uav)
         self.params = p = params or HoverTransitParams()
         self.area = area or Area()
         self.altitude_m = self.area.clamp_altitude(p.altitude_m)
-        anchors_ss, wp_ss, phase_ss, *uav_ss = as_seed_sequence(seed).spawn(3 + self.n_uav)
+        anchors_ss, wp_ss, phase_ss, *uav_ss = seeding.as_seed_sequence(seed).spawn(3 + self.n_uav)
         size = np.array([self.area.x_max_m, self.area.y_max_m])
 
         if p.waypoints_m is not None:
@@ -35,17 +37,17 @@ class HoverTransitMission(MissionBase):
             radius = float(min(p.leg_radius_m, size.min() / 2.0 - p.margin_m))
             radius = max(radius, 0.0)
             lo, hi = anchor_box(self.area, radius, p.margin_m)
-            anchors = seeded_anchors(np.random.default_rng(anchors_ss), self.n_uav, lo, hi, p.min_separation_m)
-            rng = np.random.default_rng(wp_ss)
+            anchors = seeded_anchors(seeding.generator(anchors_ss), self.n_uav, lo, hi, p.min_separation_m)
+            rng = seeding.generator(wp_ss)
             # Waypoints uniform in the disc of `radius` around the anchor (sqrt for uniform area).
             rad = radius * np.sqrt(rng.random((self.n_uav, p.n_waypoints)))
             ang = rng.random((self.n_uav, p.n_waypoints)) * 2.0 * np.pi
             pts = anchors[:, None, :] + np.stack([rad * np.cos(ang), rad * np.sin(ang)], axis=-1)
             tours = [np.clip(pts[i], 0.0, size) for i in range(self.n_uav)]
         self.waypoints_m = tours
-        starts = np.random.default_rng(phase_ss).integers(0, [len(w) for w in tours])
+        starts = seeding.generator(phase_ss).integers(0, [len(w) for w in tours])
         self.flights = [
-            LegFlight(loop(w, int(starts[i])), np.random.default_rng(uav_ss[i]), speed_mps=p.speed_mps,
+            LegFlight(loop(w, int(starts[i])), seeding.generator(uav_ss[i]), speed_mps=p.speed_mps,
                       speed_cv=p.speed_cv, accel_mps2=p.accel_mps2, hover_s=p.hover_s, altitude_m=self.altitude_m,
                       altitude_sd_m=p.altitude_sd_m, altitude_band=(self.area.z_min_m, self.area.z_max_m))
             for i, w in enumerate(tours)

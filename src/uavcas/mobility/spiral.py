@@ -17,8 +17,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from uavcas import seeding
 from uavcas.mobility.area import Area
-from uavcas.mobility.base import MissionBase, SeedLike, anchor_box, as_seed_sequence, seeded_anchors
+from uavcas.mobility.base import MissionBase, anchor_box, seeded_anchors
 from uavcas.mobility.legs import LegFlight, back_and_forth
 from uavcas.mobility.params import SpiralParams
 
@@ -44,22 +45,23 @@ def rectangular_spiral(width_m: float, height_m: float, ring_spacing_m: float, t
 class SpiralMission(MissionBase):
     kind = "spiral"
 
-    def __init__(self, n_uav: int, params: SpiralParams | None = None, area: Area | None = None, seed: SeedLike = 0):
+    def __init__(self, n_uav: int, params: SpiralParams | None = None, area: Area | None = None,
+                 seed: seeding.SeedLike = 0):
         if n_uav < 1:
             raise ValueError(f"n_uav must be >= 1, got {n_uav}")
         self.n_uav = int(n_uav)
         self.params = p = params or SpiralParams()
         self.area = area or Area()
         self.altitude_m = self.area.clamp_altitude(p.altitude_m)
-        anchors_ss, shape_ss, *uav_ss = as_seed_sequence(seed).spawn(2 + self.n_uav)
-        rng = np.random.default_rng(shape_ss)
+        anchors_ss, shape_ss, *uav_ss = seeding.as_seed_sequence(seed).spawn(2 + self.n_uav)
+        rng = seeding.generator(shape_ss)
         swap = rng.random(self.n_uav) < 0.5
         turn = np.where(rng.random(self.n_uav) < 0.5, -1.0, 1.0)
         # The footprint must fit in the area with the margin; a too-large one is shrunk, not refused.
         room = np.array([self.area.x_max_m, self.area.y_max_m]) - 2.0 * p.margin_m
         half = max(p.width_m, p.height_m) / 2.0
         lo, hi = anchor_box(self.area, half, p.margin_m)
-        self.centres_m = seeded_anchors(np.random.default_rng(anchors_ss), self.n_uav, lo, hi, p.min_separation_m)
+        self.centres_m = seeded_anchors(seeding.generator(anchors_ss), self.n_uav, lo, hi, p.min_separation_m)
         self.paths = []
         self.flights = []
         for i in range(self.n_uav):
@@ -68,7 +70,7 @@ class SpiralMission(MissionBase):
             path = rectangular_spiral(w, h, p.ring_spacing_m, turn[i]) + self.centres_m[i]
             path = np.clip(path, 0.0, [self.area.x_max_m, self.area.y_max_m])
             self.paths.append(path)
-            r = np.random.default_rng(uav_ss[i])
+            r = seeding.generator(uav_ss[i])
             start = int(r.integers(0, 2 * len(path) - 2))
             self.flights.append(LegFlight(
                 back_and_forth(path, start, bool(r.random() < 0.5)), r, speed_mps=p.speed_mps, speed_cv=p.speed_cv,

@@ -15,6 +15,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from uavcas import seeding
+
 from .codec import Scenario, ScenarioError, parse
 
 REPLAY_CONSERVATIVE = "replay=50,200,10,5,inc"
@@ -155,11 +157,11 @@ PRESETS: dict[str, Preset] = {
 
 def run_seed(campaign_seed: int, index: int) -> int:
     """A run's seed: stable in (campaign seed, index), independent of order and sharding."""
-    return int(np.random.SeedSequence([campaign_seed, index]).generate_state(1, np.uint32)[0])
+    return seeding.child_seed(campaign_seed, index)
 
 
 def permutation(n: int, seed: int) -> np.ndarray:
-    return np.random.Generator(np.random.PCG64(seed)).permutation(n)
+    return seeding.generator(seed).permutation(n)
 
 
 _SHARD = re.compile(r"^(0|[1-9][0-9]*)/([1-9][0-9]*)$")

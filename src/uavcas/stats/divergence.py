@@ -25,6 +25,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial.distance import euclidean, jensenshannon
 
+from uavcas import seeding
+
 DEFAULT_BINS = 50
 
 
@@ -130,7 +132,7 @@ def compare_pooled(
         raise ValueError("a side of the comparison has no IAT")
     pa, pb = counts_a.sum(0), counts_b.sum(0)
     h, j = hellinger(pa, pb), jsd(pa, pb)
-    rng = np.random.default_rng(seed)
+    rng = seeding.generator(seed)
     hs, js = [], []
     for _ in range(n_boot):
         ra = counts_a[rng.integers(0, len(counts_a), len(counts_a))].sum(0)
@@ -158,7 +160,7 @@ def compare_pairwise(
     b = counts_b[counts_b.sum(1) > 0]
     if len(a) == 0 or len(b) == 0:
         raise ValueError("a side of the comparison has no flow with an IAT")
-    rng = np.random.default_rng(seed)
+    rng = seeding.generator(seed)
     pa = a[rng.integers(0, len(a), n_pairs)].astype(float)
     pb = b[rng.integers(0, len(b), n_pairs)].astype(float)
     pa /= pa.sum(1, keepdims=True)

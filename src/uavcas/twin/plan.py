@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from uavcas import seeding
 from uavcas.attacks import EmitterContext, family
 from uavcas.channel import Channel, LinkChain
 from uavcas.mobility import Area, make_mission
@@ -37,7 +38,7 @@ from .model import Attack, Link, Node, Plan, Route, Window, WormholeOverride, ma
 from .profile import TwinProfile, load_profile, profile_sha256
 from .schedule import schedule_attacks
 
-# Stream ids for SeedSequence([seed, stream]); never renumber (it would change every plan).
+# Numbered streams of the plan's seed (uavcas.seeding, int keys); never renumber (it would change every plan).
 _BS_STREAM, _MOBILITY_STREAM, _CHANNEL_STREAM, _ATTACK_STREAM, _EMITTER_STREAM = 1, 2, 3, 4, 5
 
 
@@ -67,11 +68,11 @@ def _nodes(scenario: Scenario) -> list[Node]:
 
 
 def _rng(seed: int, stream: int) -> np.random.Generator:
-    return np.random.Generator(np.random.PCG64(np.random.SeedSequence([seed, stream])))
+    return seeding.generator(seed, stream)
 
 
 def _child_seed(seed: int, stream: int) -> int:
-    return int(np.random.SeedSequence([seed, stream]).generate_state(1, np.uint32)[0])
+    return seeding.child_seed(seed, stream)
 
 
 def _bs_positions(n_bs: int, area: Area, mast_m: float, rng: np.random.Generator) -> np.ndarray:

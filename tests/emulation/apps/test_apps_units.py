@@ -5,7 +5,6 @@ from __future__ import annotations
 import io
 import json
 import os
-import random
 import subprocess
 import sys
 import threading
@@ -15,6 +14,7 @@ import pytest
 from scapy.layers.inet import IP, TCP, UDP
 from scapy.layers.l2 import Ether
 
+from uavcas import seeding
 from uavcas.emulation.apps import capture, client, flood, images, nginx, replayer
 
 
@@ -165,7 +165,7 @@ def test_replay_parse_and_mutate_seq_modes():
     s = replayer.parse(_frame())
     assert (s.src, s.dst, s.proto, s.sport, s.dport, s.ip_id, s.ttl, s.seq) == (
         "10.9.0.3", "10.9.0.9", 6, 80, 40000, 7, 64, 1000)
-    rng = random.Random(1)
+    rng = seeding.generator(1, "replayer", 0)
     out, seq = replayer.mutate(_frame(), 3, "inc", 5, rng)
     p = Ether(out)
     assert p[IP].ttl == 59 and p[TCP].seq == 1003 == seq and p[IP].id == 7

@@ -25,6 +25,8 @@ from pathlib import Path
 
 import numpy as np
 
+from uavcas import seeding
+
 THINK_MEAN_S = 0.5  # mean pause between fetches: ~1.5 images/s per UAV, a few Mbit/s in total
 CONNECT_TIMEOUT_S = 2.0
 MAX_TIME_S = 8.0
@@ -39,7 +41,8 @@ class ClientSpec:
     images: tuple[str, ...]
     duration_s: float
     log_path: Path
-    seed: int
+    seed: int  # the plan's seed; the client draws from its stream ("http-client", index)
+    index: int = 0  # the client's position in `assignments` (one stream per client)
     think_mean_s: float = THINK_MEAN_S
     port: int = 80
     t0_unix: float = 0.0  # plan t = 0 (the windows below count from it)
@@ -68,11 +71,17 @@ def assignments(uavs: list[str], bss: list[str]) -> list[tuple[str, str]]:
     return [(bss[i % len(bss)], u) for i, u in enumerate(uavs)]
 
 
-def render_script(spec: ClientSpec) -> str:
-    rng = np.random.Generator(np.random.PCG64(np.random.SeedSequence([spec.seed, 0xC11E])))
+def draw_sequence(spec: ClientSpec) -> tuple[list[str], np.ndarray]:
+    """The script's image order and think times (s), from the client's own stream of the plan's seed."""
+    rng = seeding.generator(spec.seed, "http-client", spec.index)
     order = [spec.images[int(k)] for k in rng.integers(0, len(spec.images), SEQUENCE_LEN)]
     # Exponential think times, clipped: a bursty but bounded request process.
     thinks = np.clip(rng.exponential(spec.think_mean_s, SEQUENCE_LEN), 0.05, 4 * spec.think_mean_s)
+    return order, thinks
+
+
+def render_script(spec: ClientSpec) -> str:
+    order, thinks = draw_sequence(spec)
     url = f"http://{spec.uav_ip}:{spec.port}/"
     fmt = r"%{http_code}\t%{size_download}\t%{time_total}\t%{local_port}"
     offline = ""

@@ -15,6 +15,8 @@ from pathlib import Path
 
 import numpy as np
 
+from uavcas import seeding
+
 MEDIAN_KB = 120.0
 SIGMA = 0.55  # log-normal shape: ~90 % of files between 50 and 300 KB
 MIN_KB, MAX_KB = 20.0, 400.0
@@ -29,7 +31,7 @@ class Image:
 
 def image_sizes(seed: int, count: int = DEFAULT_COUNT, median_kb: float = MEDIAN_KB,
                 sigma: float = SIGMA) -> list[int]:
-    rng = np.random.Generator(np.random.PCG64(np.random.SeedSequence([seed, 0x1A6E])))
+    rng = seeding.generator(seed, "image-sizes")
     kb = np.clip(rng.lognormal(np.log(median_kb), sigma, count), MIN_KB, MAX_KB)
     return [int(k * 1024) for k in kb]
 
@@ -54,7 +56,7 @@ def jpeg_bytes(size_bytes: int, rng: np.random.Generator, width: int = 1280, hei
 def generate(directory: Path, seed: int, count: int = DEFAULT_COUNT) -> list[Image]:
     """Write `count` images into `directory` (img000.jpg ...); returns their names and sizes."""
     directory.mkdir(parents=True, exist_ok=True)
-    rng = np.random.Generator(np.random.PCG64(np.random.SeedSequence([seed, 0x1A6F])))
+    rng = seeding.generator(seed, "image-bytes")
     out = []
     for k, size in enumerate(image_sizes(seed, count)):
         name = f"img{k:03d}.jpg"

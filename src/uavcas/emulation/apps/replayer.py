@@ -16,7 +16,8 @@ sends or receives, wherever the two are. What the authors' code got wrong, and w
   like our copy of one of its datagrams when the TTL is left as it was), and (c) only buffer
   frames whose TTL is not one we produce by decrementing, so a replay of a replay is impossible;
 * it overwrote seq with 0, 1, 2: seq = original + k (`inc`, k = 1, 2, ... per injection),
-  uniformly random (`rand`), or unchanged (`zero`, the original sequence number).
+  uniformly random (`rand`, drawn from the attacker's stream `("replayer", index)` of the plan's
+  seed, `uavcas.seeding`), or unchanged (`zero`, the original sequence number).
 
 Buffer: up to `buffer_pkts` frames, first come first served (a full buffer admits nothing new
 until a replay frees a slot, like the capture-N-then-replay cycle of the paper's tool but
@@ -32,7 +33,6 @@ from __future__ import annotations
 import argparse
 import collections
 import json
-import random
 import select
 import signal
 import socket
@@ -42,6 +42,9 @@ import time
 import zlib
 from dataclasses import dataclass
 
+import numpy as np
+
+from uavcas import seeding
 from uavcas.events import Inject
 from uavcas.vocabulary import SEQ_MODES
 
@@ -84,17 +87,17 @@ def parse(frame: bytes) -> Seen | None:
     return Seen(src, dst, proto, sport, dport, ip_id, ttl, seq, zlib.crc32(frame[l4:ip_end]))
 
 
-def new_seq(orig: int, k: int, mode: str, rng: random.Random) -> int:
+def new_seq(orig: int, k: int, mode: str, rng: np.random.Generator) -> int:
     if mode == "inc":
         return (orig + k) & 0xFFFFFFFF
     if mode == "rand":
-        return rng.getrandbits(32)
+        return int(rng.integers(0, 1 << 32))
     if mode == "zero":
         return orig
     raise ValueError(f"seq mode {mode!r} not in {SEQ_MODES}")
 
 
-def mutate(frame: bytes, k: int, mode: str, ttl_dec: int, rng: random.Random) -> tuple[bytes, int | None]:
+def mutate(frame: bytes, k: int, mode: str, ttl_dec: int, rng: np.random.Generator) -> tuple[bytes, int | None]:
     """The injected frame: TTL - ttl_dec, TCP seq per mode, checksums recomputed (scapy)."""
     # scapy is slow to import; `run` imports it before the replayer says ready
     from scapy.layers.inet import IP, TCP, UDP
@@ -116,7 +119,7 @@ def mutate(frame: bytes, k: int, mode: str, ttl_dec: int, rng: random.Random) ->
 
 class Replayer:
     def __init__(self, victim_ip: str, attacker_ip: str, buffer_pkts: int, delay_ms: float, rate_pps: float,
-                 ttl_dec: int, seq_mode: str, seed: int = 0) -> None:
+                 ttl_dec: int, seq_mode: str, seed: int = 0, index: int = 0) -> None:
         if seq_mode not in SEQ_MODES:
             raise ValueError(f"seq mode {seq_mode!r} not in {SEQ_MODES}")
         self.victim, self.attacker = victim_ip, attacker_ip
@@ -124,7 +127,7 @@ class Replayer:
         self.buffer: collections.deque[tuple[float, bytes, Seen]] = collections.deque()
         self.delay_s, self.period_s = delay_ms / 1000.0, 1.0 / max(rate_pps, 1e-3)
         self.ttl_dec, self.mode = int(ttl_dec), seq_mode
-        self.rng = random.Random(seed)
+        self.rng = seeding.generator(seed, "replayer", index)  # the plan's seed, the attacker's index
         self.injected: set[Seen] = set()
         self.ttls_out: set[int] = set()  # TTLs our injections carry (ttl_dec >= 1 makes them unusual)
         self.k = 0
@@ -181,7 +184,7 @@ def run(args: argparse.Namespace) -> dict:
     sock.bind((args.iface, ETH_P_IP))
     sock.setblocking(False)
     rep = Replayer(args.victim, args.attacker_ip, args.buffer, args.delay_ms, args.rate_pps, args.ttl_dec,
-                   args.seq_mode, args.seed)
+                   args.seq_mode, args.seed, args.index)
     stop = []
     signal.signal(signal.SIGTERM, lambda *_: stop.append(1))
     signal.signal(signal.SIGINT, lambda *_: stop.append(1))
@@ -210,7 +213,7 @@ def run(args: argparse.Namespace) -> dict:
     return rep.stats
 
 
-def main(argv: list[str] | None = None) -> None:
+def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--iface", default="eth0")
     ap.add_argument("--victim", required=True)
@@ -221,11 +224,16 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--ttl-dec", type=int, required=True)
     ap.add_argument("--seq-mode", choices=SEQ_MODES, required=True)
     ap.add_argument("--seconds", type=float, required=True)
-    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--seed", type=int, default=0, help="The plan's seed.")
+    ap.add_argument("--index", type=int, default=0, help="The attacker's index in the plan (its own stream).")
     ap.add_argument("--attack-id", required=True)
     ap.add_argument("--family", required=True, help="Attack family written into the inject records.")
     ap.add_argument("--log", required=True)
-    stats = run(ap.parse_args(argv))
+    return ap.parse_args(argv)
+
+
+def main(argv: list[str] | None = None) -> None:
+    stats = run(parse_args(argv))
     print(json.dumps({"stats": stats}), flush=True)
     sys.exit(0)
 

@@ -22,8 +22,7 @@ from collections import Counter
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
-import numpy as np
-
+from uavcas import seeding
 from uavcas.emulation import kernel
 from uavcas.vocabulary import MAVLINK_PAYLOADS
 
@@ -31,7 +30,6 @@ from . import client, images, mavlink, nginx, video
 from .procs import Proc, spawn, wait_for
 
 SERVER_READY_S = 15.0
-VIDEO_SEED_TAG = 0x51DE0  # the video's stream of the plan's seed (as client.py tags its own)
 MAVLINK_READY_S = 120.0  # loading Python + pymavlink in every namespace at once takes seconds
 # The MAVLink endpoints' and the video senders' own deadlines lie this far past the run's end, and
 # `stop()` ends them right after it: when 8 Python endpoints and 6 ffmpeg exited exactly at the end,
@@ -115,17 +113,22 @@ class BenignTraffic:
         if self.video_on:
             self._start_video_senders()
 
-    def _start_http(self, t0_unix: float) -> None:
-        names = [img.name for img in self.images]
+    def client_specs(self, image_names: list[str], t0_unix: float) -> list[client.ClientSpec]:
+        """One HTTP client per (BS, UAV) assignment, each on its own stream of the plan's seed."""
         offline: dict[str, list[int]] = {}
         for w in self.plan.windows:
             for u in self.plan.disconnected_uavs(w):
                 offline.setdefault(u, []).append(w.index)
-        for k, (bs, uav) in enumerate(client.assignments([u.name for u in self.uavs], [b.name for b in self.bss])):
-            spec = client.ClientSpec(bs, uav, self.plan.node(uav).ip, tuple(names), self.duration_s,
-                                     self.log_dir / f"http-{bs}-{uav}.tsv", seed=self.plan.seed * 1000 + k,
-                                     think_mean_s=self.think_mean_s, t0_unix=t0_unix,
-                                     window_s=self.plan.window_s, offline_windows=tuple(offline.get(uav, ())))
+        return [client.ClientSpec(bs, uav, self.plan.node(uav).ip, tuple(image_names), self.duration_s,
+                                  self.log_dir / f"http-{bs}-{uav}.tsv", seed=self.plan.seed, index=k,
+                                  think_mean_s=self.think_mean_s, t0_unix=t0_unix,
+                                  window_s=self.plan.window_s, offline_windows=tuple(offline.get(uav, ())))
+                for k, (bs, uav) in enumerate(client.assignments([u.name for u in self.uavs],
+                                                                 [b.name for b in self.bss]))]
+
+    def _start_http(self, t0_unix: float) -> None:
+        for spec in self.client_specs([img.name for img in self.images], t0_unix):
+            bs, uav = spec.bs, spec.uav
             spec.log_path.parent.mkdir(parents=True, exist_ok=True)
             spec.log_path.write_text("")
             script = client.write_script(spec, self.work / "clients" / f"{bs}-{uav}.sh")
@@ -175,7 +178,7 @@ class BenignTraffic:
     def _video_spec(self, bs: str, k: int) -> video.VideoSpec:
         # one sink per BS receives every stream sent to it; each UAV's picture has its own seed,
         # drawn from the plan's seed into ffmpeg's range (a C int) whatever the plan's seed is
-        seed = int(np.random.SeedSequence([self.plan.seed, k, VIDEO_SEED_TAG]).generate_state(1)[0]) % (video.MAX_SEED + 1)
+        seed = seeding.child_seed(self.plan.seed, "video-noise", k) % (video.MAX_SEED + 1)
         return video.VideoSpec(dst_ip=self.plan.node(bs).ip, log_path=self.log_dir / f"video-{bs}.jsonl",
                                duration_s=self.duration_s + APP_OVERRUN_S, seed=seed, bitrate_kbps=self.video_kbps)
 

@@ -37,7 +37,7 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
-import numpy as np
+from uavcas import seeding
 
 # QGroundControl's "UDP h.264 Video Stream" listens on 0.0.0.0:5600 by default (udpUrl in
 # QGC's src/Settings/Video.SettingsGroup.json) and ArduPilot's companion video recipes send there.
@@ -125,7 +125,7 @@ class VideoSpec:
 
 
 def _stream_ids(seed: int) -> tuple[int, int]:
-    rng = np.random.Generator(np.random.PCG64(np.random.SeedSequence([seed, 0x51DE0])))
+    rng = seeding.generator(seed, "video-rtp")
     return int(rng.integers(1, 2**31)), int(rng.integers(0, 2**16))  # ffmpeg's -ssrc is a C int
 
 
