@@ -34,8 +34,8 @@ def main() -> int:
 
     import pandas as pd
 
-    from uavcas.dataset.synthetic import make_flows, write_dataset
     from uavcas.dataset.read import load_any
+    from uavcas.dataset.synthetic import make_flows, write_dataset
     from uavcas.ids.detectors import baselines
     from uavcas.ids.protocols import BenchConfig, run_protocol
     from uavcas.ids.results import results_frame

@@ -12,8 +12,15 @@ import pandas as pd
 import pytest
 
 from helpers.synth_run import IPS, MAV_BLACKHOLED_T, MAV_LAT, MAV_LON, T0, add_mavlink, build_run, mavlink_datagrams
-from uavcas.mavlink_capture import (ALL_COLUMNS, MavlinkError, decode_datagrams, mavlink_table, message_counts, problems,
-                                    write_table)
+from uavcas.mavlink_capture import (
+    ALL_COLUMNS,
+    MavlinkError,
+    decode_datagrams,
+    mavlink_table,
+    message_counts,
+    problems,
+    write_table,
+)
 
 UAVCAS = str(Path(sys.executable).parent / "uavcas")
 

@@ -6,7 +6,8 @@ import typing
 
 import pytest
 
-from uavcas import schema, vocabulary as v
+from uavcas import schema
+from uavcas import vocabulary as v
 from uavcas.scenario import Scenario, parse
 from uavcas.scenario.codec import FIELD_NAMES
 

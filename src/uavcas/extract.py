@@ -31,8 +31,8 @@ from uavcas.flows import DEFAULT_STANDARD, VIEWS, FlowConfig, Flows, PacketTable
 from uavcas.flows.context import CONTEXT_WINDOW_S, context_frames
 from uavcas.flows.follow import Followed, follow_run
 from uavcas.labels import PacketTruth, TruthContext, label_flows, packet_truth, read_attack_log, rule_text
-from uavcas.rundir import RunDir, RunDirError, RunInfo
 from uavcas.labels.episodes import episode_rule_text, host_window_frame
+from uavcas.rundir import RunDir, RunDirError, RunInfo
 from uavcas.schema import CONTEXT_FEATURES, EPISODE_VIEW
 from uavcas.vocabulary import EFFECTS
 

@@ -55,7 +55,6 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from uavcas.atomic import atomic_path
-
 from uavcas.extract import run_inputs, run_truth
 from uavcas.flows import read_packets
 from uavcas.flows.decode import link_layer

@@ -15,7 +15,6 @@ from uavcas.analysis.axes import axis_diversity
 from uavcas.analysis.diversity import DiversityOptions, diversity_table, split_by_run
 from uavcas.analysis.iat import choose_source, flow_iats
 from uavcas.analysis.separability import stratified_sample
-from uavcas.dataset.synthetic import write_dataset
 from uavcas.cli import app
 
 runner = CliRunner()

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from uavcas.stats.divergence import compare_pooled, flow_counts, log_bins
 from uavcas.analysis.legacy import legacy_divergence
+from uavcas.stats.divergence import compare_pooled, flow_counts, log_bins
 
 
 def _flows(rng, mean_iat, n_flows, n_pkts):

@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from uavcas import attacks
-from uavcas.attacks import AttackFamily, family, families, register
+from uavcas.attacks import AttackFamily, families, family, register
 from uavcas.attacks.base import ScheduleDraw
 from uavcas.labels import SOURCES
 from uavcas.scenario import parse

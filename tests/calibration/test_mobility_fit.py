@@ -5,7 +5,15 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from uavcas.calibration.layer2_mobility import STEP_S, Track, cruise_slice, fit_mission, leg_statistics, score, split_flights
+from uavcas.calibration.layer2_mobility import (
+    STEP_S,
+    Track,
+    cruise_slice,
+    fit_mission,
+    leg_statistics,
+    score,
+    split_flights,
+)
 from uavcas.mobility import Area, GaussMarkovParams, GridParams, make_mission
 
 

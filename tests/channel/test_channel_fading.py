@@ -8,8 +8,8 @@ from scipy.stats import ncx2
 
 from uavcas.channel import TR36777_UMA_AV_K, KFactorProfile
 from uavcas.channel.budget import link_params
-from uavcas.channel.linklayer import LinkLayer
 from uavcas.channel.frames import mpdu_per as _mpdu_per
+from uavcas.channel.linklayer import LinkLayer
 from uavcas.channel.mcs import MCS_80211AG as T
 
 

@@ -7,7 +7,7 @@ import pandas as pd
 import pytest
 
 from uavcas.channel import LinkChain, LinkGeometry, predict_links
-from uavcas.channel.predict import OUTPUT, GeometryError, prediction_csv, predict_frame, read_geometry
+from uavcas.channel.predict import OUTPUT, GeometryError, predict_frame, prediction_csv, read_geometry
 from uavcas.twin.profile import PAPER_PROFILE
 
 

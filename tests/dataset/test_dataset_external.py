@@ -5,7 +5,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from uavcas.dataset.external import MAPPED_CICIDS2017, MAPPED_UNSW_NB15, ExternalFormatError, load_cicids2017, load_unsw_nb15
+from uavcas.dataset.external import (
+    MAPPED_CICIDS2017,
+    MAPPED_UNSW_NB15,
+    ExternalFormatError,
+    load_cicids2017,
+    load_unsw_nb15,
+)
 from uavcas.flows.standards.cic import FEATURES
 
 

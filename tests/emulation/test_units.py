@@ -11,13 +11,19 @@ import pytest
 
 from uavcas.emulation import cleanup, naming
 from uavcas.emulation.controller import Detour, adjacency, compute, shortest_path
-from uavcas.emulation.hosts import host_lines, HostSpec, node_argv, subnet_prefixlen
+from uavcas.emulation.hosts import HostSpec, host_lines, node_argv, subnet_prefixlen
 from uavcas.emulation.naming import Naming
 from uavcas.emulation.nfqdelay import verdict_msg
-from uavcas.emulation.shaping import (FallbackShaper, NetemShaper, Shape, nft_loss_lines, nft_port_init_lines,
-                                      nft_table_ruleset,
-                                      parse_tc_rate,
-                                      queue_limit_pkts)
+from uavcas.emulation.shaping import (
+    FallbackShaper,
+    NetemShaper,
+    Shape,
+    nft_loss_lines,
+    nft_port_init_lines,
+    nft_table_ruleset,
+    parse_tc_rate,
+    queue_limit_pkts,
+)
 
 
 # names ---------------------------------------------------------------------------------------

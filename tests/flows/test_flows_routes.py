@@ -11,8 +11,8 @@ import pytest
 from helpers.capture_tables import HOP_S, send, table
 from uavcas.flows.assemble import FlowConfig, assemble
 from uavcas.flows.context import context_frame, context_frames
-from uavcas.flows.transmissions import transmissions
 from uavcas.flows.routes import route_codes
+from uavcas.flows.transmissions import transmissions
 from uavcas.schema import CONTEXT_FEATURES, CONTEXT_ROUTE_FEATURES
 
 STEP_S = 0.1  # packet spacing of every stream

@@ -15,9 +15,9 @@ from typer.testing import CliRunner
 
 from uavcas.cli import app
 from uavcas.dataset.synthetic import write_dataset
+from uavcas.ids.detectors import make_model
 from uavcas.ids.features import feature_matrix
 from uavcas.ids.leaderboard import COLUMNS as LEADERBOARD_COLUMNS
-from uavcas.ids.detectors import make_model
 from uavcas.ids.results import RESULT_COLUMNS
 from uavcas.ids.splits import grouped_split
 

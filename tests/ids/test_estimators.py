@@ -9,16 +9,14 @@ import sys
 import numpy as np
 import pytest
 from sklearn.base import clone
+from sklearn.metrics import log_loss
 from sklearn.pipeline import make_pipeline
 from sklearn.preprocessing import StandardScaler
-
-from sklearn.metrics import log_loss
 
 from uavcas.ids import baseline, baselines, detectors
 from uavcas.ids.classical import GroupedMLPClassifier, LightGBMClassifier
 from uavcas.ids.detectors import make_model
 from uavcas.ids.torch_estimator import DL_MISSING, TorchClassifier, import_torch
-
 
 HAS_TORCH = importlib.util.find_spec("torch") is not None
 NEEDS_TORCH = pytest.mark.skipif(not HAS_TORCH, reason="PyTorch not installed (pip install '.[dl]')")

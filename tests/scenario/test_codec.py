@@ -2,10 +2,9 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from uavcas.scenario import Scenario, ScenarioError, parse
-from uavcas.scenario import canonical
-from uavcas.twin.load import CONTEXT
 from uavcas.channel.pathloss import names as pathloss_names
+from uavcas.scenario import Scenario, ScenarioError, canonical, parse
+from uavcas.twin.load import CONTEXT
 from uavcas.vocabulary import MISSIONS
 
 

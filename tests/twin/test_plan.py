@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 from uavcas.scenario import PRESETS, parse
-from uavcas.twin import Plan, plan, read_plan
 from uavcas.topology.routing import USABLE_LOSS_MAX, Topology
+from uavcas.twin import Plan, plan, read_plan
 
 MISSIONS = ("spiral", "grid", "hover_transit", "random")
 

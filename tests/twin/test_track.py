@@ -8,8 +8,8 @@ import pytest
 
 from uavcas.twin import Site, plan, read_plan
 from uavcas.twin.load import plan_from_data
-from uavcas.twin.track import WGS84_A_M, WGS84_E2, Track, geodetic_to_local, local_to_geodetic
 from uavcas.twin.model import SCHEMA_VERSION
+from uavcas.twin.track import WGS84_A_M, WGS84_E2, Track, geodetic_to_local, local_to_geodetic
 
 CFG = "benign-6-2-telemetry-logdist-adaptive-random-30-95"
 

@@ -9,9 +9,19 @@ from __future__ import annotations
 
 import importlib
 import pkgutil
+
 from uavcas.vocabulary import FAMILIES
 
-from .base import AttackExecutor, AttackFamily, Emitter, EmitterContext, ScenarioError, ScheduleDraw, SpecBase, TruthContext
+from .base import (
+    AttackExecutor,
+    AttackFamily,
+    Emitter,
+    EmitterContext,
+    ScenarioError,
+    ScheduleDraw,
+    SpecBase,
+    TruthContext,
+)
 from .registry import families, family, register
 
 _INFRA = {"answers", "base", "registry"}  # shared code, no family

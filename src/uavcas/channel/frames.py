@@ -29,7 +29,6 @@ from .fading import fading_nodes
 from .linklayer import LinkLayer
 from .mcs import McsTable, per
 
-
 _PER_GRID_DB = (-40.0, 80.0, 0.005)  # SNR span and step of the tabulated PER
 
 

@@ -30,9 +30,9 @@ import numpy as np
 
 from .airtime import CCA_DBM, hears_matrix, shared_rate_mbps
 from .budget import LinkBudget, LinkParams, link_chain
-from .linklayer import DEFAULT_LINK_LAYER, LinkLayer
 from .fading import KFactorProfile
 from .geometry import LinkGeometry
+from .linklayer import DEFAULT_LINK_LAYER, LinkLayer
 from .mcs import DEFAULT_MARGIN_DB, MCS_80211AG, McsTable, parse_modulation
 from .pathloss import PathLossProfile, make_pathloss
 

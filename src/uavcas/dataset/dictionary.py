@@ -18,7 +18,7 @@ from dataclasses import dataclass
 from uavcas import schema as s
 from uavcas import vocabulary as v
 from uavcas.channel.pathloss import names as pathloss_names
-from uavcas.flows.standards import DEFAULT_STANDARD, standards
+from uavcas.flows.standards import DEFAULT_STANDARD
 from uavcas.flows.standards import standard as feature_standard
 
 NO_UNIT = "-"

@@ -27,7 +27,6 @@ from uavcas.ids.features import context_columns, context_matrix, resolve_feature
 
 from .read import load_any
 
-
 Nonfinite = Literal["zero", "nan", "drop"]
 NONFINITE: tuple[str, ...] = ("zero", "nan", "drop")
 

@@ -21,7 +21,6 @@ from .contention import Contention, ContentionProbe
 from .selftest import Check, DelayTolerance, HopConfig
 
 
-
 @dataclass(frozen=True)
 class DoctorProfile:
     """What the self-test offers and how strictly it judges."""

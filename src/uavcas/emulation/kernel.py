@@ -15,8 +15,8 @@ import fcntl
 import os
 import socket
 import struct
-import time
 import subprocess
+import time
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path

@@ -47,7 +47,15 @@ import pandas as pd
 
 from .packets import PacketTable, payload_and_header
 from .termination import (
-    DEFAULTS, TERMINATIONS, Cuts, KeyPackets, PolicyDefaults, Termination, cic_cuts, connection_cuts, timeout_cuts,
+    DEFAULTS,
+    TERMINATIONS,
+    Cuts,
+    KeyPackets,
+    PolicyDefaults,
+    Termination,
+    cic_cuts,
+    connection_cuts,
+    timeout_cuts,
 )
 
 View = Literal["5tuple", "hostpair", "window-hostpair"]

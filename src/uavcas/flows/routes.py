@@ -43,8 +43,8 @@ import pandas as pd
 
 if TYPE_CHECKING:
     from .assemble import Flows
-    from .transmissions import Transmissions
     from .packets import PacketTable
+    from .transmissions import Transmissions
 
 _NS = 1_000_000_000
 ROUTE_BIN_S = 1.0  # short against a plan window (5 s), long against a stream's packet spacing

@@ -24,6 +24,7 @@ per-family counts and labels. Where two families provoke one row, the first in c
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+
 import numpy as np
 
 from uavcas.attacks import families

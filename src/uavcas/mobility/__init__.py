@@ -8,7 +8,14 @@ generators and parameter models are used by calibration to fit (see `fit.py`, `k
 from uavcas.mobility.area import Area
 from uavcas.mobility.base import Mission, MissionBase
 from uavcas.mobility.factory import make_mission, mission_seed
-from uavcas.mobility.fit import GaussMarkovFit, Legs, fit_gauss_markov, resample_uniform, split_legs, velocities_from_positions
+from uavcas.mobility.fit import (
+    GaussMarkovFit,
+    Legs,
+    fit_gauss_markov,
+    resample_uniform,
+    split_legs,
+    velocities_from_positions,
+)
 from uavcas.mobility.gauss_markov import (
     GaussMarkovMission,
     alpha_at_step,

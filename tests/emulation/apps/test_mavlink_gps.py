@@ -12,8 +12,16 @@ import time
 
 import pytest
 
-from uavcas.emulation.apps.mavlink.gps import (GUARD_S, LEAD_S, GpsReceiver, Spoofing, claimed, control_path,
-                                               course_deg, publish)
+from uavcas.emulation.apps.mavlink.gps import (
+    GUARD_S,
+    LEAD_S,
+    GpsReceiver,
+    Spoofing,
+    claimed,
+    control_path,
+    course_deg,
+    publish,
+)
 from uavcas.twin.track import Track, TrackPoint
 
 T = 1_700_000_000.0
