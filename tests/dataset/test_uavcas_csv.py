@@ -84,7 +84,7 @@ def test_columns_and_conventions_by_hand(tmp_path):
     assert [r[c] for c in STAT_COLUMNS[:11]] == ["4", "5", "2", "image", "logdist", "adaptive", "spiral", "30", "95",
                                                  "10.0.0.10", "10.0.0.2"]  # fmt: skip
     t = np.array([(T + round(x * 1e9)) / 10**9 for x in rel[0]])
-    s, f, d0 = sizes[0], flags[0], dirs[0] == -1
+    s, d0 = sizes[0], dirs[0] == -1
     dur, iat = t[-1] - t[0], np.diff(t)
     expect = {
         "Flow Duration": repr(dur), "Total Packets": "12", "Total Length of Packets": str(s.sum()),

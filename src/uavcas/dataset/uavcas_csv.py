@@ -462,7 +462,7 @@ def read_layout(path: Path) -> Imported:
             same = before.notna() & (before == after)
             out.loc[same & rid.isna(), "run_id"] = before[same & rid.isna()]
             for k in ("n_uav", "n_bs", "payload", "pathloss", "modulation", "mission", "tx_dbm", "noise_dbm"):
-                b, a = out[k].ffill(), out[k].bfill()
+                b = out[k].ffill()
                 fill = same & out[k].isna()
                 out.loc[fill, k] = b[fill]
             if (~same & rid.isna()).any():

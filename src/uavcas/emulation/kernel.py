@@ -113,7 +113,7 @@ def in_netns(ns: str) -> Iterator[None]:
 
     Only this thread moves; sockets created inside stay bound to `ns` after the block.
     """
-    own = os.open(f"/proc/thread-self/ns/net", os.O_RDONLY)
+    own = os.open("/proc/thread-self/ns/net", os.O_RDONLY)
     target = os.open(str(NETNS_DIR / ns), os.O_RDONLY)
     try:
         if _libc.setns(target, CLONE_NEWNET) != 0:

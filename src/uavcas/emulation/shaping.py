@@ -370,7 +370,6 @@ class FallbackShaper(Shaper):
         return lines
 
     def apply(self, shapes: Sequence[Shape], also: Sequence[kernel.Batch] = ()) -> dict[str, float]:
-        t0 = time.perf_counter()
         changed = self._changed(shapes)
         new = {**self.current, **{s.port: s for s in shapes}}
         batches = [kernel.Batch("tc", self.fabric_ns, self.tc_lines(shapes)), *also]

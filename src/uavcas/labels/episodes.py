@@ -139,7 +139,7 @@ def host_window_frame(
         raise ValueError(f"episodes are built from 5-tuple flows, not {flows.config.view!r} ones")
     if len(flow_frame) != flows.n_flows:
         raise ValueError(f"flow_frame has {len(flow_frame)} rows for {flows.n_flows} flows")
-    n_nodes, n_win = len(plan.nodes), len(plan.windows)
+    n_win = len(plan.windows)
     rows = flows.order
     src = _node_index(packets["src_hi"][rows], packets["src_lo"][rows], plan)
     dst = _node_index(packets["dst_hi"][rows], packets["dst_lo"][rows], plan)
