@@ -14,7 +14,10 @@ from __future__ import annotations
 
 from uavcas import vocabulary as _v
 
-SCHEMA_VERSION = 6  # 2: feature standards, first_ts_ns; 3: context columns (ctx_*); 4: provoked effect, provoked_packets; 5: families jamming, gps_spoof, mavlink_inject (their columns and effects), the card's column dictionary and fidelity_failed; 6: route context (ctx_route_lonely_frac, ctx_path_len_shift_max, ctx_delay_shift_max_ms; episodes ctx_pkt_*)
+# 2: feature standards, first_ts_ns; 3: context columns (ctx_*); 4: provoked effect, provoked_packets; 5: families
+# jamming, gps_spoof, mavlink_inject (their columns and effects), the card's column dictionary and fidelity_failed;
+# 6: route context (ctx_route_lonely_frac, ctx_path_len_shift_max, ctx_delay_shift_max_ms; episodes ctx_pkt_*)
+SCHEMA_VERSION = 6
 
 # Context features (`ctx_*`): what switch monitors observe around a flow, computed from the run's
 # captures at extraction time (`uavcas.flows.context`; definitions and what a deployed node must
@@ -40,7 +43,8 @@ CONTEXT_HOST_FEATURES: tuple[str, ...] = tuple(
     f"ctx_{role}_{m}" for role in ("src", "dst") for m in CONTEXT_HOST_METRICS + tuple(CONTEXT_HOST_SHIFTS.values())
 )
 # per window for the flow's host pair, and against the pair's earlier windows
-CONTEXT_PAIR_METRICS: tuple[str, ...] = ("flow_share", "unanswered_frac", "rtt_ms", "delay_ms", "lost_frac", "path_len_mean")
+CONTEXT_PAIR_METRICS: tuple[str, ...] = ("flow_share", "unanswered_frac", "rtt_ms", "delay_ms", "lost_frac",
+                                         "path_len_mean")
 CONTEXT_PAIR_SHIFTS: dict[str, str] = {
     "unanswered_frac": "unanswered_shift", "rtt_ms": "rtt_shift_ms", "delay_ms": "delay_shift_ms",
     "path_len_mean": "path_len_shift",

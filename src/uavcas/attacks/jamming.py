@@ -101,7 +101,8 @@ class Jamming(AttackFamily):
         return JammingSpec(
             eirp_dbm=int_field("attacks.jamming.eirp_dbm", parts[0], 0, 60),
             duty_pct=int_field("attacks.jamming.duty_pct", parts[1], 1, 100) if len(parts) > 1 else DEFAULT_DUTY_PCT,
-            placement=choice("attacks.jamming.placement", parts[2], PLACEMENTS) if len(parts) > 2 else DEFAULT_PLACEMENT,
+            placement=choice("attacks.jamming.placement", parts[2], PLACEMENTS) if len(parts) > 2
+            else DEFAULT_PLACEMENT,
         )
 
     def spec_from_params(self, params: dict[str, Any]) -> JammingSpec:

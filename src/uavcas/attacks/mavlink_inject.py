@@ -102,7 +102,8 @@ class MavlinkInject(AttackFamily):
 
     def parse(self, arg: str | None, tok: str) -> MavlinkInjectSpec:
         if not arg:
-            raise ScenarioError(f"field 'attacks': mavlink_inject needs a command, e.g. mavlink_inject=rtl ({self.usage})")
+            raise ScenarioError("field 'attacks': mavlink_inject needs a command, e.g. mavlink_inject=rtl "
+                                f"({self.usage})")
         command, *rest = arg.split(",")
         kw: dict[str, Any] = {"command": choice("attacks.mavlink_inject.command", command, COMMANDS)}
         for part in rest:

@@ -159,13 +159,15 @@ def run_layer1(maeng: list[PathLossSamples], multibw: list[PathLossSamples], pat
 
 def layer1_json(res: Layer1Result) -> dict:
     prof = res.profile
-    gain = {t: -float(c) for t, c in zip(PATTERN_TERMS, res.fit.pattern_coef)} if res.fit.pattern_coef is not None else None
+    gain = {t: -float(c)
+            for t, c in zip(PATTERN_TERMS, res.fit.pattern_coef)} if res.fit.pattern_coef is not None else None
     return {
         "target": "absolute antenna-compensated path loss PL = EIRP_eff + G_t + G_r (rad_pat.mat at each sample's "
-                  "elevation/azimuth/orientation) - RSRP, minus the fitted effective-pattern correction (see layer1_fit.py)",
-        "split": f"contiguous segments: {BLOCK_S:g} s blocks, {TEST_FRACTION:.0%} held out per file (seeded), {GUARD_S:g} s "
-                 "guards dropped from training beside every held-out block; cross-validation on the multi-band campaign, "
-                 "nothing fitted on it",
+                  "elevation/azimuth/orientation) - RSRP, minus the fitted effective-pattern correction (see "
+                  "layer1_fit.py)",
+        "split": f"contiguous segments: {BLOCK_S:g} s blocks, {TEST_FRACTION:.0%} held out per file (seeded), "
+                 f"{GUARD_S:g} s guards dropped from training beside every held-out block; cross-validation on the "
+                 "multi-band campaign, nothing fitted on it",
         "scales": {"sample": "every held-out sample (bounded below by the fast fading)",
                    "local_mean": f"{LOCAL_MEAN_S:g} s power-mean windows inside held-out runs (the twin's window)"},
         "error_convention": "e = predicted - measured; bias_db = mean e",
@@ -173,20 +175,25 @@ def layer1_json(res: Layer1Result) -> dict:
         "pl_at_1m_db": res.pl_at_1m_db,
         "pl_at_1m_minus_fspl_db": res.pl_at_1m_db - FSPL_1M_DB,
         "tx_height_m": res.tx_height_m,
-        "link_budget": {"maeng": [b.as_dict() for b in res.budgets], "multibw": [b.as_dict() for b in res.crossval_budgets]},
+        "link_budget": {"maeng": [b.as_dict() for b in res.budgets],
+                        "multibw": [b.as_dict() for b in res.crossval_budgets]},
         "logdistance_params": {
             "nominal_altitude_m": [g.altitude_m for g in res.groups],
-            "altitude_m": list(prof.altitude_m), "n": list(prof.n), "pl0_db": list(prof.pl0_db), "sigma_db": list(prof.sigma_db),
+            "altitude_m": list(prof.altitude_m), "n": list(prof.n), "pl0_db": list(prof.pl0_db),
+            "sigma_db": list(prof.sigma_db),
             "sigma_sample_db": list(res.fit.sigma_sample_db), "fc_ghz": prof.fc_ghz,
             "n_train": [int(g.train.sum()) for g in res.groups], "n_test": [int(g.test.sum()) for g in res.groups],
-            "test_blocks": [list(g.split.test_blocks) for g in res.groups], "n_blocks": [g.split.n_blocks for g in res.groups],
+            "test_blocks": [list(g.split.test_blocks) for g in res.groups],
+            "n_blocks": [g.split.n_blocks for g in res.groups],
         },
         "effective_pattern_gain_db": gain,
         "shadowing_decorrelation_m": res.decorrelation_m,
-        "k_factor_db": {"altitude_m": list(res.k_factor.altitude_m), "k_db": list(res.k_factor.k_db), "method": res.k_factor.source},
+        "k_factor_db": {"altitude_m": list(res.k_factor.altitude_m), "k_db": list(res.k_factor.k_db),
+                        "method": res.k_factor.source},
         "logdistance_free_params": {"n": list(res.fit_free.profile.n), "pl0_db": list(res.fit_free.profile.pl0_db),
                                     "sigma_db": list(res.fit_free.profile.sigma_db)},
-        "logdistance_radpat_params": {"n": list(res.fit_radpat.profile.n), "pl0_db": list(res.fit_radpat.profile.pl0_db),
+        "logdistance_radpat_params": {"n": list(res.fit_radpat.profile.n),
+                                      "pl0_db": list(res.fit_radpat.profile.pl0_db),
                                       "sigma_db": list(res.fit_radpat.profile.sigma_db)},
         "two_ray_params": res.two_ray.as_dict(),
         "uma_av_offset_db": res.uma_offset_db,

@@ -8,9 +8,9 @@ so both series live on the same time grid.
 
 Chain: the twin's `Channel` (2 nodes: rover as BS, UAV), evaluated once per step in time order
 so Gudmundson shadowing (layer 1's decorrelation distance) and the LOS state evolve with the
-UAV's displacement, exactly as in a plan, with layer 1's Rician K(h) in its link layer. Budget: TX_DBM = 20 dBm, 0 dBi, noise -95 dBm (the twin's defaults); simulated RSS =
-TX_DBM - total path loss. Variants: the calibrated log-distance profile (layer 1; the built-in
-paper-anchored profile when layer 1 did not run) and TR 36.777 UMa-AV.
+UAV's displacement, exactly as in a plan, with layer 1's Rician K(h) in its link layer. Budget: TX_DBM = 20 dBm, 0 dBi,
+noise -95 dBm (the twin's defaults); simulated RSS = TX_DBM - total path loss. Variants: the calibrated log-distance
+profile (layer 1; the built-in paper-anchored profile when layer 1 did not run) and TR 36.777 UMa-AV.
 
 Scale: the sounder's power is uncalibrated (dB re an unknown reference), so one constant offset
 maps it to dBm: offset = median(sim_median - measured) over TRAINING flights only (a seeded 70 %
@@ -77,7 +77,8 @@ def replay_flight(f: AfarFlight, profile: PathLossProfile | None, seed: int, fc_
     out: dict = {"chain": {}, "median": {}, "snr": {}, "rate": {}}
     for variant in VARIANTS:
         ch = Channel(n_nodes=2, pathloss="logdist" if variant == "logdistance" else "uma", profile=profile,
-                     seed=seed, tx_power_dbm=TX_DBM, noise_dbm=NOISE_DBM, fc_ghz=fc_ghz, fading=fading, d_corr_m=d_corr_m)
+                     seed=seed, tx_power_dbm=TX_DBM, noise_dbm=NOISE_DBM, fc_ghz=fc_ghz, fading=fading,
+                     d_corr_m=d_corr_m)
         total, shadow, snr, rate = (np.empty(len(t)) for _ in range(4))
         pairs, is_bs = np.array([[0, 1]]), np.array([True, False])
         for k in range(len(t)):
@@ -113,7 +114,8 @@ def run_layer3(flights: list[AfarFlight], profile: PathLossProfile | None, seed:
     usable = [f for f in flights if f.rover_lon_lat is not None]
     if len(usable) < 2:
         raise CalibrationDataError(
-            "layer 3 needs >= 2 AFAR flights with a processed file (results_useful_with_tworay_tilt_src_exp_*) to locate the rover"
+            "layer 3 needs >= 2 AFAR flights with a processed file (results_useful_with_tworay_tilt_src_exp_*) to "
+            "locate the rover"
         )
     replays = [replay_flight(f, profile, seed + i, fading=fading, d_corr_m=d_corr_m) for i, f in enumerate(usable)]
     tr_i, te_i = split_flights([r.name for r in replays], seed, 99)
@@ -136,7 +138,8 @@ def run_layer3(flights: list[AfarFlight], profile: PathLossProfile | None, seed:
                     "median_ae_db": float(np.median(np.abs(chain[m] - meas[m]))),
                     "median_ae_no_shadow_db": float(np.median(np.abs(med[m] - meas[m]))),
                 }
-        per_flight = {r.name: {"r_chain": _r(r.rss_chain_dbm[v], r.measured_db), "r_median": _r(r.rss_median_dbm[v], r.measured_db),
+        per_flight = {r.name: {"r_chain": _r(r.rss_chain_dbm[v], r.measured_db),
+                               "r_median": _r(r.rss_median_dbm[v], r.measured_db),
                                "n": int(len(r.t_s))} for r in test}
         results[v] = {
             "offset_db": off,
@@ -145,7 +148,8 @@ def run_layer3(flights: list[AfarFlight], profile: PathLossProfile | None, seed:
             "median_ae_uncorrected_db": float(np.median(np.abs(chain - raw))),
             "bias_db": float(np.mean(chain - meas)),
             "pearson_r_median_over_flights": float(np.nanmedian([p["r_chain"] for p in per_flight.values()])),
-            "pearson_r_no_shadow_median_over_flights": float(np.nanmedian([p["r_median"] for p in per_flight.values()])),
+            "pearson_r_no_shadow_median_over_flights": float(np.nanmedian([p["r_median"]
+                                                                           for p in per_flight.values()])),
             "pearson_r_pooled": _r(chain, meas),
             "per_altitude": bins,
             "per_flight": per_flight,

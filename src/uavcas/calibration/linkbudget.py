@@ -99,7 +99,8 @@ def budget_term_db(s: PathLossSamples) -> np.ndarray:
     return s.pred_free_dbm + free_space_loss_db(s.d3d_m, carrier_ghz(s.campaign))
 
 
-def absolute_pathloss_db(s: PathLossSamples, budget: BudgetFit | None = None, pattern: PatternGain | None = None) -> np.ndarray:
+def absolute_pathloss_db(s: PathLossSamples, budget: BudgetFit | None = None,
+                         pattern: PatternGain | None = None) -> np.ndarray:
     """Antenna-compensated absolute path loss (dB) per sample: EIRP_eff + G_pattern - P_rx with
     our pattern gains when `pattern` and the sample angles are there, else K_i - P_rx with the
     file's own budget term (the multi-band files: no angles for the Maeng pattern)."""

@@ -99,7 +99,8 @@ def read_table(path: str | Path) -> dict[str, np.ndarray]:
     raise CalibrationDataError(f"{p}: unknown format (expected .mat, .csv or .csv.gz)")
 
 
-def columns(path: Path, table: dict[str, np.ndarray], names: tuple[str, ...], min_rows: int = 2) -> dict[str, np.ndarray]:
+def columns(path: Path, table: dict[str, np.ndarray], names: tuple[str, ...],
+            min_rows: int = 2) -> dict[str, np.ndarray]:
     """The 1-D float columns `names` of `table`, checked: present, numeric, equal length."""
     missing = [n for n in names if n not in table]
     if missing:
@@ -227,7 +228,8 @@ def load_maeng(root: str | Path) -> list[PathLossSamples]:
     for k, p in found_csv.items():
         found.setdefault(k, p)
     if not found:
-        raise CalibrationDataError(f"{r}: no Maeng LTE processed files (filtererd_data_with_dist_ori_*_meas_rad.mat or lte_maeng_processed_*m.csv.gz)")
+        raise CalibrationDataError(f"{r}: no Maeng LTE processed files (filtererd_data_with_dist_ori_*_meas_rad.mat or "
+                                   "lte_maeng_processed_*m.csv.gz)")
     out = []
     for (h,), p in sorted(found.items(), key=lambda kv: int(kv[0][0])):
         c = finite_rows(columns(p, read_table(p), MAENG_COLUMNS))
@@ -244,7 +246,8 @@ def load_multibw(root: str | Path) -> list[PathLossSamples]:
     r = _require_dir(root)
     found = _find(r, r"results_cole_with_tworay_tilt_src_alt_(\d+)m_fs(\d+)MHz")
     if not found:
-        raise CalibrationDataError(f"{r}: no multi-band processed files (results_cole_with_tworay_tilt_src_alt_*m_fs*MHz)")
+        raise CalibrationDataError(f"{r}: no multi-band processed files "
+                                   "(results_cole_with_tworay_tilt_src_alt_*m_fs*MHz)")
     out = []
     for (h, bw), p in sorted(found.items(), key=lambda kv: (int(kv[0][0]), int(kv[0][1]))):
         c = finite_rows(columns(p, read_table(p), MULTIBW_COLUMNS))
@@ -265,7 +268,8 @@ def load_pattern(root: str | Path) -> RadiationPattern | None:
         th, ph = np.asarray(t["theta2"], float).ravel(), np.asarray(t["phi2"], float).ravel()
         gt, gr = np.asarray(t["G_t_dB"], float), np.asarray(t["G_r_dB"], float)
         if gt.shape != (th.size, ph.size) or gr.shape != gt.shape:
-            raise CalibrationDataError(f"{p}: pattern tables {gt.shape}/{gr.shape} do not match theta2 x phi2 = {(th.size, ph.size)}")
+            raise CalibrationDataError(f"{p}: pattern tables {gt.shape}/{gr.shape} do not match theta2 x phi2 = "
+                                       f"{(th.size, ph.size)}")
         return RadiationPattern(source=p, theta_deg=th, phi_deg=ph, g_tx_db=gt, g_rx_db=gr)
     return None
 

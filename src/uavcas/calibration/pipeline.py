@@ -64,13 +64,15 @@ def build_profile(name: str, l1: Layer1Result | None, l2: Layer2Result | None, d
         update["pathloss"] = l1.profile.model_copy(update={"name": f"{name}-pathloss"})
         update["bs_mast_m"] = round(l1.tx_height_m, 2)
         update["area"] = PAPER_PROFILE.area.model_copy(update={"z_min_m": round(min(l1.profile.altitude_m), 1)})
-        channel = PAPER_PROFILE.channel.model_copy(update={"fading": l1.k_factor, "d_corr_m": round(l1.decorrelation_m, 1)})
+        channel = PAPER_PROFILE.channel.model_copy(update={"fading": l1.k_factor,
+                                                           "d_corr_m": round(l1.decorrelation_m, 1)})
         update["channel"] = channel
         parts.append("path loss, K(h), shadowing decorrelation and mast height (layer 1)")
     if l2 is not None:
         update["mobility"] = l2.profile.model_copy(update={"name": f"{name}-mobility"})
         parts.append("mobility (layer 2)")
-    update["source"] = f"uavcas calibrate on {Path(str(data)).name} (seed {seed}): fitted {' and '.join(parts) or 'nothing'}; other parts built in (paper)"
+    update["source"] = (f"uavcas calibrate on {Path(str(data)).name} (seed {seed}): fitted "
+                        f"{' and '.join(parts) or 'nothing'}; other parts built in (paper)")
     return PAPER_PROFILE.model_copy(update=update)
 
 
@@ -106,14 +108,16 @@ def run(layers: tuple[str, ...], data: Path, out: Path, seed: int = 0, write_pro
     if "pathloss" in layers:
         j = layer1_json(l1)
         res.results["pathloss"] = j
-        res.files += [report.write_json(out / "pathloss.json", j), report.write_md(out / "pathloss.md", report.pathloss_md(j)),
+        res.files += [report.write_json(out / "pathloss.json", j),
+                      report.write_md(out / "pathloss.md", report.pathloss_md(j)),
                       figures.pathloss_figure(l1, out / "pathloss_vs_distance.png", seed),
                       figures.crossval_figure(l1, out / "pathloss_crossval.png")]
     if "mobility" in layers:
         l2 = run_layer2(afar, seed=seed, assignment=assignment)
         j = layer2_json(l2)
         res.results["mobility"] = j
-        res.files += [report.write_json(out / "mobility.json", j), report.write_md(out / "mobility.md", report.mobility_md(j))]
+        res.files += [report.write_json(out / "mobility.json", j),
+                      report.write_md(out / "mobility.md", report.mobility_md(j))]
         res.files += figures.mobility_figures(l2, out, seed)
         log(f"layer 2 done ({time.monotonic() - t0:.1f} s)")
     if need3:
@@ -128,7 +132,8 @@ def run(layers: tuple[str, ...], data: Path, out: Path, seed: int = 0, write_pro
         l4 = run_layer4(l1.groups, l1.crossval_groups, l3, l1.profile, l1.k_factor, l1.decorrelation_m, seed=seed)
         j = layer4_json(l4)
         res.results["fidelity"] = j
-        res.files += [report.write_json(out / "fidelity.json", j), report.write_md(out / "fidelity.md", report.fidelity_md(j)),
+        res.files += [report.write_json(out / "fidelity.json", j),
+                      report.write_md(out / "fidelity.md", report.fidelity_md(j)),
                       figures.fidelity_figure(l4, out / "fidelity_rss_pdf.png")]
         log(f"layer 4 done ({time.monotonic() - t0:.1f} s)")
     if write_profile:

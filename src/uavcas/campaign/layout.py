@@ -63,7 +63,8 @@ class CampaignDir:
             if h != want:
                 raise CampaignError(
                     f"{self.root} holds a campaign extracted with --view {h['view']} --termination {h['termination']}, "
-                    f"not --view {want['view']} --termination {want['termination']}; resume it with those or use another --out")
+                    f"not --view {want['view']} --termination {want['termination']}; resume it with those or use "
+                    "another --out")
         if not self.extraction_path.exists():
             atomic_write_text(self.extraction_path, json.dumps(want) + "\n")
 
@@ -84,7 +85,8 @@ class CampaignDir:
             have = want
         if have != want:
             flag = "--mavlink-signing" if have["mavlink_signing"] else "--no-mavlink-signing"
-            raise CampaignError(f"{self.root} holds a campaign emulated with {flag}; resume it with that or use another --out")
+            raise CampaignError(f"{self.root} holds a campaign emulated with {flag}; resume it with that or use "
+                                "another --out")
         if not self.emulation_path.exists():
             atomic_write_text(self.emulation_path, json.dumps(want) + "\n")
 
@@ -122,7 +124,8 @@ class CampaignDir:
         """
         text = manifest_text(entries)
         if self.manifest_path.exists():
-            old = {json.loads(line)["index"]: json.loads(line) for line in self.manifest_path.read_text().splitlines() if line}
+            old = {json.loads(line)["index"]: json.loads(line)
+                   for line in self.manifest_path.read_text().splitlines() if line}
             for e in entries:
                 prev = old.get(e.index)
                 if prev is not None and prev != e.to_dict():

@@ -215,7 +215,8 @@ def link_chain(
             best = (tput, mcs, reach)
             continue
         better = tput > best[0]  # ties keep the more robust level
-        best = (np.where(better, tput, best[0]), np.where(better, mcs, best[1]), np.where(better[:, None], reach, best[2]))
+        best = (np.where(better, tput, best[0]), np.where(better, mcs, best[1]),
+                np.where(better[:, None], reach, best[2]))
     mcs, reach = best[1], best[2]
     return mcs, reach, link_params_from_reach(reach, mcs, distance_m, table, link)
 

@@ -38,8 +38,8 @@ with the information weights c_d of Haccoun & Begin, "High-rate punctured convol
 for Viterbi and sequential decoding", IEEE Trans. Commun. 37(11), 1989 (rate 1/2: d = 10, 12,
 ..., 26; 2/3: d = 6..15; 3/4: d = 5..14). This is the "NIST" OFDM error model of ns-3
 (G. Pei and T. R. Henderson, "Validation of OFDM error rate model in ns-3", Boeing Research &
-Technology, 2010; ns-3 `NistErrorRateModel`). The code rate therefore counts: BPSK 1/2 and BPSK 3/4 differ by ~2.9 dB at PER 10 %.
-PER = 1 - (1 - Pb)^L over the L bits of a frame.
+Technology, 2010; ns-3 `NistErrorRateModel`). The code rate therefore counts: BPSK 1/2 and BPSK 3/4 differ by ~2.9 dB at
+PER 10 %. PER = 1 - (1 - Pb)^L over the L bits of a frame.
 
 Implementation loss. The AWGN curves of the bound reach PER 10 % on 1000-octet frames at 3.9,
 6.7, 6.9, 9.8, 13.4, 16.5, 22.5 dB for the seven levels; the thresholds above are 5.1, 3.3,

@@ -75,7 +75,8 @@ def _text(arr: pa.Array) -> pa.Array:
 
 def _flow_id(b: pa.RecordBatch) -> pa.Array:
     # CICFlowMeter's BasicFlow: src + "-" + dst + "-" + srcPort + "-" + dstPort + "-" + protocol
-    parts = [pc.fill_null(pc.cast(b.column(c), pa.string()), "") for c in ("src_ip", "dst_ip", "src_port", "dst_port", "protocol")]
+    parts = [pc.fill_null(pc.cast(b.column(c), pa.string()), "")
+             for c in ("src_ip", "dst_ip", "src_port", "dst_port", "protocol")]
     return pc.binary_join_element_wise(*parts, "-")
 
 
@@ -107,8 +108,8 @@ def write_flow_csv(dataset_dir: Path, out: Path, view: str | None = None) -> int
     card = read_card(dataset_dir)
     path = Path(dataset_dir) / "flows.parquet"
     if card.get("unit") == "host-window" or "host" in pq.read_schema(path).names:
-        raise CicCsvError(f"{dataset_dir}: {EPISODE_VIEW} rows (episodes) are no flows and the csv format holds one row "
-                          "per flow; extract the runs with `uavcas extract RUN --view 5tuple` (or hostpair) into "
+        raise CicCsvError(f"{dataset_dir}: {EPISODE_VIEW} rows (episodes) are no flows and the csv format holds one "
+                          "row per flow; extract the runs with `uavcas extract RUN --view 5tuple` (or hostpair) into "
                           "another dataset and export that")
     standard = card_standard(card)
     names = [n for n in pq.read_schema(path).names if n not in LEFT_OUT]

@@ -95,7 +95,8 @@ def metadata_json(info: DatasetInfo, files: list[FileEntry], schema: pa.Schema, 
                                          sha256=f.sha256) for f in files]
     distribution.append(mlc.FileSet(ctx=ctx, id=SHARDS, name=SHARDS, encoding_formats=[PARQUET],
                                     includes=[f"{SHARDS}/*.parquet"],
-                                    description=f"{len(shards)} Parquet shards, one per run; their union is the dataset"))
+                                    description=f"{len(shards)} Parquet shards, one per run; their union is the "
+                                                "dataset"))
     rs = record_set_name(episodes)
     fields = []
     for f, col in zip(schema, columns(schema, standard, episodes)):
@@ -131,5 +132,6 @@ def validate(path: Path) -> list[str]:
 
 
 def _first_line(e: Exception) -> str:
-    lines = [ln.strip() for ln in str(e).splitlines() if ln.strip() and not ln.strip().startswith("Found the following")]
+    lines = [ln.strip()
+             for ln in str(e).splitlines() if ln.strip() and not ln.strip().startswith("Found the following")]
     return lines[0] if lines else type(e).__name__

@@ -68,7 +68,8 @@ _AXES: dict[str, tuple[str, str]] = {
     "noise_dbm": ("dBm", "noise floor (the scenario's 95 is -95.0)"),
 }
 _COUNTS: dict[str, tuple[str, str]] = {
-    "packets": ("packets", "packets of the row (flows: each transmission once, at the capture point when it crossed it; "
+    "packets": ("packets",
+                "packets of the row (flows: each transmission once, at the capture point when it crossed it; "
                 "episodes: sent or received by the node)"),
     "bytes": ("bytes", "sum of the flow's frame lengths (link-layer, as tshark frame.len)"),
     "duration_s": ("s", "last packet time - first packet time"),
@@ -85,7 +86,8 @@ _TRUTH: dict[str, tuple[str, str]] = {
     "attack_fraction": ("ratio", "attack_packets / packets, exactly"),
     "provoked_packets": ("packets", "of attack_packets, those whose effect is provoked (answers to attack packets)"),
     "label": (NO_UNIT, "the class: Benign, one family's class or a composition's (vocabulary.CLASSES)"),
-    "label_source": (NO_UNIT, "the labelling rules that fired (uavcas.labels.label.SOURCES), joined by +; none: Benign"),
+    "label_source": (NO_UNIT,
+                     "the labelling rules that fired (uavcas.labels.label.SOURCES), joined by +; none: Benign"),
 }
 for _f in v.FAMILIES:
     _TRUTH[f"attack_packets_{_f}"] = ("packets", f"attack packets whose effect comes from a {_f} attack "
@@ -100,7 +102,8 @@ _EPISODE: dict[str, str] = {
     "active_s": "last packet time - first packet time in the window", "peers": "distinct addresses at the other end",
     "peer_ports": "distinct TCP/UDP ports at the other end", "syn_out": "TCP SYNs (ACK clear) sent",
     "syn_in": "TCP SYNs (ACK clear) received", "synack_out": "TCP SYN-ACKs sent", "synack_in": "TCP SYN-ACKs received",
-    "rst_out": "TCP RSTs sent", "rst_in": "TCP RSTs received", "fin_out": "TCP FINs sent", "fin_in": "TCP FINs received",
+    "rst_out": "TCP RSTs sent", "rst_in": "TCP RSTs received", "fin_out": "TCP FINs sent",
+    "fin_in": "TCP FINs received",
     "udp_share": "share of the episode's packets that are UDP", "icmp_share": "share that are ICMP (or ICMPv6)",
     "flows": "5-tuple flows starting in the window with the node as an endpoint",
     "flows_out": "of those, initiated by the node", "flows_in": "of those, initiated by its peer",
@@ -114,9 +117,11 @@ _CTX_FLOW: dict[str, tuple[str, str]] = {
     "ctx_offhome_frac": ("ratio", "share of packets that entered the network away from their source's home switch"),
     "ctx_ttl_off_frac": ("ratio", "share of packets whose TTL is not their source's usual TTL"),
     "ctx_ttl_levels": ("TTL values", "distinct TTLs per direction less one, the larger direction"),
-    "ctx_neardup_frac": ("ratio", "share of packets repeating an earlier one's IP id, length and flags with another seq or TTL"),
+    "ctx_neardup_frac": ("ratio",
+                         "share of packets repeating an earlier one's IP id, length and flags with another seq or TTL"),
     "ctx_retx_frac": ("ratio", "share of packets repeating an earlier data/SYN/FIN packet (retransmissions)"),
-    "ctx_seq_regress_frac": ("ratio", "share of data packets whose TCP seq lies below the highest sent before (stale copies)"),
+    "ctx_seq_regress_frac": ("ratio",
+                             "share of data packets whose TCP seq lies below the highest sent before (stale copies)"),
     "ctx_rtt_ms": ("ms", "first SYN entering the network to the first SYN-ACK's last observation (-1: no handshake)"),
     "ctx_route_lonely_frac": ("ratio", "share of the flow's packets whose directed host pair's last route change "
                                        "(switch sequence, 1 s bins) came while < 20 % of the network's pairs "
@@ -126,7 +131,8 @@ _CTX_FLOW: dict[str, tuple[str, str]] = {
     "ctx_delay_shift_max_ms": ("ms", "likewise for first-to-last observation time, against the pair's earlier median "
                                      "delay"),
     # the window-host view's own route columns, over the episode's packets
-    "ctx_pkt_route_lonely_frac": ("ratio", "share of the episode's packets on a lonely route (as ctx_route_lonely_frac)"),
+    "ctx_pkt_route_lonely_frac": ("ratio",
+                                  "share of the episode's packets on a lonely route (as ctx_route_lonely_frac)"),
     "ctx_pkt_route_lonely_max": ("ratio", "the largest such share over the node's peers (the other end's address)"),
     "ctx_pkt_path_len_shift": ("switches", "mean over the episode's packets of switches that saw it less its directed "
                                            "pair's earlier median"),
@@ -207,7 +213,8 @@ def _episode_summary(name: str, standard: str) -> tuple[str, str] | None:
     for feat, feat_stem in feature_standard(standard).episode_summary.items():
         if feat_stem == stem:
             unit, _ = _feature(feat, standard)
-            return unit, f"{word} of the flows' {feat} [{standard}] over the flows starting in the window with the node as an endpoint"
+            return unit, (f"{word} of the flows' {feat} [{standard}] over the flows starting in the window with the "
+                          "node as an endpoint")
     ctx = _context(stem)
     if ctx is not None:
         return ctx[0], f"{word} of {stem} over those flows ({ctx[1]})"
@@ -227,7 +234,8 @@ def columns(arrow_schema, standard: str = DEFAULT_STANDARD, episodes: bool = Fal
 
 def card_columns(arrow_schema, standard: str = DEFAULT_STANDARD, episodes: bool = False) -> dict[str, dict]:
     """The card's `columns`: name -> {dtype, unit, meaning}, in file order."""
-    return {c.name: {"dtype": c.dtype, "unit": c.unit, "meaning": c.meaning} for c in columns(arrow_schema, standard, episodes)}
+    return {c.name: {"dtype": c.dtype, "unit": c.unit, "meaning": c.meaning}
+            for c in columns(arrow_schema, standard, episodes)}
 
 
 def markdown_table(cols: list[Column]) -> list[str]:

@@ -24,7 +24,8 @@ def markdown() -> str:
     summaries = set(s.EPISODE_CONTEXT_FEATURES) - set(s.EPISODE_ROUTE_FEATURES)  # said in one sentence below
     episode = [c for c in columns(episode_arrow_schema(default, context=True), default, episodes=True)
                if (c.name not in flow_names or c.name == "packets") and c.name not in summaries]
-    out = ["<!-- generated: python -m uavcas.dataset.dictionary_docs docs/formats.md (tests/dataset/test_dictionary.py checks it) -->",
+    out = ["<!-- generated: python -m uavcas.dataset.dictionary_docs docs/formats.md (tests/dataset/test_dictionary.py "
+           "checks it) -->",
            "", f"Flow datasets (`{default}` standard, with the context columns):", "", *table(flows), ""]
     for std in others:
         own = [c for c in columns(arrow_schema(std.name), std.name) if c.name in std.units]

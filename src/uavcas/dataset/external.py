@@ -133,7 +133,8 @@ def load_cicids2017(path: str | Path) -> pd.DataFrame:
         if src is not None:
             cols[ours] = pd.to_numeric(raw[src], errors="coerce").to_numpy(np.float64) * factor
     out = pd.DataFrame(cols)
-    for ours, theirs in (("src_ip", "Src IP"), ("src_port", "Src Port"), ("dst_ip", "Dst IP"), ("dst_port", "Dst Port"), ("protocol", "Protocol")):
+    for ours, theirs in (("src_ip", "Src IP"), ("src_port", "Src Port"), ("dst_ip", "Dst IP"), ("dst_port", "Dst Port"),
+                         ("protocol", "Protocol")):
         for cand in (theirs, theirs.replace("Src", "Source").replace("Dst", "Destination")):
             if cand in raw.columns:
                 out.insert(len(out.columns) - len(FEATURES), ours, raw[cand].to_numpy())

@@ -158,7 +158,8 @@ def to_table(df: pd.DataFrame, meta: dict | None = None, standard: str | None = 
         if isinstance(col.dtype, pd.ArrowDtype):
             arr = pa.array(col.array)
         elif f.name in _SEQ_TYPES and col.dtype == object:
-            arr = pa.array([None if v is None or (isinstance(v, float) and np.isnan(v)) else list(v) for v in col], type=f.type)
+            arr = pa.array([None if v is None or (isinstance(v, float) and np.isnan(v)) else list(v) for v in col],
+                           type=f.type)
         else:
             arr = pa.array(col.to_numpy(), from_pandas=True)
         if isinstance(arr, pa.ChunkedArray):
@@ -181,7 +182,8 @@ def frame_to_arrow(df: pd.DataFrame) -> pa.Table:
     arrays, names = [], []
     for c in df.columns:
         col = df[c]
-        arr = pa.array(col.array) if isinstance(col.dtype, pd.ArrowDtype) else pa.array(col.to_numpy(), from_pandas=True)
+        arr = (pa.array(col.array) if isinstance(col.dtype, pd.ArrowDtype)
+               else pa.array(col.to_numpy(), from_pandas=True))
         arrays.append(arr.combine_chunks() if isinstance(arr, pa.ChunkedArray) else arr)
         names.append(str(c))
     return pa.Table.from_arrays(arrays, names=names)

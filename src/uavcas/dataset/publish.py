@@ -143,7 +143,8 @@ def _card_text(card: dict, dataset_dir: Path, info: DatasetInfo, files: list[Fil
     standard = card_standard(card)
     episodes = card.get("unit") == "host-window"
     names = set(schema.names)
-    frame = pq.read_table(dataset_dir / "flows.parquet", columns=[c for c in ("label", "view") if c in names]).to_pandas()
+    frame = pq.read_table(dataset_dir / "flows.parquet",
+                          columns=[c for c in ("label", "view") if c in names]).to_pandas()
     classes = class_table(frame)
     headlines, parts = rule_summary(card.get("label_rules", []))
     env = jinja2.Environment(loader=jinja2.PackageLoader("uavcas.dataset", "templates"), autoescape=False,

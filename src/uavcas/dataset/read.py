@@ -118,6 +118,7 @@ def load_any(path: str | Path, fmt: str | None = None, view: str | None = None) 
     standard = df.attrs.setdefault("feature_standard", DEFAULT_STANDARD)
     if fmt != "uavcas":
         df["label"] = df["label"].astype(str).str.strip().replace(_BENIGN_NAMES)
-        df.attrs["absent_features"] = [f for f in feature_columns(standard) if f not in df.columns or df[f].isna().all()]
+        df.attrs["absent_features"] = [f for f in feature_columns(standard)
+                                       if f not in df.columns or df[f].isna().all()]
     df.attrs["source"] = fmt
     return df

@@ -8,8 +8,8 @@
                                           twin profiles (name + SHA-256), runs, library versions
 
 Extraction itself is `uavcas.extract`. A run is identified by run.json's `run_id` when present,
-else by the run directory's name; one shard per run id, so a run appears once whatever view or labels it was last extracted with.
-Every file is written to a temporary name and renamed; concurrent extracts into the same
+else by the run directory's name; one shard per run id, so a run appears once whatever view or labels it was last
+extracted with. Every file is written to a temporary name and renamed; concurrent extracts into the same
 directory are serialised by an exclusive lock on DATASET_DIR/.lock.
 """
 
@@ -61,7 +61,8 @@ def extract_run(run_dir: Path, out_dir: Path, **options: Any) -> ShardInfo:
     out_dir = ensure_out_dir(out_dir)  # only once there is a shard to write: bad input leaves nothing
     with _locked(out_dir):
         _check_unit(out_dir, shard.info.run_id, episodes="host" in shard.frame.columns)
-        write_table(to_table(shard.frame, meta=asdict(shard.info), standard=shard.info.features), out_dir / "shards" / f"{shard.info.run_id}.parquet")
+        write_table(to_table(shard.frame, meta=asdict(shard.info), standard=shard.info.features),
+                    out_dir / "shards" / f"{shard.info.run_id}.parquet")
         rebuild(out_dir)
     return shard.info
 
@@ -70,8 +71,8 @@ def _check_unit(out_dir: Path, run_id: str, episodes: bool) -> None:
     """Refuse, before anything is written, a shard of flows among episode shards or the reverse."""
     for path in sorted((out_dir / "shards").glob("*.parquet")):
         if path.stem != run_id and (pq.read_schema(path).get_field_index("host") >= 0) != episodes:
-            raise DatasetError(f"{out_dir}: holds {'flow' if episodes else EPISODE_VIEW} shards; a dataset holds flows or "
-                               f"{EPISODE_VIEW} episodes, not both: extract into another --out")
+            raise DatasetError(f"{out_dir}: holds {'flow' if episodes else EPISODE_VIEW} shards; a dataset holds flows "
+                               f"or {EPISODE_VIEW} episodes, not both: extract into another --out")
 
 
 @contextlib.contextmanager
@@ -92,7 +93,8 @@ def rebuild(out_dir: Path) -> dict:
     tables = [pq.read_table(s) for s in shards]
     standards = sorted({table_standard(t) for t in tables})
     if len(standards) > 1:
-        raise DatasetError(f"{out_dir}: shards of different feature standards {standards}; extract every run with one --features")
+        raise DatasetError(f"{out_dir}: shards of different feature standards {standards}; extract every run with one "
+                           "--features")
     standard = standards[0]
     # episodes (window-host) and flows are different units with different columns: one per dataset
     episodes = {t.schema.get_field_index("host") >= 0 for t in tables}
@@ -121,7 +123,8 @@ def rebuild(out_dir: Path) -> dict:
         # what a row is: a flow, or (window-host) one plan node's traffic in one plan window
         "unit": "host-window" if episode else "flow",
         # the ctx_* columns (uavcas.flows.context) and their window, null when the shards lack them
-        "context": {"columns": len(EPISODE_CONTEXT_FEATURES if episode else CONTEXT_FEATURES), "window_s": runs[0].get("context_window_s")} if with_ctx == {True} else None,
+        "context": {"columns": len(EPISODE_CONTEXT_FEATURES if episode else CONTEXT_FEATURES),
+                    "window_s": runs[0].get("context_window_s")} if with_ctx == {True} else None,
         "n_flows": union.num_rows,
         "n_runs": len(shards),
         "n_incomplete_runs": sum(1 for r in runs if r.get("complete") is False),

@@ -55,7 +55,8 @@ TS_FLAG_COLUMNS: tuple[str, ...] = ("packet_time", "packet_size", "packet_flag",
 STAT_MIN_PACKETS, TS_MIN_PACKETS = 10, 2
 NO_FLAGS = -1  # seq_flags value of a packet whose flag field was empty (not TCP)
 NS = 1_000_000_000
-IMPORT_LACKS = ("src_port", "dst_port", "protocol", "seed", "capture_point", "per-packet effects (seq_effect, attack_packets)")
+IMPORT_LACKS = ("src_port", "dst_port", "protocol", "seed", "capture_point",
+                "per-packet effects (seq_effect, attack_packets)")
 assert len(STAT_COLUMNS) == 59
 
 
@@ -104,7 +105,8 @@ def _meta_strings(df: pd.DataFrame) -> dict[str, list[str]]:
         "tx_power": [num(v) for v in df["tx_dbm"]],
         "noise": [num(-v) if v is not None and not pd.isna(v) else "" for v in df["noise_dbm"]],
     }
-    for ours, theirs in (("payload", "payload"), ("pathloss", "pathloss"), ("modulation", "modulation"), ("mission", "mission")):
+    for ours, theirs in (("payload", "payload"), ("pathloss", "pathloss"), ("modulation", "modulation"),
+                         ("mission", "mission")):
         out[theirs] = ["" if pd.isna(v) else str(v) for v in df[ours]]
     return out
 
@@ -169,9 +171,11 @@ def host_pair_rows(df: pd.DataFrame) -> pd.DataFrame:
     out["packets"] = plen
     out["bytes"] = np.bincount(gp, weights=sizes.astype(np.float64)[order], minlength=n).astype(np.int64)
     out["duration_s"] = (last_ns - first_ns) / 1e9
-    for c, v, t in (("seq_time_s", (ns - first_ns[gp]) / 1e9, pa.float64()), ("seq_size", sizes[order].astype(np.int32), pa.int32()),
+    for c, v, t in (("seq_time_s", (ns - first_ns[gp]) / 1e9, pa.float64()),
+                    ("seq_size", sizes[order].astype(np.int32), pa.int32()),
                     ("seq_flags", new_flags, pa.int16()), ("seq_dir", new_dir, pa.int8())):  # fmt: skip
-        out[c] = pd.arrays.ArrowExtensionArray(pa.ListArray.from_arrays(pa.array(starts.astype(np.int32)), pa.array(v, type=t)))
+        out[c] = pd.arrays.ArrowExtensionArray(pa.ListArray.from_arrays(pa.array(starts.astype(np.int32)),
+                                                                        pa.array(v, type=t)))
     fams = []
     for f in FAMILIES:
         hit = np.bincount(pair, weights=df[f"label_{f}"].to_numpy(dtype=bool).astype(np.float64), minlength=n) > 0
@@ -215,7 +219,8 @@ def write_layout(df: pd.DataFrame, out_dir: Path, embed_config: bool = False, in
     src = df["src_ip"].tolist()
     dst = df["dst_ip"].tolist()
     # the string-smaller address sends direction 0; unknown addresses (imported ts rows) keep ours
-    smaller = np.array([s is None or d is None or (not isinstance(s, str)) or s <= d for s, d in zip(src, dst)], dtype=bool)
+    smaller = np.array([s is None or d is None or (not isinstance(s, str)) or s <= d for s, d in zip(src, dst)],
+                       dtype=bool)
 
     t_rel, lens, no_seq = _lists(df["seq_time_s"])
     sizes, _, _ = _lists(df["seq_size"])
@@ -224,7 +229,8 @@ def write_layout(df: pd.DataFrame, out_dir: Path, embed_config: bool = False, in
     starts = np.concatenate(([0], np.cumsum(lens))).astype(np.int64)
     g = np.repeat(np.arange(n), lens)
     exact = df["first_ts_ns"]
-    fallback = np.round(np.nan_to_num(df["first_ts"].to_numpy(dtype=np.float64, na_value=np.nan)) * 1e9).astype(np.int64)
+    first_ts = df["first_ts"].to_numpy(dtype=np.float64, na_value=np.nan)
+    fallback = np.round(np.nan_to_num(first_ts) * 1e9).astype(np.int64)
     first_ns = np.where(exact.isna().to_numpy(), fallback, exact.fillna(0).to_numpy(dtype=np.int64))
     abs_ns = first_ns[g] + np.round(t_rel.astype(np.float64) * 1e9).astype(np.int64)
     dir0 = (dirs.astype(np.int64) == 1) == smaller[g]
@@ -244,7 +250,8 @@ def write_layout(df: pd.DataFrame, out_dir: Path, embed_config: bool = False, in
                    "[" + ", ".join(str(int(v)) for v in size_list[a:b]) + "]"]  # fmt: skip
             if include_flags:
                 tcp = proto[i] == 6 or np.isnan(proto[i])
-                row.append("[" + ", ".join(repr("" if (v == NO_FLAGS or not tcp) else f"0x{int(v):04x}") for v in flag_list[a:b]) + "]")
+                row.append("[" + ", ".join(repr("" if (v == NO_FLAGS or not tcp) else f"0x{int(v):04x}")
+                                           for v in flag_list[a:b]) + "]")
             row.append("[" + ", ".join("0" if d else "1" for d in dir_list[a:b]) + "]")
             row.append(labels[i])
             w.writerow(row)
@@ -272,7 +279,8 @@ def write_layout(df: pd.DataFrame, out_dir: Path, embed_config: bool = False, in
             w.writerow(row)
     notes = []
     if len(ts_rows) < n:
-        notes.append(f"{n - len(ts_rows)} flows under {TS_MIN_PACKETS} packets are not in {ts_path.name} (the layout's minimum)")
+        notes.append(f"{n - len(ts_rows)} flows under {TS_MIN_PACKETS} packets are not in {ts_path.name} (the layout's "
+                     "minimum)")
     return Written(stat_path, ts_path, len(stat_rows), len(ts_rows), notes)
 
 
@@ -314,7 +322,8 @@ def _time_tokens_ns(tokens: list[str], path: Path) -> np.ndarray:
 
 
 def _flag_tokens(tokens: list[str]) -> np.ndarray:
-    return np.array([NO_FLAGS if not t else int(t, 16) if t.lower().startswith("0x") else int(t) for t in tokens], dtype=np.int16)
+    return np.array([NO_FLAGS if not t else int(t, 16) if t.lower().startswith("0x") else int(t) for t in tokens],
+                    dtype=np.int16)
 
 
 def _list_array(values: np.ndarray, lengths: np.ndarray, pa_type, null: np.ndarray | None = None):
@@ -374,7 +383,8 @@ def read_layout(path: Path) -> Imported:
         stat = _read_csv(stat_path)
         missing = [c for c in STAT_COLUMNS if c not in stat.columns]
         if missing:
-            raise CsvFormatError(f"{stat_path}: not the authors' stat layout (missing {missing[:5]}{'...' if len(missing) > 5 else ''})")
+            raise CsvFormatError(f"{stat_path}: not the authors' stat layout (missing "
+                                 f"{missing[:5]}{'...' if len(missing) > 5 else ''})")
         try:
             for c in ("config_idx", *PAPER_FEATURES):
                 stat[c] = np.array([float(v) for v in stat[c]], dtype=np.float64)
@@ -415,8 +425,10 @@ def read_layout(path: Path) -> Imported:
     if stat is not None and ts is not None:
         long = np.flatnonzero(lens >= STAT_MIN_PACKETS)
         tp = stat["Total Packets"].to_numpy(dtype=np.float64)
-        if len(long) != len(stat) or not np.array_equal(lens[long], tp) or not (label_text.iloc[long].to_numpy() == stat["Label"].astype(str).to_numpy()).all():
-            raise CsvFormatError(f"{stat_path} and {ts_path}: the stat rows are not the ts rows of >= {STAT_MIN_PACKETS} packets in order")
+        same_labels = (label_text.iloc[long].to_numpy() == stat["Label"].astype(str).to_numpy()).all()
+        if len(long) != len(stat) or not np.array_equal(lens[long], tp) or not same_labels:
+            raise CsvFormatError(f"{stat_path} and {ts_path}: the stat rows are not the ts rows of >= "
+                                 f"{STAT_MIN_PACKETS} packets in order")
         row_of_stat = long
     elif stat is None:
         row_of_stat = np.zeros(0, dtype=np.int64)
@@ -490,7 +502,8 @@ def read_layout(path: Path) -> Imported:
         if no_flags is None:
             out["seq_flags"] = _list_array(flags, lens, pa.int16())
         else:
-            out["seq_flags"] = _list_array(np.zeros(0, dtype=np.int16), np.zeros(n, dtype=np.int64), pa.int16(), null=no_flags)
+            out["seq_flags"] = _list_array(np.zeros(0, dtype=np.int16), np.zeros(n, dtype=np.int64), pa.int16(),
+                                           null=no_flags)
         out["seq_dir"] = _list_array(np.where(dirs == 0, 1, -1).astype(np.int8), lens, pa.int8())
     else:
         for c in ("first_ts", "last_ts"):

@@ -1,8 +1,8 @@
 """Execute a plan's attack schedule on a running Emulation and write the attack log.
 
 The runner calls `prepare()` before t0, `start(attack)` / `halt(attack)` at the planned times,
-`calibrate(attack)` at the family's calibration times and `finish_all()` after the schedule; what each does is the family's own rule
-(`uavcas.attacks.<family>`). This class holds what the families share: the emulation, the
+`calibrate(attack)` at the family's calibration times and `finish_all()` after the schedule; what each does is the
+family's own rule (`uavcas.attacks.<family>`). This class holds what the families share: the emulation, the
 records of the attack log (`uavcas.events`), per-attack state, background processes and the
 current window (re-applied when a family changes forwarding mid-window).
 

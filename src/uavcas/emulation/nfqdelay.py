@@ -93,7 +93,8 @@ def _msg(msg_type: int, flags: int, queue: int, attrs: bytes, seq: int = 0) -> b
 
 
 def verdict_msg(queue: int, packet_id: int) -> bytes:
-    return _msg(NFQNL_MSG_VERDICT, NLM_F_REQUEST, queue, _attr(NFQA_VERDICT_HDR, struct.pack("!II", NF_ACCEPT, packet_id)))
+    return _msg(NFQNL_MSG_VERDICT, NLM_F_REQUEST, queue,
+                _attr(NFQA_VERDICT_HDR, struct.pack("!II", NF_ACCEPT, packet_id)))
 
 
 def _bucket(hist: list[int], lag_us: float) -> None:

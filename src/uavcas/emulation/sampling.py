@@ -2,8 +2,8 @@
 
 A window change must be quick (issue #14: <= 250 ms at 100 UAVs); reading back every port's
 rate, loss and delay took up to 1 s more under load. `WindowSampler` does it in a background
-thread after each change (at real-time priority just below the change itself, see `_work`), together with a snapshot of every port's kernel
-counters (`Shaper.counters`). A window's counters are the difference between the snapshot taken
+thread after each change (at real-time priority just below the change itself, see `_work`), together with a snapshot of
+every port's kernel counters (`Shaper.counters`). A window's counters are the difference between the snapshot taken
 right after it was applied and the next one (the next window's change, or `end()` at the end of
 the schedule), so each lands in that window's shaping.jsonl records. A reshape inside a window (an attack's
 shaping: `AttackExecutor.reshape`) is sampled the same way as a new segment of the window

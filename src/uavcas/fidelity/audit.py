@@ -115,7 +115,8 @@ def audit(run_dir: str | Path, tolerances: Tolerances | None = None, table: Pack
 class _Audit:
     def __init__(self, plan: Plan, info: RunInfo | None, rd: RunDir, table: PacketTable, fol: Followed,
                  timeline: Timeline, tol: Tolerances) -> None:
-        self.plan, self.info, self.rd, self.table, self.fol, self.tl, self.tol = plan, info, rd, table, fol, timeline, tol
+        self.plan, self.info, self.rd, self.table = plan, info, rd, table
+        self.fol, self.tl, self.tol = fol, timeline, tol
         self.planned = _Planned.of(plan)
         index = {x.name: x.index for x in plan.nodes}
         self.point_node = np.array([index.get(node_of_point(p) or "", -1) for p in fol.points] or [-1], dtype=np.int64)
@@ -236,13 +237,15 @@ class _Audit:
         keep = (s_a == s_b) & (s_a >= 0)
         got = np.array([bits.get(k, 0.0) for k in bins.tolist()]) / bs / 1e6
         s = s_a[keep]
-        return t_bin[keep], got[keep] / port.shaping.rate_mbps[s], port.shaping.window[s] * SEGMENTS + port.shaping.segment[s]
+        return (t_bin[keep], got[keep] / port.shaping.rate_mbps[s],
+                port.shaping.window[s] * SEGMENTS + port.shaping.segment[s])
 
     def _gaps(self) -> GapDistortion:
         c, ok = self.c, ~np.isnan(self.err_ms)
         npk = self.fol.n_packets
         if len(c) == 0:
-            return GapDistortion(gaps=0, gap_p50_ms=None, shift_p50_ms=None, shift_p90_ms=None, shift_over_half_gap=None)
+            return GapDistortion(gaps=0, gap_p50_ms=None, shift_p50_ms=None, shift_p90_ms=None,
+                                 shift_over_half_gap=None)
         e2e = np.bincount(c.pid, weights=np.where(ok, self.err_ms, 0.0), minlength=npk)
         bad = np.bincount(c.pid, weights=(~ok).astype(float), minlength=npk) > 0
         ncross = np.bincount(c.pid, minlength=npk)
@@ -264,7 +267,8 @@ class _Audit:
         a = np.abs(shift)
         return GapDistortion(gaps=int(p.shape[0]), gap_p50_ms=_q(gap_model, 50), shift_p50_ms=_q(a, 50),
                              shift_p90_ms=_q(a, 90),
-                             shift_over_half_gap=round(float((a > 0.5 * np.abs(gap_model)).mean()), 6) if a.shape[0] else None)
+                             shift_over_half_gap=round(float((a > 0.5 * np.abs(gap_model)).mean()), 6) if a.shape[0]
+                             else None)
 
     def _links(self, sat: dict[tuple[int, int, int], np.ndarray]) -> list[LinkWindow]:
         n = self.n
@@ -352,7 +356,8 @@ class _Audit:
                   ok=_le(pooled["delay_error_p99_ms"], tol.delay_error_p99_ms)),
             Check(name="delay_early_p1_ms", value=pooled["delay_error_p1_ms"], limit=-tol.delay_early_p1_ms,
                   ok=pooled["delay_error_p1_ms"] is None or pooled["delay_error_p1_ms"] >= -tol.delay_early_p1_ms),
-            Check(name="loss_sigma", value=sigma, limit=tol.loss_sigma, ok=sigma is None or abs(sigma) <= tol.loss_sigma),
+            Check(name="loss_sigma", value=sigma, limit=tol.loss_sigma,
+                  ok=sigma is None or abs(sigma) <= tol.loss_sigma),
             Check(name="throughput_rel", value=_q(ratios, 50), limit=tol.throughput_rel,
                   ok=ratios.shape[0] == 0 or abs(float(np.median(ratios)) - 1) <= tol.throughput_rel),
             Check(name="window_change_ms", value=round(max(change), 3) if change else None, limit=tol.window_change_ms,

@@ -123,7 +123,8 @@ def port_shaping(plan: Plan, timeline: Timeline, spans: list[ShapeSpan] = ()) ->
     return out
 
 
-def planned_settings(shaping: dict[tuple[int, int], PortShaping]) -> dict[tuple[int, int, int, int], tuple[float, float, float]]:
+def planned_settings(shaping: dict[tuple[int, int], PortShaping]) -> dict[tuple[int, int, int, int],
+                                                                          tuple[float, float, float]]:
     """(window, segment, i, j) -> the planned (delay_ms, rate_mbps, loss) of that setting."""
     return {(int(w), int(sg), i, j): (float(d), float(r), float(lo)) for (i, j), ps in shaping.items()
             for w, sg, d, r, lo in zip(ps.window, ps.segment, ps.delay_ms, ps.rate_mbps, ps.loss)}

@@ -5,8 +5,8 @@
 groups packets into flows (termination.py: the `connection`, `cic` and `timeout` policies),
 `flow_frame` (features.py) computes one row per flow with the features of a standard
 (`standards`: one module per standard; cic: CICFlowMeter's, paper: the authors'). `extract_flows`
-(`flows_of` for a table already read) chains the three in memory (the extraction stage needs the packets for its labels);
-`iter_flow_frames` (stream.py) streams one capture with bounded memory; `uavcas.dataset.flow_files`
+(`flows_of` for a table already read) chains the three in memory (the extraction stage needs the packets for its
+labels); `iter_flow_frames` (stream.py) streams one capture with bounded memory; `uavcas.dataset.flow_files`
 writes such a stream to Parquet or CSV.
 """
 

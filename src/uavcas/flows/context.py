@@ -77,7 +77,8 @@ def flow_context(p: PacketTable, fl: Flows, t: Transmissions) -> pd.DataFrame:
     per = lambda v: np.bincount(g, weights=v, minlength=n) / np.maximum(np.bincount(g, minlength=n), 1)  # noqa: E731
     tx = t.tx[r]
     col = lambda name: np.asarray(p[name], dtype=np.int64)[r]  # noqa: E731
-    flags, ttl, ip_id, seq, flen, ts = col("tcp_flags"), col("ttl"), col("ip_id"), col("tcp_seq"), col("frame_len"), col("ts_ns")
+    flags, ttl, ip_id = col("tcp_flags"), col("ttl"), col("ip_id")
+    seq, flen, ts = col("tcp_seq"), col("frame_len"), col("ts_ns")
     payload = col("ip_len") - col("ip_hdr_len") - col("l4_hdr_len")
     tcp = col("proto") == 6
     d = fwd.astype(np.int64)
@@ -176,7 +177,8 @@ class Observed:
     def of(p: PacketTable, fl: Flows, t: Transmissions, rtt_ms: np.ndarray, window_s: float) -> "Observed":
         w_ns = int(round(window_s * NS_PER_S))
         first = fl.first
-        fwd_first = fl.first_sent_forward  # the initiator (the flow's src) sent the first packet unless it went backward
+        # the initiator (the flow's src) sent the first packet unless it went backward
+        fwd_first = fl.first_sent_forward
         return Observed(
             ini=np.where(fwd_first, t.addr_src[first], t.addr_dst[first]),
             res=np.where(fwd_first, t.addr_dst[first], t.addr_src[first]),
@@ -219,7 +221,8 @@ def host_windows(o: Observed, t: Transmissions) -> pd.DataFrame:
     """Per (host, window): `schema.CONTEXT_HOST_METRICS` and their shifts (`CONTEXT_HOST_SHIFTS`).
     A flow counts for both its hosts, a transmission for its source and its destination."""
     twice = lambda a: np.r_[a, a]  # noqa: E731
-    flows = pd.DataFrame({"key": np.r_[o.ini, o.res], "win": twice(o.f_win), "u": twice(o.unanswered), "rtt": twice(o.rtt)})
+    flows = pd.DataFrame({"key": np.r_[o.ini, o.res], "win": twice(o.f_win), "u": twice(o.unanswered),
+                          "rtt": twice(o.rtt)})
     fa = _flow_counts(flows, o.f_win)
     ntx = t.src.shape[0]
     txs = pd.DataFrame({

@@ -40,7 +40,8 @@ def gaps(t: np.ndarray, group: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return np.diff(t)[same], group[1:][same]
 
 
-def direction_stats(fw: GroupStats, bw: GroupStats, fiat: GroupStats, biat: GroupStats, iat_max: bool) -> dict[str, np.ndarray]:
+def direction_stats(fw: GroupStats, bw: GroupStats, fiat: GroupStats, biat: GroupStats,
+                    iat_max: bool) -> dict[str, np.ndarray]:
     """The per-direction length and IAT statistics both feature standards share (same names).
 
     IAT statistics need two packets in the direction (0 otherwise); `iat_max` adds Fwd/Bwd IAT Max.

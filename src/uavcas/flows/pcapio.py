@@ -64,7 +64,8 @@ class RawCapture:
         return int(self.data_off.shape[0])
 
 
-def iter_capture(path: str | Path, allow_truncated: bool = False, chunk_bytes: int = CHUNK_BYTES) -> Iterator[RawCapture]:
+def iter_capture(path: str | Path, allow_truncated: bool = False,
+                 chunk_bytes: int = CHUNK_BYTES) -> Iterator[RawCapture]:
     """Blocks of a pcap or pcapng file (format detected from the magic), in file order."""
     path = Path(path)
     try:
@@ -154,7 +155,8 @@ def _iter_pcap(path: Path, fh, allow: bool, chunk_bytes: int) -> Iterator[RawCap
             elif eof and incl is None:
                 truncated_at = _stop(path, allow, base + off, f"truncated record header ({n - off} of 16 bytes)")
             elif eof:
-                truncated_at = _stop(path, allow, base + off, f"truncated packet record ({n - off - 16} of {incl} bytes)")
+                truncated_at = _stop(path, allow, base + off,
+                                     f"truncated packet record ({n - off - 16} of {incl} bytes)")
         hdr_at = np.asarray(offs, dtype=np.int64)
         raw = np.frombuffer(data, dtype=np.uint8)
         if offs:

@@ -165,7 +165,8 @@ def flow_route_context(p: "PacketTable", fl: "Flows", t: "Transmissions", shifts
     out = {"ctx_route_lonely_frac": np.nan_to_num(_nanmean_by(g, shifts.lonely[tx], n))}
     fw, fw_idx = np.unique(np.stack([g, win], 1), axis=0, return_inverse=True)
     fw_idx = fw_idx.reshape(-1)
-    for name, value in (("ctx_path_len_shift_max", shifts.path_shift), ("ctx_delay_shift_max_ms", shifts.delay_shift_ms)):
+    for name, value in (("ctx_path_len_shift_max", shifts.path_shift),
+                        ("ctx_delay_shift_max_ms", shifts.delay_shift_ms)):
         per_window = _nanmean_by(fw_idx, value[tx], fw.shape[0])
         best = np.full(n, -np.inf)
         ok = np.isfinite(per_window)

@@ -26,7 +26,8 @@ MIN_HOLDOUT_ROWS = 10  # below this, no row is spared for validation
 PATIENCE = 5  # the paper's early stopping: epochs without a lower validation loss before stopping
 
 
-def stratified_holdout(yi: np.ndarray, fraction: float, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray] | None:
+def stratified_holdout(yi: np.ndarray, fraction: float,
+                       rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray] | None:
     """(train, val) row indices: round(fraction * count) rows of each class with >= 2 rows go to
     validation, never a class's last row; None when nothing would be held out."""
     if not 0 < fraction < 1 or len(yi) < MIN_HOLDOUT_ROWS:

@@ -95,7 +95,8 @@ class LightGBMClassifier(EarlyStoppingClassifier):
         model = lgb.LGBMClassifier(**params)
         kw = {} if init_score is None else {"init_score": init_score}
         if X_val is not None:
-            kw.update(eval_X=X_val, eval_y=yv, callbacks=[lgb.early_stopping(self.early_stopping_rounds, verbose=False)])
+            kw.update(eval_X=X_val, eval_y=yv,
+                      callbacks=[lgb.early_stopping(self.early_stopping_rounds, verbose=False)])
             if val_init_score is not None:
                 kw["eval_init_score"] = [val_init_score]
             if params.get("class_weight") is not None:  # stop on the loss the model is trained for

@@ -124,7 +124,8 @@ class ContextClassifier(LightGBMClassifier):
         model = self._boost(X, yi, X_val, yv, init_score=init,
                             val_init_score=None if fv is None else flow.predict(fv, raw_score=True))
         self.flow_model_, self.model_ = flow, model
-        self.n_iter_ = int(flow.best_iteration_ or flow.n_estimators_) + int(model.best_iteration_ or model.n_estimators_)
+        self.n_iter_ = (int(flow.best_iteration_ or flow.n_estimators_)
+                        + int(model.best_iteration_ or model.n_estimators_))
         imp = model.feature_importances_.astype(np.float64)
         imp[f] += flow.feature_importances_
         self.feature_importances_ = imp

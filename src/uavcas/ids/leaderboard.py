@@ -25,7 +25,8 @@ MAIN: dict[str, tuple[tuple[str, str, str], ...]] = {
     "multiclass": (("f1_macro", "", "macro F1"), ("f1_weighted", "", "weighted F1"),
                    ("f1_macro", STEALTH, "stealth macro F1"), ("pr_auc_macro", "", "macro PR-AUC"),
                    ("accuracy", "", "accuracy"), ("fit_s", "", "fit s")),
-    "ood": (("auroc", "", "AUROC (in-distribution)"), ("pr_auc", "", "PR-AUC (in-distribution)"), ("fit_s", "", "fit s")),
+    "ood": (("auroc", "", "AUROC (in-distribution)"), ("pr_auc", "", "PR-AUC (in-distribution)"),
+            ("fit_s", "", "fit s")),
     "cross-condition": (("f1_macro", "", "macro F1 held-out"), ("f1_macro_iid", "", "macro F1 seen"),
                         ("f1_macro", STEALTH, "stealth held-out"), ("f1_weighted", "", "weighted F1 held-out"),
                         ("fit_s", "", "fit s")),
@@ -89,7 +90,8 @@ def protocol_markdown(summary: pd.DataFrame, protocol: str) -> str:
 def leaderboard_markdown(summary: pd.DataFrame, title: str = "IDS leaderboard", notes: list[str] | None = None) -> str:
     protocols = [p for p in PROTOCOL_ORDER if p in set(summary["protocol"])]
     protocols += [p for p in dict.fromkeys(summary["protocol"]) if p not in protocols]
-    parts = [f"# {title}", "", "Mean ± standard deviation over the seeds (a new grouped split and model seed each).", ""]
+    parts = [f"# {title}", "", "Mean ± standard deviation over the seeds (a new grouped split and model seed each).",
+             ""]
     parts += [f"- {n}" for n in notes or []] + ([""] if notes else [])
     parts += [protocol_markdown(summary, p) for p in protocols]
     return "\n".join(parts)

@@ -46,7 +46,8 @@ def scores(y_true, proba: np.ndarray, model_classes, declared: list[str],
     _, _, fw, _ = precision_recall_fscore_support(y_true, pred, labels=declared, average="weighted", zero_division=0)
     aps = [pr_auc(y_true == c, class_scores(proba, model_classes, c)) for c in declared]
     rows = [("accuracy", "", float(np.mean(y_true == pred))), ("f1_macro", "", float(np.mean(f))),
-            ("f1_weighted", "", float(fw)), ("pr_auc_macro", "", float(np.nanmean(aps)) if not np.all(np.isnan(aps)) else np.nan)]
+            ("f1_weighted", "", float(fw)),
+            ("pr_auc_macro", "", float(np.nanmean(aps)) if not np.all(np.isnan(aps)) else np.nan)]
     for i, c in enumerate(declared):
         rows += [("precision", c, float(p[i])), ("recall", c, float(r[i])), ("f1", c, float(f[i])),
                  ("support", c, float(s[i])), ("pr_auc", c, aps[i])]

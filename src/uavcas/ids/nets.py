@@ -83,7 +83,8 @@ class ConvNet(nn.Module):
 class TinyML(nn.Module):
     def __init__(self, n_features: int, n_classes: int) -> None:
         super().__init__()
-        self.net = nn.Sequential(nn.Linear(n_features, 16), nn.ReLU(), nn.Linear(16, 8), nn.ReLU(), nn.Linear(8, n_classes))
+        self.net = nn.Sequential(nn.Linear(n_features, 16), nn.ReLU(), nn.Linear(16, 8), nn.ReLU(),
+                                 nn.Linear(8, n_classes))
 
     def forward(self, x: torch.Tensor) -> torch.Tensor:
         return self.net(x)

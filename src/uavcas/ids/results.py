@@ -110,8 +110,9 @@ def write_results(res: ProtocolResult, out: str | Path, meta: dict) -> list[Path
     df = results_frame(res)
     written = [atomic_write_text(out / "results.csv", df.to_csv(index=False)),
                atomic_write_text(out / "summary.csv", summarize(df).to_csv(index=False)),
-               atomic_write_text(out / "splits.csv", pd.DataFrame([asdict(s) for s in res.splits],
-                                                                  columns=["seed", "run_id", "split"]).to_csv(index=False)),
+               atomic_write_text(out / "splits.csv",
+                                 pd.DataFrame([asdict(s) for s in res.splits],
+                                              columns=["seed", "run_id", "split"]).to_csv(index=False)),
                atomic_write_text(out / "confusion.csv", confusion_long(res).to_csv(index=False))]
     imp = importance_frame(res)
     if not imp.empty:

@@ -1,7 +1,7 @@
 """The ground truth of one run, typed: attack windows and replay injections.
 
-Read from RUN_DIR/attacks.jsonl through the `uavcas.events` records (authoritative: epoch times of the capture clock, see
-docs/formats.md). An attack of the plan with no `start` record in the log (e.g. a run that crashed
+Read from RUN_DIR/attacks.jsonl through the `uavcas.events` records (authoritative: epoch times of the capture clock,
+see docs/formats.md). An attack of the plan with no `start` record in the log (e.g. a run that crashed
 before logging it) falls back to the plan: start/stop = run.json `t0_unix` + plan `start_s`/`stop_s`
 and the IPs of the plan's nodes; such windows carry `from_plan=True`. A `start` without `stop`
 lasts until +inf (the end of the capture).

@@ -54,7 +54,8 @@ def leg_duration_s(length_m: np.ndarray, v_mps: np.ndarray, accel_mps2: float | 
         return np.where(L <= 0, 0.0, np.where(v <= 0, np.inf, np.where(full, L / v + v / a, 2.0 * np.sqrt(L / a))))
 
 
-def distance_along_m(tau_s: np.ndarray, length_m: np.ndarray, v_mps: np.ndarray, accel_mps2: float | None) -> np.ndarray:
+def distance_along_m(tau_s: np.ndarray, length_m: np.ndarray, v_mps: np.ndarray,
+                     accel_mps2: float | None) -> np.ndarray:
     """Distance covered tau seconds into a leg (tau within the leg's duration)."""
     tau, L, v = (np.asarray(x, float) for x in (tau_s, length_m, v_mps))
     if accel_mps2 is None:

@@ -27,7 +27,8 @@ class TraceMission(MissionBase):
         if x.ndim == 2:
             x = x[:, None, :]
         if t.ndim != 1 or t.size < 1 or x.ndim != 3 or x.shape[0] != t.size or x.shape[2] != 3:
-            raise ValueError(f"trace needs t_s (T,) and positions (T, 3) or (T, n, 3); got {t.shape} and {np.shape(positions_m)}")
+            raise ValueError(f"trace needs t_s (T,) and positions (T, 3) or (T, n, 3); got {t.shape} and "
+                             f"{np.shape(positions_m)}")
         if not (np.all(np.isfinite(t)) and np.all(np.isfinite(x))):
             raise ValueError("trace times and positions must be finite")
         if np.any(np.diff(t) <= 0):

@@ -120,7 +120,8 @@ def _distributions(df: pd.DataFrame, shown: tuple[str, ...], standard: str, epis
             uri, counts[feat] = feature_figure(df, feat, classes, describe(feat, standard, episodes)[0])
             figures.append({"feature": feat, "uri": uri})
     title = "Host-window features per class" if episodes else "Flow features per class"
-    return {"title": title, "figures": figures, "counts_table": _styled(counts_frame(counts, classes)) if counts else ""}
+    return {"title": title, "figures": figures,
+            "counts_table": _styled(counts_frame(counts, classes)) if counts else ""}
 
 
 def write_report(dataset_dir: str | Path, out_dir: str | Path) -> Path:

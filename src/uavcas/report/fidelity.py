@@ -121,6 +121,7 @@ def fidelity_figure(runs: dict[str, Fidelity]) -> str | None:
         a.axhline(1.0, color="k", lw=0.8)
     else:
         a.text(0.5, 0.5, "no saturated link-window", ha="center", va="center", transform=a.transAxes)
-    a.set(xlabel="planned rate (Mbit/s)", ylabel="measured / planned rate", title="saturated links (median of 200 ms bins)")
+    a.set(xlabel="planned rate (Mbit/s)", ylabel="measured / planned rate",
+          title="saturated links (median of 200 ms bins)")
     fig.suptitle(f"fidelity: {len(runs)} run(s), {len(links)} link-windows with packets")
     return png_data_uri(fig)

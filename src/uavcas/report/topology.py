@@ -88,7 +88,8 @@ def draw_window(plan: Plan, w: Window, ax, attacks: list[Attack] | None = None, 
 def add_legends(ax, mcs_used: set, roles: set[str]) -> None:
     """Beside the axes: the node markers, then the MCS colours used (and the wired backhaul)."""
     cmap = _mcs_cmap()
-    links = [Line2D([], [], color=cmap(m), lw=2.5, label=f"MCS {m}") for m in sorted(x for x in mcs_used if x is not None)]
+    links = [Line2D([], [], color=cmap(m), lw=2.5, label=f"MCS {m}")
+             for m in sorted(x for x in mcs_used if x is not None)]
     if None in mcs_used:
         links.append(Line2D([], [], color=BACKHAUL_COLOUR, lw=3, label="wired backhaul"))
     nodes = [Line2D([], [], ls="", marker=ROLE_STYLE[r][2], markersize=7, markerfacecolor=ROLE_STYLE[r][1],

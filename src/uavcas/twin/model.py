@@ -19,7 +19,9 @@ from pydantic import BaseModel, ConfigDict, Field, SerializeAsAny, ValidationInf
 from uavcas.scenario_model import SPEC_READER, Scenario, SpecBase, read_spec, spec_reader
 from uavcas.vocabulary import FAMILIES, Family
 
-SCHEMA_VERSION = 4  # 2: Plan.site and Node.sysid; 3: Window.interferers and link_overrides (jamming); 4: Plan.episodes; defaults fill them in older plans
+# 2: Plan.site and Node.sysid; 3: Window.interferers and link_overrides (jamming); 4: Plan.episodes; defaults fill them
+# in older plans
+SCHEMA_VERSION = 4
 
 NodeKind = Literal["uav", "bs"]
 LinkKind = Literal["air", "backhaul"]
@@ -214,7 +216,8 @@ class Plan(_Frozen):
     scenario: Scenario | None = None
     seed: int
     window_s: float
-    episodes: int = Field(default=1, ge=1)  # attack episodes drawn (`twin.schedule`): with seed, config and windows, it fixes the plan
+    # attack episodes drawn (`twin.schedule`): with seed, config and windows, it fixes the plan
+    episodes: int = Field(default=1, ge=1)
     profile: str  # channel/mobility profile name the plan was made with
     profile_sha256: str | None = None  # SHA-256 of the profile's JSON (None: plans made before it was recorded)
     area_m: tuple[float, float, float, float]  # x_max, y_max, z_min, z_max

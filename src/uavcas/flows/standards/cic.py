@@ -64,7 +64,8 @@ FLAG_BITS: tuple[tuple[str, int], ...] = (
     ("ACK Flag Count", 0x10), ("URG Flag Count", 0x20), ("CWE Flag Count", 0x80), ("ECE Flag Count", 0x40),
 )  # fmt: skip
 UNITS: dict[str, str] = {f: "count" for f in FEATURES}
-UNITS.update({f: "us" for f in FEATURES if "IAT" in f or f in ("Flow Duration", "Active Mean", "Idle Mean", "Idle Max")})
+UNITS.update({f: "us"
+              for f in FEATURES if "IAT" in f or f in ("Flow Duration", "Active Mean", "Idle Mean", "Idle Max")})
 UNITS.update({f: "bytes" for f in FEATURES if "Length" in f or f == "Average Packet Size"})
 UNITS.update({"Flow Bytes/s": "bytes/s", "Flow Packets/s": "packets/s", "Down/Up Ratio": "ratio"})
 UNITS.update({f: "packets" for f in ("Total Fwd Packets", "Total Backward Packets")})

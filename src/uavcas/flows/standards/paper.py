@@ -65,7 +65,8 @@ UNITS: dict[str, str] = {f: "count" for f in PAPER_FEATURES}
 UNITS.update({f: "s" for f in PAPER_FEATURES if "IAT" in f or f == "Flow Duration"})
 UNITS.update({f: "bytes" for f in PAPER_FEATURES if "Length" in f or f == "Average Packet Size"})
 UNITS.update({f: "packets/s" for f in PAPER_FEATURES if f.endswith("Packets/s")})
-UNITS.update({"Flow Bytes/s": "bytes/s", "Total Packets": "packets", "Total Fwd Packets": "packets", "Total Bwd Packets": "packets"})
+UNITS.update({"Flow Bytes/s": "bytes/s", "Total Packets": "packets", "Total Fwd Packets": "packets",
+              "Total Bwd Packets": "packets"})
 UNITS["Packet Length Variance"] = "bytes^2"  # the square of the length's unit
 
 
