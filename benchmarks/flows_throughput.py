@@ -36,7 +36,8 @@ from rich.table import Table
 SNAP = 80
 FLOW_PKTS = 40
 NFSTREAM = ("from nfstream import NFStreamer; import sys; "
-            "NFStreamer(source=sys.argv[1], n_dissections=0, statistical_analysis=True, n_meters=1).to_csv(sys.argv[2])")  # fmt: skip
+            "NFStreamer(source=sys.argv[1], n_dissections=0, statistical_analysis=True, n_meters=1)"
+            ".to_csv(sys.argv[2])")
 
 
 def make_capture(path: Path, n_packets: int, seed: int = 1) -> int:
@@ -195,7 +196,8 @@ def main() -> None:
     table = Table(title=f"Flow extraction of {n:,} packets ({args.repeat} runs each, alternating)")
     for c in ("tool", "best wall s", "packets/s", "peak RSS MB"):
         table.add_column(c, justify="left" if c == "tool" else "right")
-    names = {"uavcas": "uavcas flows --format csv (streamed, cic)", "nfstream": "nfstream 6 (statistical, no DPI, 1 meter)"}
+    names = {"uavcas": "uavcas flows --format csv (streamed, cic)",
+             "nfstream": "nfstream 6 (statistical, no DPI, 1 meter)"}
     for tool, res in runs.items():
         if res:
             wall, rss = min(r[0] for r in res), max(r[1] for r in res)
@@ -239,7 +241,8 @@ def read_bench(con: Console, work: Path, n_flows: int) -> None:
         t2.add_column(c, justify="left" if c.startswith("format") else "right")
     t = time.perf_counter()
     read_flows(ds / "flows.parquet")
-    t2.add_row("Parquet (list columns), uavcas read_flows", f"{time.perf_counter() - t:.2f}", f"{(ds / 'flows.parquet').stat().st_size / 1e6:.1f}")
+    t2.add_row("Parquet (list columns), uavcas read_flows", f"{time.perf_counter() - t:.2f}",
+               f"{(ds / 'flows.parquet').stat().st_size / 1e6:.1f}")
     mb = sum(p.stat().st_size for p in (work / "csv").iterdir()) / 1e6
     t = time.perf_counter()
     read_layout(work / "csv")

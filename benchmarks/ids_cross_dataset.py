@@ -40,7 +40,8 @@ def main() -> int:
     from uavcas.ids.protocols import BenchConfig, run_protocol
     from uavcas.ids.results import results_frame
 
-    ours = args.dataset or write_dataset(Path(tempfile.mkdtemp()) / "uavcas-synthetic", make_flows(400, flows_per_run=50))
+    ours = args.dataset or write_dataset(Path(tempfile.mkdtemp()) / "uavcas-synthetic",
+                                         make_flows(400, flows_per_run=50))
     models = tuple(s.name for s in baselines()) if args.models == "all" else tuple(args.models.split(","))
     cfg = BenchConfig(models=models, scaler=args.scaler, epochs=args.epochs, seeds=(0,), importance=False,
                       n_threads=args.threads or None)
@@ -48,7 +49,8 @@ def main() -> int:
     for path in [*args.external, ours]:
         df = load_any(path)
         if df.attrs.get("feature_standard", "cic") != "cic":
-            raise SystemExit(f"{path}: {df.attrs['feature_standard']} features; the comparison needs cic (extract --features cic)")
+            raise SystemExit(f"{path}: {df.attrs['feature_standard']} features; the comparison needs cic (extract "
+                             "--features cic)")
         res = run_protocol(df, "binary", cfg)
         df = results_frame(res)
         w = df[(df["metric"] == "f1_weighted") & (df["class"] == "")].set_index("model")["value"]

@@ -91,7 +91,8 @@ def read_benches(benches: list[tuple[str, Path]]) -> tuple[pd.DataFrame, pd.Data
             metas.append({**meta, "view": view})
             rs = pd.read_csv(rj.parent / "results.csv", keep_default_na=False, na_values=[""])
             seeds.append(rs.assign(view=view))
-    lb = pd.concat(lbs, ignore_index=True).drop_duplicates(["view", "protocol", "model", "metric", "class"], keep="last")
+    lb = pd.concat(lbs, ignore_index=True).drop_duplicates(["view", "protocol", "model", "metric", "class"],
+                                                           keep="last")
     return lb, pd.concat(seeds, ignore_index=True), metas
 
 
@@ -211,7 +212,8 @@ def campaign_section(camp: pd.DataFrame) -> list[str]:
     passed = int((audited.verdict == "pass").sum())
     out = ["## The campaign", "",
            f"{len(camp)} runs in the manifest, {len(done)} done. Wall time per run (realisation, audit and extraction "
-           f"of one run, `outcome.json`): median {done.wall_s.median():.0f} s, sum {done.wall_s.sum() / 3600:.2f} h.", "",
+           f"of one run, `outcome.json`): median {done.wall_s.median():.0f} s, sum {done.wall_s.sum() / 3600:.2f} h.",
+           "",
            f"**Fidelity audit**: {passed} of {len(audited)} runs pass. Per-hop delay error over the runs (median of "
            f"the runs' p50 / p90 / p99): {audited.delay_error_p50_ms.median():.3f} / "
            f"{audited.delay_error_p90_ms.median():.3f} / {audited.delay_error_p99_ms.median():.3f} ms; largest p99 "
@@ -231,7 +233,8 @@ def classes_section(classes: dict[str, pd.DataFrame]) -> list[str]:
     for cls in names:
         cells = [cls]
         for c in classes.values():
-            cells += ([f"{int(c.loc[cls, 'rows']):,}", str(int(c.loc[cls, "runs"])), f"{c.loc[cls, 'median_packets']:g}"]
+            cells += ([f"{int(c.loc[cls, 'rows']):,}", str(int(c.loc[cls, "runs"])),
+                       f"{c.loc[cls, 'median_packets']:g}"]
                       if cls in c.index else ["0", "0", "-"])
         rows.append(cells)
     return ["## Classes per view", "",
@@ -244,7 +247,8 @@ def binary_section(lb: pd.DataFrame, view: str) -> list[str]:
     models = models_in(lb, view, "binary")
     if not models:
         return []
-    rows = [[m, str(PAPER_BINARY.get(m, "-")) if view == "5tuple" else "-", pct(get(lb, view, "binary", m, "f1_weighted"), 2),
+    rows = [[m, str(PAPER_BINARY.get(m, "-")) if view == "5tuple" else "-",
+             pct(get(lb, view, "binary", m, "f1_weighted"), 2),
              pct(get(lb, view, "binary", m, "auroc"), 2), secs(get(lb, view, "binary", m, "fit_s"))] for m in models]
     return [f"### Binary (Benign vs DoS), weighted F1 % — {VIEWS[view]}", "",
             *table(["model", "paper", "ours", "AUROC %", "fit s"], rows)]
@@ -260,12 +264,15 @@ def multiclass_section(lb: pd.DataFrame, metas: list[dict], view: str) -> list[s
         cells = [m]
         for c in classes:
             ours = pct(get(lb, view, "multiclass", m, "f1", c))
-            paper = PAPER_PER_CLASS[m][PAPER_CLASSES.index(c)] if view == "5tuple" and m in PAPER_PER_CLASS and c in PAPER_CLASSES else None
+            known = view == "5tuple" and m in PAPER_PER_CLASS and c in PAPER_CLASSES
+            paper = PAPER_PER_CLASS[m][PAPER_CLASSES.index(c)] if known else None
             cells.append(ours + (f" [{paper}]" if paper is not None else ""))
-        cells += [pct(get(lb, view, "multiclass", m, "f1_macro")), pct(get(lb, view, "multiclass", m, "f1_macro", "stealth")),
+        cells += [pct(get(lb, view, "multiclass", m, "f1_macro")),
+                  pct(get(lb, view, "multiclass", m, "f1_macro", "stealth")),
                   secs(get(lb, view, "multiclass", m, "fit_s"))]
         rows.append(cells)
-    return [f"### Multiclass, per-class F1 % — {VIEWS[view]}" + (" (the paper's in brackets)" if view == "5tuple" else ""), "",
+    return [f"### Multiclass, per-class F1 % — {VIEWS[view]}"
+            + (" (the paper's in brackets)" if view == "5tuple" else ""), "",
             f"{len(classes)} declared classes (every class held by enough runs for a grouped split).", "",
             *table(["model", *classes, "macro", "stealth", "fit s"], rows)]
 
@@ -291,7 +298,8 @@ def cross_section(lb: pd.DataFrame, view: str) -> list[str]:
     models = models_in(lb, view, "cross-condition")
     if not models:
         return []
-    rows = [[m, pct(get(lb, view, "cross-condition", m, "f1_weighted")), pct(get(lb, view, "cross-condition", m, "f1_macro")),
+    rows = [[m, pct(get(lb, view, "cross-condition", m, "f1_weighted")),
+             pct(get(lb, view, "cross-condition", m, "f1_macro")),
              pct(get(lb, view, "cross-condition", m, "f1_macro", "stealth")),
              pct(get(lb, view, "cross-condition", m, "f1_macro_iid"))] for m in models]
     return [f"### Cross-condition: one channel setting never trained on, % — {VIEWS[view]}", "",
@@ -329,7 +337,8 @@ def fit_section(lb: pd.DataFrame, metas: list[dict]) -> list[str]:
         models = sorted({m for p in PROTOCOLS for m in models_in(lb, view, p)}, key=(MODELS + CONTEXT).index)
         if models:
             out += [f"{VIEWS[view]}:", "", *table(["model", *PROTOCOLS],
-                                                 [[m, *(secs(get(lb, view, p, m, "fit_s")) for p in PROTOCOLS)] for m in models])]
+                                                 [[m, *(secs(get(lb, view, p, m, "fit_s")) for p in PROTOCOLS)]
+                                                  for m in models])]
     out += [f"Devices the fits ran on (`results.json` of each protocol): {', '.join(devices) or '-'}.", ""]
     return out
 
@@ -342,10 +351,11 @@ def torch_section(path: Path | None) -> list[str]:
     t = f.groupby(["model", "resolved"])["fit_s"].sum().unstack()
     rows = [[m, f"{t.loc[m, 'cuda']:.1f}", f"{t.loc[m, 'cpu']:.1f}", f"{t.loc[m, 'cpu'] / t.loc[m, 'cuda']:.1f}x"]
             for m in t.index]
-    rows.append(["all five", f"{t['cuda'].sum():.1f}", f"{t['cpu'].sum():.1f}", f"{t['cpu'].sum() / t['cuda'].sum():.1f}x"])
+    rows.append(["all five", f"{t['cuda'].sum():.1f}", f"{t['cpu'].sum():.1f}",
+                 f"{t['cpu'].sum() / t['cuda'].sum():.1f}x"])
     return ["## The torch baselines on a GPU", "",
-            f"`benchmarks/torch_devices.py` on one {d['gpu']} against {d['cpu_threads']} CPU threads of the same machine "
-            f"(torch {d['torch']}): protocol {d['protocol']}, seeds {', '.join(map(str, d['seeds']))}, at most "
+            f"`benchmarks/torch_devices.py` on one {d['gpu']} against {d['cpu_threads']} CPU threads of the same "
+            f"machine (torch {d['torch']}): protocol {d['protocol']}, seeds {', '.join(map(str, d['seeds']))}, at most "
             f"{d['epochs']} epochs and {d['train_cap']} training rows per run and class, on `{d['dataset']}` "
             f"({d['flows']:,} flows of the medium design, `uavcas dataset synth`; not this campaign). Fit seconds "
             "summed over the seeds:", "", *table(["model", "CUDA s", "CPU s", "CPU / CUDA"], rows)]
@@ -369,7 +379,8 @@ def changes_section(lb: pd.DataFrame, previous: Path | None, classes: dict[str, 
                 *table(["model", *(h for *_, h in cols)], rows)]
     if "5tuple" in classes and "Benign" in classes["5tuple"].index:
         b = classes["5tuple"].loc["Benign"]
-        out += [f"Benign flows now: {int(b['rows']):,} in {int(b['runs'])} runs, median {b['median_packets']:g} packets.", ""]
+        out += [f"Benign flows now: {int(b['rows']):,} in {int(b['runs'])} runs, median {b['median_packets']:g} "
+                "packets.", ""]
     out += [
         "- **Benign is traffic no attack touched.** Before, a flood victim's SYN-ACK retransmissions were split "
         "off into flows of their own by a RST rule and most of them were labelled Benign; now a packet an "
@@ -394,18 +405,21 @@ def regenerate_section(camp: pd.DataFrame) -> list[str]:
             f"# {len(camp)} runs: the medium preset (root; resumable: re-running the command resumes it)",
             ".venv/bin/uavcas campaign run --preset medium --out data/medium",
             "# the same runs as window-host episodes",
-            "for r in data/medium/runs/*/; do .venv/bin/uavcas extract \"$r\" --view window-host --out data/medium-wh; done",
+            "for r in data/medium/runs/*/; do .venv/bin/uavcas extract \"$r\" --view window-host --out data/medium-wh; "
+            "done",
             f"M={','.join(names())}",  # every registered detector
             "B=\"--seeds 0,1,2,3,4 --models $M --train-cap 300 --epochs 15 --no-importance\"",
             "for v in medium:5tuple medium-wh:wh; do",
-            "  .venv/bin/uavcas bench ids data/${v%%:*} --out bench/${v##*:} --protocol binary,multiclass,ood --min-class-runs 2 $B",
+            "  .venv/bin/uavcas bench ids data/${v%%:*} --out bench/${v##*:} --protocol binary,multiclass,ood "
+            "--min-class-runs 2 $B",
             "  .venv/bin/uavcas bench ids data/${v%%:*} --out bench/${v##*:}-cross --protocol cross-condition \\",
             "      --holdout mission=spiral --min-class-runs 3 $B",
             "done",
             ".venv/bin/python benchmarks/medium_results.py --campaign data/medium --dataset 5tuple=data/medium \\",
             "    --dataset window-host=data/medium-wh --bench 5tuple=bench/5tuple --bench 5tuple=bench/5tuple-cross \\",
             "    --bench window-host=bench/wh --bench window-host=bench/wh-cross \\",
-            "    --previous docs/results/medium-leaderboard-v0.2.csv --torch docs/results/torch-devices-h200.json --out docs",
+            "    --previous docs/results/medium-leaderboard-v0.2.csv --torch docs/results/torch-devices-h200.json "
+            "--out docs",
             "```", "",
             "Channel settings (UAVs, base stations, payload, path loss, MCS, mission, TX dBm, noise): "
             + ", ".join(f"`{s}`" for s in settings) + ". Runs are real-time emulations, so row counts move a little "
@@ -439,7 +453,8 @@ def main() -> None:
     ap.add_argument("--bench", action="append", default=[], help="VIEW=BENCH_DIR (a `bench ids` --out)")
     ap.add_argument("--previous", type=Path)
     ap.add_argument("--torch", type=Path)
-    ap.add_argument("--out", type=Path, required=True, help="docs directory: results.md and results/medium-leaderboard.csv")
+    ap.add_argument("--out", type=Path, required=True,
+                    help="docs directory: results.md and results/medium-leaderboard.csv")
     a = ap.parse_args()
     camp = read_campaign(a.campaign)
     classes = {v: read_classes(p) for v, p in _pairs(a.dataset, "--dataset")}

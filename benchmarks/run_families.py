@@ -31,7 +31,8 @@ def shaping_summary(path: Path) -> dict:
     loss_err = [abs(r["applied_loss"] - r["planned_loss"]) for r in recs if r["applied_loss"] is not None]
     missing = sum(1 for r in recs if None in (r["applied_rate_mbps"], r["applied_delay_ms"], r["applied_loss"]))
     return {"records": len(recs), "missing_readback": missing,
-            "planned_rate_mbps_mean": round(statistics.fmean(r["planned_rate_mbps"] for r in recs), 3) if recs else None,
+            "planned_rate_mbps_mean": round(statistics.fmean(r["planned_rate_mbps"] for r in recs), 3) if recs
+            else None,
             "applied_rate_mbps_mean": round(statistics.fmean(r["applied_rate_mbps"] for r in recs
                                                              if r["applied_rate_mbps"]), 3) if recs else None,
             "rate_rel_err_max": max(rate_err, default=None), "delay_abs_err_ms_max": max(delay_err, default=None),
@@ -112,7 +113,8 @@ def main() -> None:
 
     results = []
     for fam in args.families.split(","):
-        config = f"{FAMILIES[fam]}-{args.uavs}-{args.bss}-image-{args.pathloss}-adaptive-{args.mission}-{args.tx_dbm}-95"
+        config = (f"{FAMILIES[fam]}-{args.uavs}-{args.bss}-image-{args.pathloss}-adaptive-{args.mission}-"
+                  f"{args.tx_dbm}-95")
         p = plan(config, seed=args.seed, windows=args.windows)
         t = time.monotonic()
         art = realize(p, args.out / f"{fam}-{args.pathloss}-{args.mission}-{args.tx_dbm}")
