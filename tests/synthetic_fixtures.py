@@ -1,5 +1,5 @@
-"""Fixtures for analysis and IDS tests: small synthetic datasets with a known separable class (DoS) and a known indistinguishable
-class (Wormhole = the benign generator)."""
+"""Fixtures for analysis and IDS tests: small synthetic datasets with a known separable class (DoS) and a known
+indistinguishable class (Wormhole = the benign generator)."""
 
 from __future__ import annotations
 

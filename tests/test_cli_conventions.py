@@ -46,7 +46,8 @@ def _one_line_error(r, *needles):
 
 
 def test_a_bad_choice_a_bound_or_a_missing_argument_is_one_line():
-    _one_line_error(runner.invoke(app, ["extract", "x", "--out", "y", "--view", "bogus"]), "--view", "'bogus'", "window-host")
+    _one_line_error(runner.invoke(app, ["extract", "x", "--out", "y", "--view", "bogus"]), "--view", "'bogus'",
+                    "window-host")
     _one_line_error(runner.invoke(app, ["plan", "x", "--window-s", "0.1"]), "--window-s", "0.5")
     _one_line_error(runner.invoke(app, ["plan"]), "CONFIG")
     _one_line_error(runner.invoke(app, ["nope"]), "No such command")
@@ -57,7 +58,9 @@ def test_a_bad_choice_a_bound_or_a_missing_argument_is_one_line():
 def test_choices_are_listed_in_the_help():
     out = runner.invoke(app, ["extract", "-h"]).output
     assert "5tuple|hostpair" in out.replace("\n", "").replace(" ", "").replace("│", "")
-    assert "connection|cic|timeout" in runner.invoke(app, ["flows", "-h"]).output.replace(" ", "").replace("\n", "").replace("│", "")
+    assert "connection|cic|timeout" in runner.invoke(app,
+                                                     ["flows",
+                                                      "-h"]).output.replace(" ", "").replace("\n", "").replace("│", "")
 
 
 def test_the_same_option_has_the_same_bounds_everywhere():
@@ -66,7 +69,8 @@ def test_the_same_option_has_the_same_bounds_everywhere():
 
     def walk(c, path):
         for p in getattr(c, "params", []):
-            if p.opts and p.opts[0].startswith("--") and p.opts[0] in ("--seed", "--windows", "--window-s", "--profile"):
+            if p.opts and p.opts[0].startswith("--") and p.opts[0] in ("--seed", "--windows", "--window-s",
+                                                                       "--profile"):
                 seen.setdefault(p.opts[0], set()).add((p.min, p.max, p.default))
         for name, sub in getattr(c, "commands", {}).items():
             walk(sub, f"{path} {name}")

@@ -36,7 +36,8 @@ def test_axes_files(tmp_path):
     write_axes(tmp_path, table, [0.0, 0.5, math.inf], "flow-mean")
     payload = json.loads((tmp_path / "axes.json").read_text())
     assert payload["iat_source"] == "flow-mean" and payload["confound_tv"] == CONFOUND_TV
-    assert payload["bins"][-1] == math.inf and payload["table"] == [{"axis": "speed", "low": 1, "high": 9, "hellinger": 0.2}]
+    assert payload["bins"][-1] == math.inf and payload["table"] == [{"axis": "speed", "low": 1, "high": 9,
+                                                                     "hellinger": 0.2}]
     assert pd.read_csv(tmp_path / "axes.csv").equals(table)
 
 

@@ -23,7 +23,8 @@ runner = CliRunner()
 def test_separable_high_indistinguishable_at_baseline(synth_df):
     res = diversity_table(synth_df, "synth", DiversityOptions(n_boot=50, pairwise=True))
     t = res.table.set_index("class")
-    for col in ("hellinger", "jsd", "hellinger_lo", "hellinger_hi", "jsd_lo", "jsd_hi", "baseline_hellinger", "baseline_jsd",
+    for col in ("hellinger", "jsd", "hellinger_lo", "hellinger_hi", "jsd_lo", "jsd_hi", "baseline_hellinger",
+                "baseline_jsd",
                 "hellinger_pairwise", "jsd_pairwise"):
         assert t[col].between(0, 1).all(), col
     dos, worm = t.loc["DoS"], t.loc["Wormhole"]
@@ -61,7 +62,8 @@ def test_confounded_axes_flagged(synth_df):
     """The medium design crosses path loss with TX power (2 x 2) but ties swarm size and mission
     to the channel setting: n_uav 5 vs 10 is also spiral vs random at 30 vs 10 dBm."""
     t = axis_diversity(synth_df, n_boot=0)[0].set_index("axis")
-    flagged = {a: dict(x.split(":") for x in str(v).split(", ") if x) for a, v in t["confounded_with"].fillna("").items()}
+    flagged = {a: dict(x.split(":") for x in str(v).split(", ") if x)
+               for a, v in t["confounded_with"].fillna("").items()}
     assert float(flagged["n_uav"]["mission"]) == 1.0 and float(flagged["n_uav"]["tx_dbm"]) == 1.0
     assert "tx_dbm" not in flagged["pathloss"] and "pathloss" not in flagged["tx_dbm"]
     assert "attacks" not in flagged["n_uav"]  # every setting holds every composition
@@ -71,7 +73,8 @@ def test_baseline_drawn_at_the_class_sample_size(synth_df):
     """A benign-identical class of 8 flows scores far above 0 (plug-in bias) and so does its
     baseline at 8 flows; a whole-benign baseline would call it different."""
     small = synth_df[~((synth_df["label"] == "Wormhole") & (synth_df.groupby("label").cumcount() >= 8))]
-    t = diversity_table(small, "s", DiversityOptions(n_boot=0, legacy=False, iat_source="flow-mean")).table.set_index("class")
+    t = diversity_table(small, "s",
+                        DiversityOptions(n_boot=0, legacy=False, iat_source="flow-mean")).table.set_index("class")
     w, dos = t.loc["Wormhole"], t.loc["DoS"]
     assert w["n_flows"] == w["baseline_n_flows"] == 8
     assert w["baseline_hellinger"] > 2 * dos["baseline_hellinger"]  # the small-sample floor is higher
@@ -128,8 +131,10 @@ def test_cli_bad_dataset_one_line_error(tmp_path, make):
 def test_cli_axes_and_separability(synth_dir, tmp_path):
     r = runner.invoke(app, ["analyze", "axes", str(synth_dir), "--out", str(tmp_path / "ax"), "--boot", "10"])
     assert r.exit_code == 0, r.output
-    assert {"axis", "hellinger", "jsd", "baseline_hellinger", "baseline_jsd"} <= set(pd.read_csv(tmp_path / "ax" / "axes.csv").columns)
-    r = runner.invoke(app, ["analyze", "separability", str(synth_dir), "--out", str(tmp_path / "sep"), "--tsne-samples", "300"])
+    assert {"axis", "hellinger", "jsd", "baseline_hellinger",
+            "baseline_jsd"} <= set(pd.read_csv(tmp_path / "ax" / "axes.csv").columns)
+    r = runner.invoke(app, ["analyze", "separability", str(synth_dir), "--out", str(tmp_path / "sep"), "--tsne-samples",
+                            "300"])
     assert r.exit_code == 0, r.output
     assert pd.read_csv(tmp_path / "sep" / "tsne.csv")["label"].nunique() == 15
     stats = pd.read_csv(tmp_path / "sep" / "separability.csv").set_index("class")
@@ -166,10 +171,12 @@ def test_cli_like_for_like_with_external(shared_data, synth_dir, tmp_path):
     ext = shared_data / "ids-samples" / "cicids2017-improved-rnd2500"
     if not ext.is_dir():
         pytest.skip(f"{ext} not found")
-    r = runner.invoke(app, ["analyze", "diversity", str(synth_dir), "--reference", str(ext), "--out", str(tmp_path / "p"),
+    r = runner.invoke(app,
+                      ["analyze", "diversity", str(synth_dir), "--reference", str(ext), "--out", str(tmp_path / "p"),
                             "--iat-source", "packet"])
     assert r.exit_code == 2 and "flow-mean" in r.output and not (tmp_path / "p").exists()
-    r = runner.invoke(app, ["analyze", "diversity", str(synth_dir), "--reference", str(ext), "--out", str(tmp_path / "a"),
+    r = runner.invoke(app,
+                      ["analyze", "diversity", str(synth_dir), "--reference", str(ext), "--out", str(tmp_path / "a"),
                             "--boot", "0"])
     assert r.exit_code == 0, r.output
     d = pd.read_csv(tmp_path / "a" / "diversity.csv")

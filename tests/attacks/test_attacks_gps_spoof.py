@@ -48,7 +48,8 @@ def test_bad_tokens_are_one_line_errors(tok, msg):
 def test_image_payload_is_refused_in_one_line():
     for payload in ("telemetry", "video", "mixed"):
         parse(CFG.format(drift=3, payload=payload))
-    with pytest.raises(ScenarioError, match="field 'payload': gps_spoof needs payload telemetry or video or mixed") as e:
+    with pytest.raises(ScenarioError,
+                       match="field 'payload': gps_spoof needs payload telemetry or video or mixed") as e:
         parse(CFG.format(drift=3, payload="image"))
     assert "\n" not in str(e.value) and "got 'image'" in str(e.value)
     with pytest.raises(ScenarioError, match="field 'payload'"):  # in a composition too

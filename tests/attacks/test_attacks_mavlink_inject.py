@@ -128,6 +128,7 @@ def test_run_refuses_signing_on_a_payload_without_mavlink(tmp_path):
     import sys
 
     r = subprocess.run([sys.executable, "-m", "uavcas", "run", "blackhole-6-2-image-logdist-adaptive-random-30-95",
-                        "--mavlink-signing", "--out", str(tmp_path / "run")], capture_output=True, text=True, timeout=120)
+                        "--mavlink-signing", "--out", str(tmp_path / "run")], capture_output=True, text=True,
+                       timeout=120)
     assert r.returncode == 2 and "--mavlink-signing: payload 'image' carries no MAVLink" in r.stderr
     assert len(r.stderr.strip().splitlines()) == 1 and not (tmp_path / "run").exists()

@@ -64,7 +64,8 @@ def maeng_table(h: int, n: int, rng: np.random.Generator) -> dict:
     for i in range(1, n):
         z[i] = rho * z[i - 1] + np.sqrt(1 - rho * rho) * rng.standard_normal()
     k = 10 ** (TRUE_K_DB / 10)
-    g = np.abs(np.sqrt(k / (k + 1)) + np.sqrt(0.5 / (k + 1)) * (rng.standard_normal(n) + 1j * rng.standard_normal(n))) ** 2
+    g = np.abs(np.sqrt(k / (k + 1))
+               + np.sqrt(0.5 / (k + 1)) * (rng.standard_normal(n) + 1j * rng.standard_normal(n))) ** 2
     pl_mean = TRUE_PL0_DB + 10 * TRUE_N[h] * np.log10(d3) + TRUE_SIGMA_DB[h] * z
     pl_true = pl_mean - 10 * np.log10(g)
     from uavcas.calibration.linkbudget import PatternGain
@@ -116,5 +117,6 @@ def write_multibw(root: Path, n: int = 400, seed: int = 1) -> None:
         k = 55.0 + rng.normal(0, 2.0, n)
         pl = TRUE_PL0_DB + 10 * 2.1 * np.log10(d3) + rng.normal(0, 4.0, n)
         scipy.io.savemat(folder / f"results_cole_with_tworay_tilt_src_alt_{h}m_fs20MHz.mat", {
-            "power_all": k - pl, "RSRP_PL_free": k - free_space_loss_db(d3, 3.3), "dist_3D": d3, "dist_2D_new": d2, "h_all": height,
+            "power_all": k - pl, "RSRP_PL_free": k - free_space_loss_db(d3, 3.3), "dist_3D": d3, "dist_2D_new": d2,
+            "h_all": height,
         })

@@ -72,7 +72,8 @@ def test_split_legs_finds_the_legs_of_a_spiral():
     from uavcas.mobility import SpiralParams
 
     area = Area(x_max_m=1000, y_max_m=1000, z_min_m=10, z_max_m=60)
-    true = SpiralParams(speed_mps=6.0, speed_cv=0.3, accel_mps2=0.5, altitude_m=25.0, width_m=300, height_m=200, ring_spacing_m=50)
+    true = SpiralParams(speed_mps=6.0, speed_cv=0.3, accel_mps2=0.5, altitude_m=25.0, width_m=300, height_m=200,
+                        ring_spacing_m=50)
     tracks = _tracks("spiral", true, 2, 1500.0, area)
     stats = leg_statistics(tracks)
     assert stats["n_legs"] > 20 and stats["speed_mps"] == pytest.approx(6.0, rel=0.2)

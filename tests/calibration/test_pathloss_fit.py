@@ -86,7 +86,8 @@ def test_local_mean_and_moment_k():
     assert [len(w) for w in windows(np.r_[np.ones(25, bool), False, np.ones(9, bool)], 10)] == [10, 10]
     rng = np.random.default_rng(0)
     k = 10 ** (8.0 / 10)
-    g = np.abs(np.sqrt(k / (k + 1)) + np.sqrt(0.5 / (k + 1)) * (rng.standard_normal(200_000) + 1j * rng.standard_normal(200_000))) ** 2
+    g = np.abs(np.sqrt(k / (k + 1))
+               + np.sqrt(0.5 / (k + 1)) * (rng.standard_normal(200_000) + 1j * rng.standard_normal(200_000))) ** 2
     assert moment_k_db(10 * np.log10(g), windows(np.ones(g.size, bool), 10)) == pytest.approx(8.0, abs=0.3)
 
 
@@ -142,7 +143,8 @@ def test_run_layer1_json_shape_and_scores(synth):
     # Local means score the shadowing; single samples add the fading on top of it.
     assert ld["heldout_local_mean"]["rmse_db"] == pytest.approx(sig, rel=0.3)
     assert ld["heldout_sample"]["rmse_db"] > ld["heldout_local_mean"]["rmse_db"] + 1.0
-    assert ld["heldout_local_mean"]["rmse_db"] < j["models"]["logdistance_radpat"]["heldout_local_mean"]["rmse_db"] + 0.2
+    radpat = j["models"]["logdistance_radpat"]
+    assert ld["heldout_local_mean"]["rmse_db"] < radpat["heldout_local_mean"]["rmse_db"] + 0.2
     assert j["checks"]["logdistance_beats_uma_av_heldout"]
     assert all(TRUE_K_DB - 1.2 < k < TRUE_K_DB + 0.5 for k in j["k_factor_db"]["k_db"])
 

@@ -50,7 +50,8 @@ def test_calibrate_pathloss_cli_writes_outputs_and_a_profile_with_provenance(tmp
     write_maeng(data, n=3000)
     write_multibw(data)
     out = tmp_path / "out"
-    r = CliRunner().invoke(app, ["calibrate", "pathloss", "--data", str(data), "--out", str(out), "--write-profile", "synthcal", "--seed", "1"])
+    r = CliRunner().invoke(app, ["calibrate", "pathloss", "--data", str(data), "--out", str(out), "--write-profile",
+                                 "synthcal", "--seed", "1"])
     assert r.exit_code == 0, r.output
     for name in ("pathloss.json", "pathloss.md", "pathloss_vs_distance.png", "pathloss_crossval.png", "summary.md"):
         assert (out / name).stat().st_size > 0
@@ -74,7 +75,8 @@ def test_calibrate_pathloss_cli_writes_outputs_and_a_profile_with_provenance(tmp
 
 
 def test_fitted_pathloss_changes_the_links_as_its_numbers_say(tmp_path):
-    fitted = PathLossProfile(name="f", altitude_m=(30.0, 110.0), n=(2.3, 2.0), pl0_db=(43.35, 43.35), sigma_db=(3.0, 5.0))
+    fitted = PathLossProfile(name="f", altitude_m=(30.0, 110.0), n=(2.3, 2.0), pl0_db=(43.35, 43.35),
+                             sigma_db=(3.0, 5.0))
     base_prof = PAPER_PROFILE.model_copy(update={"name": "a"})
     cal_prof = PAPER_PROFILE.model_copy(update={"name": "b", "pathloss": fitted})
     base, cal = make_plan(CONFIG, seed=5, profile=base_prof), make_plan(CONFIG, seed=5, profile=cal_prof)

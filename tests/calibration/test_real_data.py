@@ -52,8 +52,10 @@ def test_real_csv_form_matches_mat(aerpaw, tmp_path):
 
 def test_real_outputs_written(calibrated):
     out, res = calibrated
-    for name in ("pathloss.json", "mobility.json", "link.json", "fidelity.json", "summary.md", "pathloss_vs_distance.png",
-                 "mobility_trajectories.png", "mobility_speed_cdf.png", "link_representative_flight.png", "fidelity_rss_pdf.png"):
+    for name in ("pathloss.json", "mobility.json", "link.json", "fidelity.json", "summary.md",
+                 "pathloss_vs_distance.png",
+                 "mobility_trajectories.png", "mobility_speed_cdf.png", "link_representative_flight.png",
+                 "fidelity_rss_pdf.png"):
         assert (out / name).stat().st_size > 0, name
     assert res.runtime_s < 600
 

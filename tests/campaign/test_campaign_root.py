@@ -60,7 +60,8 @@ def test_killed_campaign_resumes_without_duplicates(tmp_path):
     m = tmp_path / "m.jsonl"
     _manifest(m)
     ds = tmp_path / "ds"
-    proc = subprocess.Popen([sys.executable, "-m", "uavcas.cli", "campaign", "run", "--manifest", str(m), "--out", str(ds)],
+    proc = subprocess.Popen([sys.executable, "-m", "uavcas.cli", "campaign", "run", "--manifest", str(m), "--out",
+                             str(ds)],
                             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
     deadline = time.monotonic() + 120
     while time.monotonic() < deadline and proc.poll() is None:
@@ -106,7 +107,8 @@ def test_dask_cluster_gives_the_same_plans_and_services_as_local(tmp_path):
                                "--no-dashboard", "--local-directory", str(tmp_path / "w")],
                               stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True, env=env)
     try:
-        r = _cli("campaign", "run", "--manifest", str(m), "--out", str(tmp_path / "dask"), "--scheduler", addr, timeout=300)
+        r = _cli("campaign", "run", "--manifest", str(m), "--out", str(tmp_path / "dask"), "--scheduler", addr,
+                 timeout=300)
         assert r.returncode == 0, r.stderr[-2000:]
         r = _cli("campaign", "run", "--manifest", str(m), "--out", str(tmp_path / "local"), timeout=300)
         assert r.returncode == 0, r.stderr[-2000:]

@@ -60,7 +60,8 @@ def test_clean_link_rates_follow_dcf_efficiency():
 
 
 def test_paper_parity_mode_is_raw_per_and_phy_rate():
-    link = LinkLayer(retry_limit=0, rate_model="phy", mac_overhead_bytes=0, coding="uncoded", implementation_loss_db=0.0)
+    link = LinkLayer(retry_limit=0, rate_model="phy", mac_overhead_bytes=0, coding="uncoded",
+                     implementation_loss_db=0.0)
     snr, mcs = np.array([8.0, 12.0, 27.0]), np.array([0, 2, 6])
     lp = link_params(snr, mcs, np.zeros(3), link=link)
     raw = 1 - (1 - T.ber(snr, mcs)) ** 12000
@@ -111,7 +112,8 @@ def test_coded_per_counts_the_code_rate_and_the_implementation_loss():
     gap = T.snr_threshold_db - np.array(at)
     assert np.all((gap > 3.0) & (gap < 5.5))
     # The default link layer applies that 5 dB before the bound.
-    np.testing.assert_allclose(mpdu_per(snr[::100] + 5.0, 0, link=link.model_copy(update={"implementation_loss_db": 5.0})),
+    np.testing.assert_allclose(mpdu_per(snr[::100] + 5.0, 0,
+                                        link=link.model_copy(update={"implementation_loss_db": 5.0})),
                                mpdu_per(snr[::100], 0, link=link))
 
 

@@ -87,7 +87,8 @@ def test_link_chain_columns(tmp_path):
     ([{"d3d_m": 10.0, "d2d_m": 5.0, "h_uav_m": 40.0}], "missing column(s) h_bs_m"),
     ([{"d3d_m": "far", "d2d_m": 5.0, "h_uav_m": 40.0, "h_bs_m": 10.0}], "column d3d_m row 1"),
     ([{"d3d_m": 10.0, "d2d_m": -5.0, "h_uav_m": 40.0, "h_bs_m": 10.0}], "column d2d_m row 1: negative"),
-    ([{"d3d_m": 10.0, "d2d_m": 50.0, "h_uav_m": 40.0, "h_bs_m": 10.0}], "row 1: d2d_m 50 exceeds d3d_m 10 by more than 0.5 m"),
+    ([{"d3d_m": 10.0, "d2d_m": 50.0, "h_uav_m": 40.0, "h_bs_m": 10.0}],
+     "row 1: d2d_m 50 exceeds d3d_m 10 by more than 0.5 m"),
     ([{"d3d_m": 10.0, "d2d_m": 5.0, "h_uav_m": 40.0, "h_bs_m": 10.0, "fc_ghz": 0.0}], "fc_ghz row 1"),
 ])
 def test_bad_input_one_line_exit_2_nothing_written(tmp_path, rows, needle):

@@ -17,7 +17,8 @@ from uavcas.flows.standards.cic import FEATURES
 
 def test_original_cic_header_with_spaces(tmp_path):
     f = tmp_path / "cic.csv"
-    f.write_text(" Destination Port, Flow Duration, Total Fwd Packets, Total Backward Packets, Flow IAT Mean, Label\n80,2000000,3,2,500000,BENIGN\n443,1000,1,0,0,DDoS\n")
+    f.write_text(" Destination Port, Flow Duration, Total Fwd Packets, Total Backward Packets, Flow IAT Mean, "
+                 "Label\n80,2000000,3,2,500000,BENIGN\n443,1000,1,0,0,DDoS\n")
     df = load_cicids2017(f)
     # CICFlowMeter's own units (us) are the `cic` standard's: taken as they are
     assert df["Flow Duration"].tolist() == [2_000_000, 1000] and df["Flow IAT Mean"][0] == 500_000
@@ -39,5 +40,6 @@ def test_shared_samples(shared_data):
     assert len(unsw) == 4528 and (unsw.label == "Normal").sum() == 243
     assert unsw[list(MAPPED_UNSW_NB15)].notna().all().all()
     assert unsw.label_binary.sum() == 4528 - 243
-    raw = __import__("pandas").read_csv(next((shared_data / "ids-samples" / "unsw-nb15-testing-head4528").glob("*.csv")))
+    sample_dir = shared_data / "ids-samples" / "unsw-nb15-testing-head4528"
+    raw = __import__("pandas").read_csv(next(sample_dir.glob("*.csv")))
     assert np.allclose(unsw["Flow Duration"], raw["dur"] * 1e6)  # seconds -> us

@@ -73,7 +73,8 @@ def test_every_parquet_file_reads_with_plain_pandas(synth_run_dir, tmp_path):
 
     ds = tmp_path / "ds"
     assert _run("extract", synth_run_dir, "--out", ds).exit_code == 0
-    assert _run("flows", synth_run_dir / "pcap" / "s-bs0.pcap", "--format", "parquet", "--out", tmp_path / "f.parquet").exit_code == 0
+    assert _run("flows", synth_run_dir / "pcap" / "s-bs0.pcap", "--format", "parquet", "--out",
+                tmp_path / "f.parquet").exit_code == 0
     for path in [ds / "flows.parquet", *ds.glob("shards/*.parquet"), tmp_path / "f.parquet"]:
         df = pd.read_parquet(path)
         assert len(df) > 0 and len(df.seq_size.iloc[0]) == df.packets.iloc[0], path
@@ -170,7 +171,8 @@ def test_snaplen_and_orphans_are_reported_on_stderr(tmp_path):
         p = Ether() / IP(src="10.0.0.1", dst="10.0.0.2") / TCP(sport=1000 + k, dport=80, flags="S")
         p.time = 1_700_000_000 + k
         pk.append(p)
-    frag = [Ether() / f for f in fragment(IP(src="10.0.0.1", dst="10.0.0.2", id=9) / UDP() / Raw(b"y" * 1200), fragsize=400)]
+    frag = [Ether() / f
+            for f in fragment(IP(src="10.0.0.1", dst="10.0.0.2", id=9) / UDP() / Raw(b"y" * 1200), fragsize=400)]
     for f in frag:
         f.time = 1_700_000_010
     wrpcap(str(tmp_path / "x.pcap"), pk + frag[1:])  # the first fragment is missing

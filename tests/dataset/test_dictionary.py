@@ -40,7 +40,8 @@ def test_every_column_of_an_extracted_dataset_is_described(synth_run_dir, tmp_pa
 
 def test_every_schema_column_of_every_standard_and_view_is_described():
     for std in names():
-        for sch, episodes in ((arrow_schema(std, context=True), False), (episode_arrow_schema(std, context=True), True)):
+        for sch, episodes in ((arrow_schema(std, context=True), False),
+                              (episode_arrow_schema(std, context=True), True)):
             cols = dictionary.columns(sch, std, episodes)
             assert [c.name for c in cols] == sch.names and all(c.meaning and c.unit for c in cols)
     units = {c.name: c.unit for c in dictionary.columns(arrow_schema("cic"), "cic")}
@@ -67,7 +68,8 @@ def test_family_columns_follow_the_vocabulary():
 
 def test_docs_section_is_the_generated_one():
     text = DOCS.read_text()
-    assert dictionary_docs.with_docs_section(text) == text, "run: python -m uavcas.dataset.dictionary_docs docs/formats.md"
+    assert dictionary_docs.with_docs_section(text) == text, ("run: python -m uavcas.dataset.dictionary_docs "
+                                                             "docs/formats.md")
 
 
 def test_info_columns_lists_every_column_with_unit_and_meaning(synth_run_dir, tmp_path):

@@ -56,7 +56,8 @@ def test_an_empty_stream_gives_a_valid_file_with_the_flow_schema(pcap, tmp_path)
     assert write_csv(iter([]), out, "paper") == 0
     header = out.getvalue().decode().splitlines()
     assert len(header) == 1
-    assert header[0].split(",") == [*CSV_LEAD_COLUMNS, *feature_columns("paper"), "first_ts", "last_ts", "capture_point"]
+    assert header[0].split(",") == [*CSV_LEAD_COLUMNS, *feature_columns("paper"), "first_ts", "last_ts",
+                                    "capture_point"]
 
 
 @pytest.mark.parametrize("standard", ["cic", "paper"])

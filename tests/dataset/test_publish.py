@@ -62,7 +62,8 @@ def test_the_publication_holds_the_shards_card_croissant_and_readme(ds, publishe
     schema = pq.read_schema(ds / "flows.parquet")
     assert [f["name"] for f in rs["field"]] == schema.names
     by_name = {f["name"]: f for f in rs["field"]}
-    assert by_name["Flow Duration"]["dataType"] == "cr:Float64" and "(unit: us)" in by_name["Flow Duration"]["description"]
+    duration = by_name["Flow Duration"]
+    assert duration["dataType"] == "cr:Float64" and "(unit: us)" in duration["description"]
     assert by_name["seq_size"]["cr:isArray"] is True and by_name["seq_size"]["dataType"] == "cr:Int32"
     assert by_name["label"]["dataType"] == "sc:Text"
 
@@ -102,7 +103,8 @@ def test_hugging_face_datasets_reads_the_shards(ds, published, tmp_path):
 
 def test_the_card_lists_every_column_with_its_unit(ds, published):
     text = (published / "README.md").read_text()
-    rows = {m.group(1): (m.group(2), m.group(3)) for m in re.finditer(r"^\| `([^`]+)` \| ([^|]+) \| ([^|]+) \|", text, re.M)}
+    rows = {m.group(1): (m.group(2), m.group(3))
+            for m in re.finditer(r"^\| `([^`]+)` \| ([^|]+) \| ([^|]+) \|", text, re.M)}
     schema = pq.read_schema(ds / "flows.parquet")
     assert set(schema.names) <= set(rows)
     for f in schema:

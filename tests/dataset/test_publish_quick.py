@@ -34,6 +34,7 @@ def test_the_quick_dataset_publishes_a_croissant_file_mlcroissant_validates(tmp_
     assert len(records) == read_card(ds)["n_flows"] > 0
     # the card: every column of the shards with its dtype and unit
     text = (pub / "README.md").read_text()
-    rows = {m.group(1): (m.group(2), m.group(3)) for m in re.finditer(r"^\| `([^`]+)` \| ([^|]+) \| ([^|]+) \|", text, re.M)}
+    rows = {m.group(1): (m.group(2), m.group(3))
+            for m in re.finditer(r"^\| `([^`]+)` \| ([^|]+) \| ([^|]+) \|", text, re.M)}
     for f in pq.read_schema(ds / "flows.parquet"):
         assert rows[f.name][0].strip() == str(f.type) and rows[f.name][1].strip() == describe(f.name, "cic")[0], f.name

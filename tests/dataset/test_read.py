@@ -17,7 +17,8 @@ from uavcas.flows.standards.paper import PAPER_FEATURES
 
 runner = CliRunner()
 
-CIC = " Destination Port, Flow Duration, Total Fwd Packets, Flow IAT Mean, Label\n80,2000000,3,500000,BENIGN\n443,1000,1,0,DDoS\n"
+CIC = (" Destination Port, Flow Duration, Total Fwd Packets, Flow IAT Mean, Label\n"
+       "80,2000000,3,500000,BENIGN\n443,1000,1,0,DDoS\n")
 UNSW = "id,dur,spkts,dpkts,sbytes,dbytes,attack_cat,label\n1,0.1,2,2,100,100,Normal,0\n2,0.2,4,0,400,0,DoS,1\n"
 
 
@@ -36,7 +37,8 @@ def dataset_and_csv(synth_run_dir, tmp_path_factory):
 def test_ours_and_the_authors_csv_give_the_same_flows(dataset_and_csv, tmp_path):
     ds, csv = dataset_and_csv
     assert detect_format(ds) == detect_format(ds / "flows.parquet") == "uavcas"
-    assert detect_format(csv) == detect_format(csv / "UAV-CAS_ts.csv") == detect_format(csv / "UAV-CAS_stat.csv") == "uavcas-csv"
+    assert (detect_format(csv) == detect_format(csv / "UAV-CAS_ts.csv") == detect_format(csv / "UAV-CAS_stat.csv")
+            == "uavcas-csv")
     ours, theirs = load_any(ds), load_any(csv)
     assert ours.attrs["source"] == "uavcas" and theirs.attrs["source"] == "uavcas-csv"
     assert ours.attrs["feature_standard"] == "cic" and theirs.attrs["feature_standard"] == "paper"
@@ -99,7 +101,8 @@ def test_views_are_never_mixed_silently():
 
 def test_cli_bench_reads_the_authors_csv(dataset_and_csv, tmp_path):
     _, csv = dataset_and_csv
-    r = runner.invoke(app, ["bench", "ids", str(csv), "--out", str(tmp_path / "b"), "--protocol", "binary", "--models", "lr"])
+    r = runner.invoke(app, ["bench", "ids", str(csv), "--out", str(tmp_path / "b"), "--protocol", "binary", "--models",
+                            "lr"])
     assert r.exit_code == 0, r.output
     assert (tmp_path / "b" / "results.csv").exists()
 

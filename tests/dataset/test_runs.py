@@ -41,7 +41,8 @@ def test_runs_carry_verdict_and_failed_checks_with_value_and_limit(flagged_ds):
     assert runs[1].failed[0] == "delay_error_p50_ms 2 (limit <= 0.1)" and runs[1].rows == 6
     assert sum(runs[1].classes.values()) == 6
     lines = flagged_lines(runs)
-    assert len(lines) == 2 and lines[0].startswith("run run00001 (dos=1000-5-2-mixed") and "delay_error_p99_ms 2" in lines[0]
+    assert len(lines) == 2 and lines[0].startswith("run run00001 (dos=1000-5-2-mixed")
+    assert "delay_error_p99_ms 2" in lines[0]
     assert lines[1].endswith("error: audit error: no captures")
 
 

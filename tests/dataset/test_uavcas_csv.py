@@ -33,7 +33,8 @@ def _rows(path):
 
 
 def _lists(values, starts, typ):
-    return pd.arrays.ArrowExtensionArray(pa.ListArray.from_arrays(pa.array(np.asarray(starts, dtype=np.int32)), pa.array(values, type=typ)))
+    return pd.arrays.ArrowExtensionArray(pa.ListArray.from_arrays(pa.array(np.asarray(starts, dtype=np.int32)),
+                                                                  pa.array(values, type=typ)))
 
 
 def _tiny_dataset():
@@ -48,7 +49,8 @@ def _tiny_dataset():
         "run_id": ["4"] * n, "config": ["dos=1000-5-2-image-logdist-adaptive-spiral-30-95"] * n, "seed": [1] * n,
         "view": ["5tuple"] * n, "flow_id": range(n),
         # '10.0.0.2' sends first (forward) but '10.0.0.10' is the string-smaller address
-        "src_ip": ["10.0.0.2", "10.0.0.3", "10.0.0.3"], "src_port": [40000, 53, 9], "dst_ip": ["10.0.0.10", "10.0.0.4", "10.0.0.4"],
+        "src_ip": ["10.0.0.2", "10.0.0.3", "10.0.0.3"], "src_port": [40000, 53, 9],
+        "dst_ip": ["10.0.0.10", "10.0.0.4", "10.0.0.4"],
         "dst_port": [80, 4000, 9], "protocol": [6, 17, 6], "first_ts_ns": [T, T + 5 * 10**9, T + 9 * 10**9],
         "attacks": ["dos=1000"] * n, "n_uav": [5] * n, "n_bs": [2] * n, "payload": ["image"] * n,
         "pathloss": ["logdist"] * n, "modulation": ["adaptive"] * n, "mission": ["spiral"] * n, "tx_dbm": [30] * n,
@@ -99,8 +101,10 @@ def test_columns_and_conventions_by_hand(tmp_path):
         "Fwd Header Length": str(20 * d0.sum()), "Label": "DoS",
     }  # fmt: skip
     for k, v in expect.items():
-        if k in ("Flow Duration", "Flow Bytes/s", "Flow Packets/s", "Flow IAT Total", "Flow IAT Std", "Packet Length Std",
-                 "Packet Length Variance", "Fwd Packet Length Std", "Bwd Packet Length Mean", "Fwd IAT Total", "Bwd IAT Std"):
+        if k in ("Flow Duration", "Flow Bytes/s", "Flow Packets/s", "Flow IAT Total", "Flow IAT Std",
+                 "Packet Length Std",
+                 "Packet Length Variance", "Fwd Packet Length Std", "Bwd Packet Length Mean", "Fwd IAT Total",
+                 "Bwd IAT Std"):
             assert float(r[k]) == pytest.approx(float(v.removeprefix("np.float64(").rstrip(")")), rel=1e-12), k
         else:
             assert r[k] == v, k
@@ -164,7 +168,8 @@ def _their_files(d):
     dirs = [0, 1] * 6
     feats = {f: 0.0 for f in PAPER_FEATURES}
     feats.update({"Total Packets": 12, "Total Length of Packets": 720, "Min Packet Length": 60, "Max Packet Length": 60,
-                  "Header Length": 240, "Total Fwd Packets": 6, "Total Bwd Packets": 6, "Total Length of Fwd Packets": 360,
+                  "Header Length": 240, "Total Fwd Packets": 6, "Total Bwd Packets": 6,
+                  "Total Length of Fwd Packets": 360,
                   "Total Length of Bwd Packets": 360, "Fwd Header Length": 120, "Bwd Header Length": 120,
                   **{k: 0 for k in PAPER_FEATURES if "Flag" in k}, "Flow Duration": t[-1] - t[0]})  # fmt: skip
     with open(d / "UAV-CAS_ts_cfg.csv", "w", newline="") as fh:
@@ -172,12 +177,14 @@ def _their_files(d):
         w.writerow(["packet_time", "packet_size", "packet_flag", "packet_dir", "Label"])
         w.writerow(["[" + ", ".join(repr(x) for x in t) + "]", str(sizes), str(["0x0010"] * 12), str(dirs),
                     "Blackhole+DoS|blackhole+dos=1000-6-2-image-3gpp-adaptive-random-10-95"])  # fmt: skip
-        w.writerow(["[1700000009.5, 1700000009.75]", "[60, 60]", "['', '']", "[0, 0]", "Benign|blackhole+dos=1000-6-2-image-3gpp-adaptive-random-10-95"])
+        w.writerow(["[1700000009.5, 1700000009.75]", "[60, 60]", "['', '']", "[0, 0]",
+                    "Benign|blackhole+dos=1000-6-2-image-3gpp-adaptive-random-10-95"])
     with open(d / "UAV-CAS_stat_cfg.csv", "w", newline="") as fh:
         w = csv.writer(fh)
         w.writerow(list(STAT_COLUMNS))
         w.writerow([3, "6", "2", "image", "3gpp", "adaptive", "random", "10", "95", "10.0.0.1", "10.0.0.5"]
-                   + [feats[f] for f in PAPER_FEATURES] + ["Blackhole+DoS|blackhole+dos=1000-6-2-image-3gpp-adaptive-random-10-95"])  # fmt: skip
+                   + [feats[f] for f in PAPER_FEATURES]
+                   + ["Blackhole+DoS|blackhole+dos=1000-6-2-image-3gpp-adaptive-random-10-95"])  # fmt: skip
     return d
 
 
@@ -187,7 +194,8 @@ def test_their_files_as_released(tmp_path):
     df = imp.frame
     assert len(df) == 2 and df.attrs["feature_standard"] == "paper"
     r = df.iloc[0]
-    assert (r.run_id, r.src_ip, r.dst_ip, r.n_uav, r.tx_dbm, r.noise_dbm, r.pathloss) == ("3", "10.0.0.1", "10.0.0.5", 6, 10, -95.0, "3gpp")
+    assert (r.run_id, r.src_ip, r.dst_ip, r.n_uav, r.tx_dbm, r.noise_dbm,
+            r.pathloss) == ("3", "10.0.0.1", "10.0.0.5", 6, 10, -95.0, "3gpp")
     assert r.label == "Blackhole+DoS" and r.label_blackhole and r.label_dos and not r.label_replay
     assert r.config == "blackhole+dos=1000-6-2-image-3gpp-adaptive-random-10-95" and r.attacks == "blackhole+dos=1000"
     assert r.first_ts_ns == 1700000001_000005000 and list(r.seq_dir)[:2] == [1, -1] and list(r.seq_flags)[0] == 0x10
@@ -196,7 +204,8 @@ def test_their_files_as_released(tmp_path):
     out = tmp_path / "ds"
     assert _run("import", src, "--format", "uavcas-csv", "--out", out).exit_code == 0
     back = tmp_path / "back"
-    assert _run("export", out, "--format", "uavcas-csv", "--out", back, "--embed-config", "--include-flags").exit_code == 0
+    assert _run("export", out, "--format", "uavcas-csv", "--out", back, "--embed-config",
+                "--include-flags").exit_code == 0
     for name in ("UAV-CAS_stat_cfg.csv", "UAV-CAS_ts_cfg.csv"):
         assert (back / name).read_bytes() == (src / name).read_bytes(), name
 

@@ -59,7 +59,8 @@ def test_guest_writes_only_its_output_folder(tmp_path):
             "except OSError as e:\n"
             "    (out / 'root').write_text(f'refused {e.errno}')\n"
             "pathlib.Path('/tmp/scratch').write_text('x')\n"
-            "(out / 'tmp').write_text(str(os.statvfs('/tmp').f_fsid) + ' ' + pathlib.Path('/tmp/scratch').read_text())\n")
+            "(out / 'tmp').write_text(str(os.statvfs('/tmp').f_fsid) + ' ' + "
+            "pathlib.Path('/tmp/scratch').read_text())\n")
     out = tmp_path / "out"
     out.mkdir()
     run = vm.run_in_vm(lambda accel: ["-c", code], out, timeout_s=vm.TIMEOUT_S)

@@ -18,7 +18,7 @@ kernel/drivers/virtio/virtio_ring.ko:
 kernel/drivers/virtio/virtio_pci.ko: kernel/drivers/virtio/virtio_pci_legacy_dev.ko kernel/drivers/virtio/virtio_pci_modern_dev.ko kernel/drivers/virtio/virtio.ko kernel/drivers/virtio/virtio_ring.ko
 kernel/drivers/virtio/virtio_pci_legacy_dev.ko:
 kernel/drivers/virtio/virtio_pci_modern_dev.ko:
-"""
+"""  # noqa: E501 (modules.dep lines: one module per line, they cannot wrap)
 
 
 def test_module_chain_puts_every_dependency_first_once():

@@ -39,7 +39,8 @@ def runs(tmp_path_factory) -> dict[str, RunDir]:
     extra = {"mixed": ["--video-kbps", str(MIXED_VIDEO_KBPS)], "video": ["--video-kbps", str(VIDEO_KBPS)]}
     for pl, args in extra.items():
         r = subprocess.run([sys.executable, "-m", "uavcas.cli", "run", CFG.format(payload=pl), "--seed", str(SEED),
-                            "--windows", "4", "--out", str(base / pl), *args], capture_output=True, text=True, timeout=240)
+                            "--windows", "4", "--out", str(base / pl), *args], capture_output=True, text=True,
+                           timeout=240)
         assert r.returncode == 0, f"{pl}: {(r.stdout + r.stderr)[-2000:]}"
     return {pl: RunDir(base / pl) for pl in extra}
 
@@ -128,7 +129,8 @@ def test_streams_at_their_configured_rates_in_the_capture_table(run):
         sent = table[(table.src_ip == uav.ip) & (table.point == f"s-{uav.name}")]
         counts = message_counts(sent)
         for name, hz in want.items():
-            per_s = counts[counts.msg_name == name].set_index("second").messages.reindex(range(first, last), fill_value=0)
+            per_s = counts[counts.msg_name == name].set_index("second").messages.reindex(range(first, last),
+                                                                                         fill_value=0)
             assert abs(per_s.mean() - hz) <= 0.1 * hz, (uav.name, name, per_s.tolist())
 
 

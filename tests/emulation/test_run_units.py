@@ -119,7 +119,8 @@ def test_cli_run_into_a_foreign_dir_is_one_line_exit_2(tmp_path, monkeypatch):
 
 
 def test_cli_bad_config_is_one_line_exit_2(tmp_path):
-    r = CliRunner().invoke(app, ["run", "dos=abc-5-2-image-logdist-adaptive-random-30-95", "--out", str(tmp_path / "r")])
+    r = CliRunner().invoke(app,
+                           ["run", "dos=abc-5-2-image-logdist-adaptive-random-30-95", "--out", str(tmp_path / "r")])
     assert r.exit_code == 2 and "error" in r.output and not (tmp_path / "r").exists()
 
 

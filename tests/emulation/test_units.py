@@ -93,7 +93,8 @@ def test_impossible_override_is_rejected_not_looped():
     fwd = compute(NODES, links, wormholes=[("uav0", "uav1", "bs0")], routes=[["uav0", "uav3", "bs0"]])
     assert fwd.path("uav0", "bs0") == ["uav0", "bs0"] and fwd.detours == ()
     assert fwd.rejected == ["route uav0>uav3>bs0", "route bs0>uav3>uav0", "wormhole uav0>uav1>bs0"]
-    bad_hops = compute(NODES, links + [("uav1", "bs0")], wormholes=[Detour("uav0", "uav1", "bs0", ("uav0", "uav1", "bs0"))])
+    bad_hops = compute(NODES, links + [("uav1", "bs0")],
+                       wormholes=[Detour("uav0", "uav1", "bs0", ("uav0", "uav1", "bs0"))])
     assert bad_hops.detours == () and bad_hops.rejected == ["wormhole uav0>uav1>bs0"]  # uav0-uav1 is no link
 
 

@@ -208,7 +208,8 @@ class BasicFlow:
     flow_length_stats: SummaryStatistics = field(default_factory=SummaryStatistics)
     flow_active: SummaryStatistics = field(default_factory=SummaryStatistics)
     flow_idle: SummaryStatistics = field(default_factory=SummaryStatistics)
-    flag_counts: dict = field(default_factory=lambda: dict.fromkeys(("FIN", "SYN", "RST", "PSH", "ACK", "URG", "CWR", "ECE"), 0))
+    flag_counts: dict = field(default_factory=lambda: dict.fromkeys(("FIN", "SYN", "RST", "PSH", "ACK", "URG", "CWR",
+                                                                     "ECE"), 0))
     forward: list = field(default_factory=list)
     backward: list = field(default_factory=list)
     forward_bytes: int = 0

@@ -48,7 +48,8 @@ def test_timeouts_defaults_and_cap(tmp_path):
     cap = extract_flows([path], FlowConfig(max_packets=4, **WHOLE)).frame
     assert cap.packets.tolist() == [4] and cap.duration_s.iloc[0] == pytest.approx(200)
     long = [udp(t, A, B, 1, 2) for t in np.arange(0, 300, 10.0)]  # 10 s apart for 300 s
-    assert extract_flows([write(tmp_path / "l.pcap", long)], FlowConfig(**CIC_RULES)).frame.packets.tolist() == [13, 13, 4]
+    assert extract_flows([write(tmp_path / "l.pcap", long)],
+                         FlowConfig(**CIC_RULES)).frame.packets.tolist() == [13, 13, 4]
 
 
 def test_direction_initiator_and_synack_first(tmp_path):
@@ -103,7 +104,8 @@ def test_vantage_point_keeps_transmissions_that_missed_it(tmp_path):
     fr = flows_of(packets, cfg, transmissions=tid)
     assert fr.frame.packets.tolist() == [8]  # every transmission once
     kept = fr.flows.order
-    assert sorted(packets.points[i] for i in packets["point"][kept]) == ["s-a"] * 6 + ["s-b"] * 2  # copies at their last point
+    assert sorted(packets.points[i]
+                  for i in packets["point"][kept]) == ["s-a"] * 6 + ["s-b"] * 2  # copies at their last point
     with pytest.raises(ValueError, match="one id per packet"):
         flows_of(packets, cfg, transmissions=tid[:-1])
 

@@ -59,7 +59,8 @@ def compare(pcap) -> tuple[int, int]:
     df = df[df.protocol.isin([6, 17])]
     ours = {}
     for row in df.to_dict("records"):
-        k = _key(row["src_ip"], row["src_port"], row["dst_ip"], row["dst_port"], row["protocol"], row["first_ts_ns"] // 1000)
+        k = _key(row["src_ip"], row["src_port"], row["dst_ip"], row["dst_port"], row["protocol"],
+                 row["first_ts_ns"] // 1000)
         if k[:5] not in fragmented:
             assert k not in ours, k
             ours[k] = row
@@ -78,7 +79,8 @@ def compare(pcap) -> tuple[int, int]:
 
 
 @pytest.mark.shared
-@pytest.mark.parametrize("name", [f"nfstream-tests/{n}" for n in NFSTREAM_PCAPS] + ["lwerdna-filesamples/simple_http.pcap"])
+@pytest.mark.parametrize("name",
+                         [f"nfstream-tests/{n}" for n in NFSTREAM_PCAPS] + ["lwerdna-filesamples/simple_http.pcap"])
 def test_cic_flows_equal_cicflowmeter_on_real_captures(shared_data, name):
     pcap = shared_data / "pcaps" / name
     if name.startswith("nfstream-tests/"):  # every capture of the folder is listed here
@@ -96,7 +98,8 @@ def _built_capture() -> list:
     #    closes; the client's last ACK is a one-packet flow (not written)
     s = 40002
     pk += [tcp(1.000, A, B, s, 80, "S", seq=100), tcp(1.010, B, A, 80, s, "SA", seq=900, ack=101),
-           tcp(1.020, A, B, s, 80, "PA", b"q" * 30, seq=101, ack=901), tcp(1.030, B, A, 80, s, "PA", b"r" * 700, seq=901, ack=131),
+           tcp(1.020, A, B, s, 80, "PA", b"q" * 30, seq=101, ack=901),
+           tcp(1.030, B, A, 80, s, "PA", b"r" * 700, seq=901, ack=131),
            tcp(1.040, A, B, s, 80, "FA", seq=131, ack=1601), tcp(1.540, A, B, s, 80, "FA", seq=131, ack=1601),
            tcp(1.545, B, A, 80, s, "A", seq=1601, ack=132), tcp(7.000, B, A, 80, s, "FA", seq=1601, ack=132),
            tcp(7.010, A, B, s, 80, "A", seq=132, ack=1602)]  # fmt: skip
@@ -134,8 +137,8 @@ def test_cic_flows_equal_cicflowmeter_on_a_built_capture(tmp_path):
     pcap = write(tmp_path / "cic_cases.pcap", _built_capture())
     flows, _ = compare(pcap)
     got = extract_flows([pcap], CIC, sequences=False).frame
-    # the cases are there: appendix flow (1), the client-first close (2), both RST flows (3), SYN-ACK first (4), three UDP flows
-    # cut by the flow timeout (5), the zero-duration flow (6); no one-packet flow is written
+    # the cases are there: appendix flow (1), the client-first close (2), both RST flows (3), SYN-ACK first (4), three
+    # UDP flows cut by the flow timeout (5), the zero-duration flow (6); no one-packet flow is written
     assert flows == 2 + 1 + 2 + 1 + 3 + 1 and (got.packets >= 2).all()
     by_port = Counter(zip(got.src_port, got.dst_port))
     assert by_port[(40001, 80)] == 2 and by_port[(443, 40005)] == 1 and by_port[(5353, 5000)] == 3

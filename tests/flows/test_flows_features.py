@@ -62,7 +62,8 @@ def test_cic_active_idle_single_packet_and_flags(tmp_path):
     pk = [udp(t, A, B, 1000, 2000, size=10) for t in (0, 1, 2, 8, 9, 20, 21)] + [udp(30, B, C, 9, 9, size=0)]
     pk += [tcp(40, A, C, 5, 6, "SE"), tcp(40.5, C, A, 6, 5, "AC")]  # ECE 0x40 / CWR 0x80 flags
     # min_packets=1: CICFlowMeter writes no one-packet flow, but the other policies do, with these features
-    df = extract_flows([write(tmp_path / "i.pcap", pk)], FlowConfig(termination="cic", min_packets=1)).frame.set_index("src_port")
+    df = extract_flows([write(tmp_path / "i.pcap", pk)],
+                       FlowConfig(termination="cic", min_packets=1)).frame.set_index("src_port")
     assert 9 not in extract_flows([write(tmp_path / "i2.pcap", pk)], CIC_RULES).frame.src_port.tolist()
     r = df.loc[1000]
     # idle gaps > 5 s: 6 s and 11 s; the active stretches before them: 0->2 s and 8->9 s; the last
@@ -83,7 +84,8 @@ def test_paper_standard_by_hand(tmp_path):
     pk = [udp(0.0, b, a, 7, 8, size=100), udp(0.1, a, b, 8, 7, size=200), udp(0.3, b, a, 7, 8, size=100),
           udp(0.6, b, a, 7, 8, size=50)]  # fmt: skip
     pk += [tcp(1.0, A, C, 5, 6, "SE"), tcp(1.5, C, A, 6, 5, "AC")]
-    df = extract_flows([write(tmp_path / "p.pcap", pk)], FlowConfig(view="hostpair", min_packets=1), standard="paper").frame
+    df = extract_flows([write(tmp_path / "p.pcap", pk)], FlowConfig(view="hostpair", min_packets=1),
+                       standard="paper").frame
     assert list(df.columns[-47:]) == list(PAPER_FEATURES) and df.attrs["feature_standard"] == "paper"
     r = df.set_index("src_ip").loc[b]
     t = np.array([T0 + x for x in (0.0, 0.1, 0.3, 0.6)])  # float epoch seconds, as tshark's

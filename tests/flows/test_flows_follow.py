@@ -55,14 +55,17 @@ def _table(rows: list[dict]) -> PacketTable:
                 "ip_version": 4, "ip_len": r.get("len", 142) - 14,
                 "src_hi": shi, "src_lo": slo, "dst_hi": dhi, "dst_lo": dlo, "sport": r.get("sport", 5000),
                 "dport": r.get("dport", 6000), "proto": r.get("proto", 17), "tcp_flags": r.get("flags", 0),
-                "ttl": r.get("ttl", 64), "ip_id": r.get("id", 0), "tcp_seq": r.get("seq", 0), "tcp_ack": r.get("ack", 0), "ip_hdr_len": 20,
+                "ttl": r.get("ttl", 64), "ip_id": r.get("id", 0), "tcp_seq": r.get("seq", 0),
+                "tcp_ack": r.get("ack", 0), "ip_hdr_len": 20,
                 "l4_hdr_len": 8, "frame_index": k, "point": NAMES.index(r["at"]), **QUOTE_ZERO}
         for c in COLUMNS:
             cols[c].append(vals[c])
-    dtypes = {"ts_ns": np.int64, "ip_len": np.uint32, "frame_len": np.uint32, "cap_len": np.uint32, "ip_version": np.uint8,
+    dtypes = {"ts_ns": np.int64, "ip_len": np.uint32, "frame_len": np.uint32, "cap_len": np.uint32,
+              "ip_version": np.uint8,
               "src_hi": np.uint64, "src_lo": np.uint64, "dst_hi": np.uint64, "dst_lo": np.uint64,
               "sport": np.uint16, "dport": np.uint16, "proto": np.uint8, "tcp_flags": np.uint16, "ttl": np.uint8,
-              "ip_id": np.uint32, "tcp_seq": np.uint32, "tcp_ack": np.uint32, "ip_hdr_len": np.uint16, "l4_hdr_len": np.uint16,
+              "ip_id": np.uint32, "tcp_seq": np.uint32, "tcp_ack": np.uint32, "ip_hdr_len": np.uint16,
+              "l4_hdr_len": np.uint16,
               "frame_index": np.int64, "point": np.int16, **{c: empty_columns()[c].dtype for c in QUOTE_COLUMNS},
               "mav_msgid": np.int32}
     return PacketTable({c: np.array(v, dtype=dtypes[c]) for c, v in cols.items()}, POINTS)

@@ -38,15 +38,18 @@ TSHARK_FIELDS = ("frame.time_epoch", "frame.len", "ip.src", "ip.dst", "tcp.srcpo
 
 def _tshark_flows(pcap) -> pd.DataFrame:
     """The paper's pipeline, written independently: tshark fields -> pandas 5-tuple flows."""
-    cmd = ["tshark", "-n", "-r", str(pcap), "-Y", "ip && !icmp", "-T", "fields", "-E", "separator=,", "-E", "occurrence=f"]
+    cmd = ["tshark", "-n", "-r", str(pcap), "-Y", "ip && !icmp", "-T", "fields", "-E", "separator=,", "-E",
+           "occurrence=f"]
     for f in TSHARK_FIELDS:
         cmd += ["-e", f]
     out = subprocess.run(cmd, capture_output=True, text=True, check=True, timeout=60).stdout
     rows = [line.split(",") for line in out.splitlines() if line]
     df = pd.DataFrame(rows, columns=list(TSHARK_FIELDS))
     df["t"] = df["frame.time_epoch"].astype(float)
-    df["sp"] = pd.to_numeric(df["tcp.srcport"].where(df["tcp.srcport"] != "", df["udp.srcport"]), errors="coerce").fillna(0).astype(int)
-    df["dp"] = pd.to_numeric(df["tcp.dstport"].where(df["tcp.dstport"] != "", df["udp.dstport"]), errors="coerce").fillna(0).astype(int)
+    df["sp"] = pd.to_numeric(df["tcp.srcport"].where(df["tcp.srcport"] != "", df["udp.srcport"]),
+                             errors="coerce").fillna(0).astype(int)
+    df["dp"] = pd.to_numeric(df["tcp.dstport"].where(df["tcp.dstport"] != "", df["udp.dstport"]),
+                             errors="coerce").fillna(0).astype(int)
     df["fl"] = df["tcp.flags"].map(lambda s: int(s, 16) if s else 0)
     a = list(zip(df["ip.src"], df.sp))
     b = list(zip(df["ip.dst"], df.dp))

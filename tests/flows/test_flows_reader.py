@@ -19,7 +19,8 @@ from uavcas.flows import CaptureError, read_packets
 
 
 def test_ethernet_ipv4_fields(tmp_path):
-    pk = [tcp(0.5, A, B, 1234, 80, "PA", b"abc", seq=77, ttl=33, ip_id=4242), udp(1.0, B, A, 53, 999, size=10), icmp(2.0, A, B)]
+    pk = [tcp(0.5, A, B, 1234, 80, "PA", b"abc", seq=77, ttl=33, ip_id=4242), udp(1.0, B, A, 53, 999, size=10),
+          icmp(2.0, A, B)]
     t = read_packets([write(tmp_path / "x.pcap", pk)]).to_pandas()
     assert list(t.src_ip) == [A, B, A] and list(t.dst_ip) == [B, A, B]
     assert list(t.proto) == [6, 17, 1]
@@ -183,7 +184,8 @@ def test_fragments_join_their_datagram_and_orphans_are_counted(tmp_path):
     assert fr.packets.tolist() == [len(d1) + len(d2) + 1] and fr.src_port.tolist() == [4001]
     # across blocks: the same answer when the file is read a few records at a time
     small = read_packets([path], chunk_bytes=700)
-    assert small.stats[0].orphan_fragments == len(d3) - 1 and sorted(small["ts_ns"].tolist()) == sorted(t["ts_ns"].tolist())
+    assert small.stats[0].orphan_fragments == len(d3) - 1
+    assert sorted(small["ts_ns"].tolist()) == sorted(t["ts_ns"].tolist())
 
 
 def test_timestamps_are_exact_integer_nanoseconds(tmp_path):

@@ -128,7 +128,8 @@ def test_cic_closes_at_the_first_backward_fin_and_drops_a_second_forward_fin(tmp
     pk = [tcp(0, A, B, 1, 2, "S"), tcp(0.1, B, A, 2, 1, "SA"), tcp(0.2, A, B, 1, 2, "FA"), tcp(0.3, B, A, 2, 1, "A"),
           tcp(0.4, B, A, 2, 1, "R"), tcp(0.5, A, B, 1, 2, "A"), tcp(0.6, A, B, 1, 2, "R"), tcp(0.7, B, A, 2, 1, "A")]
     assert flows(tmp_path, pk, CIC, name="r.pcap").packets.tolist() == [5, 2]  # the lone last ACK is not written
-    assert flows(tmp_path, [tcp(0, A, B, 1, 2, "R"), tcp(0.1, A, B, 1, 2, "R")], CIC, name="r1.pcap").packets.tolist() == [2]
+    assert flows(tmp_path, [tcp(0, A, B, 1, 2, "R"), tcp(0.1, A, B, 1, 2, "R")], CIC,
+                 name="r1.pcap").packets.tolist() == [2]
 
 
 def test_cic_flow_timeout_keeps_the_orientation_and_counts_the_first_packet_forward(tmp_path):
@@ -154,7 +155,8 @@ def test_cic_all_47_features_of_a_syn_ack_first_flow_by_hand(tmp_path):
     expect = {
         "Flow Duration": 50_000, "Flow Bytes/s": 400 / 0.05, "Flow Packets/s": 4 / 0.05,
         "Flow IAT Mean": iat.mean(), "Flow IAT Std": iat.std(ddof=1), "Flow IAT Max": 30_000, "Flow IAT Min": 10_000,
-        "Min Packet Length": 0, "Max Packet Length": 300, "Packet Length Mean": 80, "Packet Length Std": lens.std(ddof=1),
+        "Min Packet Length": 0, "Max Packet Length": 300, "Packet Length Mean": 80,
+        "Packet Length Std": lens.std(ddof=1),
         "Packet Length Variance": 17_000, "FIN Flag Count": 0, "SYN Flag Count": 1, "RST Flag Count": 0,
         "PSH Flag Count": 1, "ACK Flag Count": 4, "URG Flag Count": 0, "CWE Flag Count": 0, "ECE Flag Count": 0,
         "Down/Up Ratio": 1, "Average Packet Size": 100, "Active Mean": 0, "Idle Mean": 0, "Idle Max": 0,

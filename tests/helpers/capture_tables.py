@@ -14,7 +14,8 @@ HOP_S = 0.001
 _DTYPES = {"ts_ns": np.int64, "ip_len": np.uint32, "frame_len": np.uint32, "cap_len": np.uint32, "ip_version": np.uint8,
            "src_hi": np.uint64, "src_lo": np.uint64, "dst_hi": np.uint64, "dst_lo": np.uint64, "sport": np.uint16,
            "dport": np.uint16, "proto": np.uint8, "tcp_flags": np.uint16, "ttl": np.uint8, "ip_id": np.uint32,
-           "tcp_seq": np.uint32, "tcp_ack": np.uint32, "ip_hdr_len": np.uint16, "l4_hdr_len": np.uint16, "frame_index": np.int64,
+           "tcp_seq": np.uint32, "tcp_ack": np.uint32, "ip_hdr_len": np.uint16, "l4_hdr_len": np.uint16,
+           "frame_index": np.int64,
            "point": np.int16, **{c: empty_columns()[c].dtype for c in QUOTE_COLUMNS},
            "mav_msgid": np.int32}
 QUOTE_ZERO = {**{c: 0 for c in QUOTE_COLUMNS}, "mav_msgid": -1}  # TCP only: no ICMP error quotes a packet
@@ -29,7 +30,8 @@ def table(obs: list[dict], ips: dict[str, str] = IPS) -> PacketTable:
         dhi, dlo = address_to_words(ips[o["dst"]])
         udp = o.get("proto", 6) == 17
         length = (42 if udp else 54) + o.get("payload", 0)
-        vals = {"ts_ns": round(T0) * 10**9 + round(o["t"] * 1e9), "frame_len": length, "cap_len": length, "ip_version": 4,
+        vals = {"ts_ns": round(T0) * 10**9 + round(o["t"] * 1e9), "frame_len": length, "cap_len": length,
+                "ip_version": 4,
                 "ip_len": length - 14, "src_hi": shi, "src_lo": slo, "dst_hi": dhi, "dst_lo": dlo,
                 "sport": o["sport"], "dport": o["dport"], "proto": o.get("proto", 6), "tcp_flags": o.get("flags", 0),
                 "ttl": o.get("ttl", 64), "ip_id": o["id"], "tcp_seq": o.get("seq", 0), "tcp_ack": o.get("ack", 0),

@@ -62,7 +62,8 @@ def table(packets: list[dict]) -> PacketTable:
     return PacketTable({c: np.array(v, dtype=dtypes[c]) for c, v in cols.items()}, POINTS)
 
 
-def window(family: str, attacker: str, victim: str, start_s: float, stop_s: float, aid: str | None = None) -> AttackWindow:
+def window(family: str, attacker: str, victim: str, start_s: float, stop_s: float,
+           aid: str | None = None) -> AttackWindow:
     return AttackWindow(attack_id=aid or f"{family}-0", family=family, attacker_ips=(IPS[attacker],),
                         victim_ips=(IPS[victim],), start_unix=T0 + start_s, stop_unix=T0 + stop_s)
 
@@ -87,7 +88,8 @@ def rows_of(ctx: TruthContext, p: dict) -> np.ndarray:
     shi, slo = address_to_words(IPS[p["src"]])
     hit = (t["src_lo"] == np.uint64(slo)) & (t["dst_lo"] == np.uint64(address_to_words(IPS[p["dst"]])[1]))
     hit &= (t["sport"] == p["sport"]) & (t["dport"] == p["dport"]) & (t["proto"] == p["proto"])
-    hit &= (t["tcp_flags"] == p["flags"]) & (t["tcp_seq"] == p["seq"]) & (t["ip_id"] == p["ip_id"]) & (t["ttl"] == p["ttl"])
+    hit &= ((t["tcp_flags"] == p["flags"]) & (t["tcp_seq"] == p["seq"]) & (t["ip_id"] == p["ip_id"])
+            & (t["ttl"] == p["ttl"]))
     hit &= np.abs(t["ts_s"] - (T0 + p["t"])) < 0.5 * 1e-3 + len(p["at"]) * HOP_S
     assert hit.sum() == len(p["at"]), p
     return hit

@@ -89,7 +89,8 @@ def write_pcapng(path: Path, packets) -> Path:
 
 
 def sll(t, src, dst, sport, dport, flags):
-    return tcp(t, src, dst, sport, dport, flags, l2=lambda: CookedLinux(proto=0x0800, pkttype=0, lladdrtype=1, lladdrlen=6))
+    return tcp(t, src, dst, sport, dport, flags,
+               l2=lambda: CookedLinux(proto=0x0800, pkttype=0, lladdrtype=1, lladdrlen=6))
 
 
 def vlan_tcp(t, src, dst, sport, dport, flags):

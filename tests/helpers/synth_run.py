@@ -75,10 +75,12 @@ def http_session(t, client, server, sport, ip_id0=100):
         _pkt(t, client, server, sport, 80, "S", c, ip_id=ip_id0),
         _pkt(t + 0.01, server, client, 80, sport, "SA", s, c + 1, ip_id=ip_id0 + 1),
         _pkt(t + 0.02, client, server, sport, 80, "A", c + 1, s + 1, ip_id=ip_id0 + 2),
-        _pkt(t + 0.03, client, server, sport, 80, "PA", c + 1, s + 1, b"GET /img.jpg HTTP/1.1\r\n\r\n", ip_id=ip_id0 + 3),
+        _pkt(t + 0.03, client, server, sport, 80, "PA", c + 1, s + 1, b"GET /img.jpg HTTP/1.1\r\n\r\n",
+             ip_id=ip_id0 + 3),
     ]
     for k in range(4):
-        pk.append(_pkt(t + 0.05 + 0.02 * k, server, client, 80, sport, "A", s + 1 + 1000 * k, c + 26, b"x" * 1000, ip_id=ip_id0 + 4 + k))
+        pk.append(_pkt(t + 0.05 + 0.02 * k, server, client, 80, sport, "A", s + 1 + 1000 * k, c + 26, b"x" * 1000,
+                       ip_id=ip_id0 + 4 + k))
     pk.append(_pkt(t + 0.14, client, server, sport, 80, "A", c + 26, s + 4001, ip_id=ip_id0 + 8))
     pk.append(_pkt(t + 0.15, server, client, 80, sport, "FA", s + 4001, c + 26, ip_id=ip_id0 + 9))
     pk.append(_pkt(t + 0.16, client, server, sport, 80, "FA", c + 26, s + 4002, ip_id=ip_id0 + 10))
@@ -99,19 +101,23 @@ def make_plan(wormhole: bool = False) -> Plan:
     ]
     windows = [
         Window(index=k, t_s=5.0 * k, duration_s=5.0, positions={n: (0.0, 0.0, 50.0) for n in names},
-               links=[_link(a, b) for a, b in LINKS] + ([_link("uav0", "uav2", detour=True)] if wormhole and k == 0 else []),
+               links=[_link(a, b) for a, b in LINKS]
+               + ([_link("uav0", "uav2", detour=True)] if wormhole and k == 0 else []),
                routes=[],
                wormholes=[WormholeOverride(victim="uav0", attacker="uav2", bs="bs0", hops=["uav0", "uav2", "bs0"])]
                if wormhole and k == 0 else [])
         for k in range(12)
     ]
     attacks = [
-        dict(attack_id="dos-0", family="dos", attackers=["uav1"], victims=["uav0"], start_s=DOS_WINDOW[0], stop_s=DOS_WINDOW[1], params={"interval_us": 1000}),
+        dict(attack_id="dos-0", family="dos", attackers=["uav1"], victims=["uav0"], start_s=DOS_WINDOW[0],
+             stop_s=DOS_WINDOW[1], params={"interval_us": 1000}),
         dict(attack_id="replay-0", family="replay", attackers=["uav2"], victims=["uav3"], start_s=10.0, stop_s=20.0),
-        dict(attack_id="blackhole-0", family="blackhole", attackers=["uav2"], victims=["uav3"], start_s=BLACKHOLE_WINDOW[0], stop_s=BLACKHOLE_WINDOW[1]),
+        dict(attack_id="blackhole-0", family="blackhole", attackers=["uav2"], victims=["uav3"],
+             start_s=BLACKHOLE_WINDOW[0], stop_s=BLACKHOLE_WINDOW[1]),
     ]
     # read as a plan.json of the time before attacks carried specs: the families fill them in
-    return plan_from_data(dict(config=CONFIG, seed=7, window_s=5.0, profile="test", area_m=(1000.0, 1000.0, 30.0, 110.0),
+    return plan_from_data(dict(config=CONFIG, seed=7, window_s=5.0, profile="test",
+                               area_m=(1000.0, 1000.0, 30.0, 110.0),
                                nodes=nodes, windows=windows, attacks=attacks))
 
 
@@ -152,7 +158,8 @@ def build_run(run_dir: Path, run_id: str = "run-synth") -> Path:
             pkts.append(_pkt(t + 0.001, "uav0", "uav1", 80, sp, "SA", 9, 78 + i, ip_id=6000 + i))
             pkts.append(_pkt(t + 0.002, "uav1", "uav0", sp, 80, "R", 78 + i, ip_id=7000 + i))
     # Replay: re-send the uav3 -> bs0 data segments of the session at 12 (ttl - 5, seq + k).
-    orig = [p for p in http_session(12, "bs0", "uav3", 41001, ip_id0=1100) if p[IP].src == IPS["uav3"] and len(p[TCP].payload)][:3]
+    orig = [p for p in http_session(12, "bs0", "uav3", 41001, ip_id0=1100)
+            if p[IP].src == IPS["uav3"] and len(p[TCP].payload)][:3]
     injects, injected = [], []
     for k, o in enumerate(orig):
         r = o.copy()

@@ -22,7 +22,8 @@ from uavcas.ids.results import RESULT_COLUMNS
 from uavcas.ids.splits import grouped_split
 
 runner = CliRunner()
-NEEDS_TORCH = pytest.mark.skipif(importlib.util.find_spec("torch") is None, reason="PyTorch not installed (pip install '.[dl]')")
+NEEDS_TORCH = pytest.mark.skipif(importlib.util.find_spec("torch") is None,
+                                 reason="PyTorch not installed (pip install '.[dl]')")
 
 
 def _read(path):
@@ -82,7 +83,8 @@ def test_multiclass_all_ten_models(synth_dir, tmp_path):
 
 def test_binary_dos_is_separable(synth_dir, tmp_path):
     df = _bench(synth_dir, tmp_path, "--protocol", "binary", "--models", "lr,rf", "--scaler", "robust")
-    assert (_overall(df, "f1_weighted")[["LR", "RF"]] > 0.97).all() and (_overall(df, "f1_macro")[["LR", "RF"]] > 0.95).all()
+    assert (_overall(df, "f1_weighted")[["LR",
+                                         "RF"]] > 0.97).all() and (_overall(df, "f1_macro")[["LR", "RF"]] > 0.95).all()
     assert (_overall(df, "auroc") > 0.99).all() and (_overall(df, "pr_auc") > 0.95).all()
     assert set(_read(tmp_path / "confusion_RF.csv").columns[1:]) == {"Benign", "DoS"}
 
@@ -106,7 +108,8 @@ def test_all_protocols_one_leaderboard(synth_dir, tmp_path):
     assert r.exit_code == 0, r.output
     again = _read(tmp_path / "lb" / "leaderboard.csv")
     key = ["protocol", "model", "metric", "class"]
-    pd.testing.assert_frame_equal(again.sort_values(key).reset_index(drop=True), lb.sort_values(key).reset_index(drop=True))
+    pd.testing.assert_frame_equal(again.sort_values(key).reset_index(drop=True),
+                                  lb.sort_values(key).reset_index(drop=True))
 
 
 def test_indistinguishable_class_auroc_near_chance(synth_df):

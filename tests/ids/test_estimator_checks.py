@@ -16,7 +16,8 @@ from uavcas.ids import baseline, detectors
 
 HAS_TORCH = importlib.util.find_spec("torch") is not None
 DEEP = tuple(s.name for s in detectors() if s.needs_torch)
-FAST = {"mlp": {"batch_size": 16, "max_iter": 20}, **{d: {"batch_size": 16, "epochs": 20, "n_threads": 1} for d in DEEP}}
+FAST = {"mlp": {"batch_size": 16, "max_iter": 20},
+        **{d: {"batch_size": 16, "epochs": 20, "n_threads": 1} for d in DEEP}}
 # every registered detector but the context ablation (one class for the four context variants:
 # they differ in the columns they select by name, and an array without names is taken whole)
 NAMES = tuple(s.name for s in detectors()

@@ -16,7 +16,8 @@ from uavcas.ids.protocols import BenchConfig, run_protocol
 from uavcas.ids.splits import DegenerateSplitError, grouped_split, runs_per_class
 
 
-@pytest.mark.parametrize("col", schema.METADATA_COLUMNS + schema.SEQUENCE_COLUMNS + schema.COUNT_COLUMNS + ("config_idx",))
+@pytest.mark.parametrize("col",
+                         schema.METADATA_COLUMNS + schema.SEQUENCE_COLUMNS + schema.COUNT_COLUMNS + ("config_idx",))
 def test_metadata_is_refused(col):
     with pytest.raises(MetadataLeakError):
         check_feature_columns(list(FEATURES[:3]) + [col])

@@ -28,7 +28,8 @@ def _table(obs: list[dict]) -> PacketTable:
         rows.append({"ts_ns": round(T0) * 10**9 + round(o["t"] * 1e9), "frame_len": length, "cap_len": length,
                      "ip_version": 4, "ip_len": length - 14, "src_hi": shi, "src_lo": slo, "dst_hi": dhi,
                      "dst_lo": dlo, "sport": o["sport"], "dport": o["dport"], "proto": 6, "tcp_flags": o["flags"],
-                     "ttl": 64, "ip_id": o.get("id", k), "tcp_seq": 100, "ip_hdr_len": 20, "l4_hdr_len": 20, "frame_index": k,
+                     "ttl": 64, "ip_id": o.get("id", k), "tcp_seq": 100, "ip_hdr_len": 20, "l4_hdr_len": 20,
+                     "frame_index": k,
                      "point": POINTS.index(o["at"])})  # fmt: skip
     return table_from_rows(rows, POINTS)
 
@@ -50,7 +51,8 @@ def _case():
         add("blackhole", "blackhole", t=7.0 + 0.5 * k, at="s-uav0", src="bs0", dst="uav0", sport=80, dport=5000,
             flags=PSH | ACK, payload=100)
     for at in ("s-uav3", "s-bs0"):
-        add("benign", None, t=1.0 + (at == "s-bs0") * 1e-4, at=at, src="uav3", dst="bs0", sport=6000, dport=80, flags=SYN)
+        add("benign", None, t=1.0 + (at == "s-bs0") * 1e-4, at=at, src="uav3", dst="bs0", sport=6000, dport=80,
+            flags=SYN)
         add("benign", None, t=1.01 + (at == "s-uav3") * 1e-4, at=at, src="bs0", dst="uav3", sport=80, dport=6000,
             flags=SYN | ACK)
     p = _table(obs)
@@ -76,12 +78,14 @@ def test_two_families_on_one_victim_in_one_window(episodes):
     assert episodes.loc[("uav0", 3)].label == "DoS" and episodes.loc[("uav1", 1)].label == "DoS"
     assert episodes.loc[("bs0", 1)].label == "Blackhole"
     assert episodes.loc[("uav3", 0)].label == "Benign" and episodes.loc[("uav3", 0)].attack_packets == 0
-    assert sorted(episodes.index) == [("bs0", 0), ("bs0", 1), ("uav0", 1), ("uav0", 3), ("uav1", 1), ("uav1", 3), ("uav3", 0)]
+    assert sorted(episodes.index) == [("bs0", 0), ("bs0", 1), ("uav0", 1), ("uav0", 3), ("uav1", 1), ("uav1", 3),
+                                      ("uav3", 0)]
 
 
 def test_a_packet_seen_at_two_switches_counts_once(episodes):
     b = episodes.loc[("uav3", 0)]
-    assert (b.packets, b.packets_out, b.packets_in, b.syn_out, b.synack_in, b.flows, b.flows_out) == (2, 1, 1, 1, 1, 1, 1)
+    assert (b.packets, b.packets_out, b.packets_in, b.syn_out, b.synack_in, b.flows,
+            b.flows_out) == (2, 1, 1, 1, 1, 1, 1)
     assert (b.bytes_out, b.bytes_in) == (54, 54)
 
 
@@ -150,7 +154,8 @@ def test_route_columns_summarise_the_episodes_own_packets():
     v = df.loc[("uav3", 2)]
     assert (v.ctx_pkt_route_lonely_max, v.ctx_pkt_route_lonely_frac) == (pytest.approx(0.5), pytest.approx(0.5))
     assert v.ctx_pkt_path_len_shift == pytest.approx(0.47)  # one switch more on the 47 detoured of its 100
-    assert df.loc[("uav3", 0), "ctx_pkt_route_lonely_max"] == 0.0 and df.loc[("uav0", 2), "ctx_pkt_route_lonely_max"] == 0.0
+    assert df.loc[("uav3", 0),
+                  "ctx_pkt_route_lonely_max"] == 0.0 and df.loc[("uav0", 2), "ctx_pkt_route_lonely_max"] == 0.0
     b = df.loc[("bs0", 2)]  # of bs0's three peers, uav3's traffic was half detoured
     assert (b.ctx_pkt_route_lonely_max, b.ctx_pkt_route_lonely_frac) == (pytest.approx(0.5), pytest.approx(50 / 300))
     with pytest.raises(ValueError, match="routes"):

@@ -98,7 +98,8 @@ def test_hostpair_views_labels(synth_run_dir):
     assert len(flood) == 1 and flood.iloc[0].label == "DoS"
     win = _labelled(synth_run_dir, view="window-hostpair", min_attack_fraction=0.0)
     # one flow per host pair per 5 s window (with >= 10 packets): bs0-uav0 in the 6 windows it talks in
-    bu = win[((win.src_ip == IPS["bs0"]) & (win.dst_ip == IPS["uav0"])) | ((win.src_ip == IPS["uav0"]) & (win.dst_ip == IPS["bs0"]))]
+    bu = win[((win.src_ip == IPS["bs0"]) & (win.dst_ip == IPS["uav0"]))
+             | ((win.src_ip == IPS["uav0"]) & (win.dst_ip == IPS["bs0"]))]
     assert len(bu) == 6 and len(set(((bu.first_ts - T0) // 5).astype(int))) == 6
     assert (win.last_ts - win.first_ts < 5.0).all() and (win.src_port == 0).all()
     fl = win[win.label_dos]

@@ -126,7 +126,8 @@ def test_descending_mean_pulls_uavs_down_before_the_floor():
 
 
 def test_gm_fit_recovers_known_parameters():
-    true = GaussMarkovParams(alpha=0.8, mean_speed_mps=4.0, sigma2_mps2=2.0, sigma2_z_mps2=0.25, mean_vz_mps=-0.1, step_s=1.0, sim_step_s=1.0)
+    true = GaussMarkovParams(alpha=0.8, mean_speed_mps=4.0, sigma2_mps2=2.0, sigma2_z_mps2=0.25, mean_vz_mps=-0.1,
+                             step_s=1.0, sim_step_s=1.0)
     m = GaussMarkovMission(100, true, HUGE, 21)
     t = np.arange(0.0, 3000.0, 1.0)
     v = velocities_from_positions(m.positions(t), 1.0)  # positions only, as a real log would be

@@ -52,7 +52,8 @@ def test_trace_interpolates_and_holds():
     m = TraceMission(t, p)
     assert m.n_uav == 1 and m.duration_s == 30.0
     assert np.allclose(m.positions(5.0), [[50, 0, 40]])
-    assert np.allclose(m.positions(np.array([0.0, 20.0, 30.0, 99.0])), [[[0, 0, 40]], [[100, 100, 50]], [[100, 200, 60]], [[100, 200, 60]]])
+    assert np.allclose(m.positions(np.array([0.0, 20.0, 30.0, 99.0])),
+                       [[[0, 0, 40]], [[100, 100, 50]], [[100, 200, 60]], [[100, 200, 60]]])
 
 
 def test_trace_clips_to_the_area_only_when_asked():

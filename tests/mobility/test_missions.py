@@ -95,7 +95,8 @@ def test_mission_streams_differ_by_kind_and_do_not_use_python_hash():
     p = make_mission("random", 2, 0).positions(0.0)
     q = make_mission("random", 2, 0).positions(0.0)
     assert np.array_equal(p, q)
-    assert not np.allclose(make_mission("spiral", 2, 0).positions(0.0)[:, :2], make_mission("grid", 2, 0).positions(0.0)[:, :2])
+    assert not np.allclose(make_mission("spiral", 2, 0).positions(0.0)[:, :2],
+                           make_mission("grid", 2, 0).positions(0.0)[:, :2])
 
 
 def test_paper_defaults_and_altitude_rules():
@@ -184,10 +185,13 @@ def test_legs_draw_speeds_per_leg_and_accelerate():
     z = m.positions(t)[..., 2]
     assert 1.5 < np.std(z) < 4.5 and np.all(np.abs(np.diff(z, axis=0)) < 1.0)  # altitude varies smoothly
     cruise = np.concatenate([f.v[:40] for f in m.flights])
-    assert np.mean(cruise) == pytest.approx(5.0, rel=0.15) and np.std(cruise) / np.mean(cruise) == pytest.approx(0.4, rel=0.3)
+    assert np.mean(cruise) == pytest.approx(5.0,
+                                            rel=0.15) and np.std(cruise) / np.mean(cruise) == pytest.approx(0.4,
+                                                                                                            rel=0.3)
 
 
-@pytest.mark.parametrize("params", [GridParams(), GridParams(speed_mps=4.0, lane_spacing_m=20.0), GridParams(box_m=(100, 100, 500, 300))])
+@pytest.mark.parametrize("params", [GridParams(), GridParams(speed_mps=4.0, lane_spacing_m=20.0),
+                                    GridParams(box_m=(100, 100, 500, 300))])
 def test_grid_flies_at_constant_speed_along_lanes(params):
     m, t, k = _speeds("grid", params)
     v = k.horizontal_speed_mps

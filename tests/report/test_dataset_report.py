@@ -110,7 +110,8 @@ def test_run_table_names_config_seed_classes_verdict_and_links(report, report_ds
 def test_fidelity_columns_are_explained(report):
     _, page = report
     text = page.text("fidelity")
-    for column in ("lost (packets)", "queue tail", "random", "transition", "unexplained", "delay error p50 / p90 / p99 (ms)"):
+    for column in ("lost (packets)", "queue tail", "random", "transition", "unexplained",
+                   "delay error p50 / p90 / p99 (ms)"):
         assert text.count(column) >= 2, column  # the table header and its explanation
     assert "queue-drop counter" in text and "random-loss rule" in text
 

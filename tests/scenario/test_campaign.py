@@ -42,11 +42,13 @@ def test_medium_preset_every_composition_in_four_channel_settings(tmp_path):
     settings = {(s.n_uav, s.pathloss, s.mission, s.tx_dbm) for s in scen}
     assert len(settings) == 4
     assert {s.pathloss for s in scen} == {"logdist", "3gpp"} and {s.tx_dbm for s in scen} == {10, 30}
-    assert {s.mission for s in scen} == {"spiral", "grid", "hover_transit", "random"} and len({s.n_uav for s in scen}) == 4
+    assert {s.mission for s in scen} == {"spiral", "grid", "hover_transit",
+                                         "random"} and len({s.n_uav for s in scen}) == 4
     assert len({(s.pathloss, s.tx_dbm) for s in scen}) == 4
     # every composition in every setting: holding one setting out leaves each composition in 3
     assert Counter((s.axes()["attacks"], s.mission) for s in scen) == Counter({k: 1 for k in
-                                                                                {(c, m) for c in comps for m in {s.mission for s in scen}}})
+                                                                                {(c, m) for c in comps
+                                                                                 for m in {s.mission for s in scen}}})
 
 
 def test_permutation_is_seeded_and_shards_partition_it():

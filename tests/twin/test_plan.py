@@ -82,7 +82,8 @@ def test_plan_json_has_the_documented_fields():
     assert {"name", "kind", "ip"} <= set(d["nodes"][0])
     w = d["windows"][0]
     assert {"t_s", "positions", "links"} <= set(w)
-    assert {"a", "b", "distance_m", "pathloss_db", "snr_db", "mcs", "rate_mbps", "delay_ms", "loss"} <= set(w["links"][0])
+    assert {"a", "b", "distance_m", "pathloss_db", "snr_db", "mcs", "rate_mbps", "delay_ms",
+            "loss"} <= set(w["links"][0])
     (atk,) = d["attacks"]
     assert {"family", "attackers", "victims", "start_s", "stop_s", "params"} <= set(atk)
     assert atk["family"] == "ddos" and len(atk["attackers"]) >= 2
