@@ -19,10 +19,17 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from uavcas import schema
-from uavcas import seeding
+from uavcas import schema, seeding
 from uavcas.atomic import atomic_write_text
-from uavcas.stats.divergence import DEFAULT_BINS, compare_pairwise, compare_pooled, flow_counts, hellinger, jsd, log_bins
+from uavcas.stats.divergence import (
+    DEFAULT_BINS,
+    compare_pairwise,
+    compare_pooled,
+    flow_counts,
+    hellinger,
+    jsd,
+    log_bins,
+)
 
 from .iat import FlowIATs, flow_iats
 from .legacy import legacy_divergence

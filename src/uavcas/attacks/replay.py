@@ -46,8 +46,17 @@ from uavcas.flows.packets import address_to_words
 from uavcas.scenario_model import ScenarioError, SpecBase, choice, int_field
 from uavcas.vocabulary import SEQ_MODES, SeqMode
 
-from .answers import (ANSWER_WITHIN_S, TCP_ACK, TCP_FIN, TCP_RST, TCP_SYN, answers, icmp_errors_quoting,
-                      payload_len, tcp_flags_are)
+from .answers import (
+    ANSWER_WITHIN_S,
+    TCP_ACK,
+    TCP_FIN,
+    TCP_RST,
+    TCP_SYN,
+    answers,
+    icmp_errors_quoting,
+    payload_len,
+    tcp_flags_are,
+)
 from .base import AttackExecutor, AttackFamily, TruthContext
 from .registry import register
 

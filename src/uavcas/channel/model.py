@@ -44,10 +44,10 @@ from scipy.special import ndtr
 from uavcas import seeding
 
 from .airtime import CCA_DBM
-from .linklayer import LinkLayer
 from .fading import KFactorProfile
 from .geometry import LinkGeometry
 from .linkchain import ChainedLinks, LinkChain, Selection
+from .linklayer import LinkLayer
 from .mcs import DEFAULT_MARGIN_DB, McsTable
 from .pathloss import PathLossModel, PathLossProfile, make_pathloss
 from .shadowing import DEFAULT_DECORRELATION_M, GudmundsonShadowing

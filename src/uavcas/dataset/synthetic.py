@@ -25,8 +25,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from uavcas import schema
-from uavcas import seeding
+from uavcas import schema, seeding
 from uavcas.atomic import atomic_dir
 from uavcas.flows.assemble import FlowConfig, assemble
 from uavcas.flows.context import context_frame

@@ -25,8 +25,7 @@ import pandas as pd
 from sklearn.preprocessing import MinMaxScaler, RobustScaler, StandardScaler
 from threadpoolctl import threadpool_limits
 
-from uavcas import schema
-from uavcas import seeding
+from uavcas import schema, seeding
 from uavcas.vocabulary import families_of
 
 from .base import fit_model

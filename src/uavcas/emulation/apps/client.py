@@ -87,7 +87,7 @@ def render_script(spec: ClientSpec) -> str:
     offline = ""
     if spec.offline_windows:
         # ${EPOCHREALTIME/./}: the epoch in microseconds (bash 5 prints 6 decimals)
-        offline = f"""  now=${{t/./}}
+        offline = """  now=${t/./}
   w=$(( (now - t0us) / wus ))
   if [[ "$off" == *" $w "* ]]; then
     printf '%s\\tskip\\t0\\t0\\t%s\\n' "$t" "$w" >> "$log"

@@ -10,7 +10,6 @@ GNU `timeout` forwards the signal it receives to the tool, so signalling the Pop
 
 from __future__ import annotations
 
-import os
 import signal
 import subprocess
 import time

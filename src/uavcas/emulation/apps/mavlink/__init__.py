@@ -53,8 +53,18 @@ Run: python -m uavcas.emulation.apps.mavlink {uav|gcs} SPEC.json
 from . import gps
 from .link import T0_WAIT_S, read_log, write_t0
 from .signing import SigningSpec, signing_key, signing_spec
-from .specs import (GCS_PORT, UAV_PORT, BatterySpec, GcsSpec, GcsTarget, RetrySpec, StreamRates, UavSpec,
-                    gcs_target, uav_spec)
+from .specs import (
+    GCS_PORT,
+    UAV_PORT,
+    BatterySpec,
+    GcsSpec,
+    GcsTarget,
+    RetrySpec,
+    StreamRates,
+    UavSpec,
+    gcs_target,
+    uav_spec,
+)
 
 __all__ = ["gps", "GCS_PORT", "T0_WAIT_S", "UAV_PORT", "BatterySpec", "GcsSpec", "GcsTarget", "RetrySpec",
            "SigningSpec", "StreamRates", "UavSpec", "gcs_target", "read_log", "signing_key", "signing_spec", "uav_spec",
