@@ -50,7 +50,8 @@ from uavcas.flows.standards import names, standard
 assert uavcas.__file__.startswith(sys.argv[1]), uavcas.__file__
 assert "tiny" in names() and standard("tiny").source == "test only"
 cols = card_columns(arrow_schema("tiny"), "tiny")
-assert cols["Tiny Bytes"]["unit"] == "bytes" and cols["Tiny Packets"]["meaning"].startswith("packets of the flow"), cols["Tiny Packets"]
+assert cols["Tiny Bytes"]["unit"] == "bytes", cols["Tiny Bytes"]
+assert cols["Tiny Packets"]["meaning"].startswith("packets of the flow"), cols["Tiny Packets"]
 assert "Flow Duration" not in cols  # the card lists this standard's columns, not another's
 assert describe("tiny_bytes_max", "tiny", episodes=True)[0] == "bytes"
 print("ok")

@@ -118,7 +118,8 @@ def size_matched_baseline(counts: np.ndarray, runs: np.ndarray | None, n: int, d
     if not hs:
         return Baseline(0, np.nan, np.nan, np.nan, np.nan, by)
     q = 100 * (1 - (1 - ci) / 2)
-    return Baseline(used, float(np.mean(hs)), float(np.percentile(hs, q)), float(np.mean(js)), float(np.percentile(js, q)), by)
+    return Baseline(used, float(np.mean(hs)), float(np.percentile(hs, q)), float(np.mean(js)),
+                    float(np.percentile(js, q)), by)
 
 
 def _pairwise_baseline(benign: pd.DataFrame, edges: np.ndarray, opt: DiversityOptions) -> tuple[float, float]:

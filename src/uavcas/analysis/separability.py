@@ -27,7 +27,8 @@ def separability_stats(df: pd.DataFrame) -> pd.DataFrame:
     """One row per class: n and mean/std of IAT (ms), packet rate, packet size, duration."""
     missing = [c for c, _, _ in KEY_FEATURES if c not in df.columns]
     if missing or "label" not in df.columns:
-        raise ValueError(f"missing columns for separability: {missing + (['label'] if 'label' not in df.columns else [])}")
+        raise ValueError("missing columns for separability: "
+                         f"{missing + (['label'] if 'label' not in df.columns else [])}")
     rows = []
     for c in class_order(df["label"].unique()):
         sub = df[df["label"] == c]

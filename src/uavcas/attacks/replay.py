@@ -61,6 +61,8 @@ from .base import AttackExecutor, AttackFamily, TruthContext
 from .registry import register
 
 if TYPE_CHECKING:  # types only: the twin's and labels' package __init__s load this registry
+    from collections.abc import Callable
+
     from uavcas.labels.attacklog import AttackLog, AttackWindow
     from uavcas.twin.model import Attack
 
@@ -123,10 +125,11 @@ class Replay(AttackFamily):
     truth_rule = ("a packet matching an inject record (addresses, protocol, ports, IP id, TTL, TCP seq) within "
                   f"{MATCH_TOLERANCE_S:g} s of it (an injected copy; without a seq, as UDP, the nearest one)")
     provoked_rule = ("answers to an injected copy on its 5-tuple reversed: the SYN-ACK with ack = its seq + 1 (a "
-                     "copied SYN, and the RST on the copy's own 5-tuple with seq = its seq + 1); the RST with seq = its ack (copy with ACK) or ack = its seq + length (+1 SYN/FIN); "
-                     "ICMP errors quoting it (IP id and TTL included); each within "
-                     f"{ANSWER_WITHIN_S:g} s after it; and the pure ACK whose nearest preceding packet of the copy's "
-                     f"direction at the same capture point is the copy, within {DUP_ACK_WITHIN_S:g} s")
+                     "copied SYN, and the RST on the copy's own 5-tuple with seq = its seq + 1); the RST with seq = "
+                     "its ack (copy with ACK) or ack = its seq + length (+1 SYN/FIN); ICMP errors quoting it (IP id "
+                     f"and TTL included); each within {ANSWER_WITHIN_S:g} s after it; and the pure ACK whose nearest "
+                     "preceding packet of the copy's direction at the same capture point is the copy, within "
+                     f"{DUP_ACK_WITHIN_S:g} s")
     python_modules = ("scapy",)
 
     def parse(self, arg: str | None, tok: str) -> ReplaySpec:
@@ -327,7 +330,8 @@ def injected_packets(p, log: "AttackLog") -> np.ndarray:
     )
     m = pk.merge(inj, on=["src", "dst", "src_hi", "dst_hi", "proto", "ip_id", "ttl", "seqk"], how="inner")
     m["dt"] = (m["ts"] - m["t_inj"]).abs()
-    ports = ((m["rec_sport"] < 0) | (m["sport"] == m["rec_sport"])) & ((m["rec_dport"] < 0) | (m["dport"] == m["rec_dport"]))
+    ports = (((m["rec_sport"] < 0) | (m["sport"] == m["rec_sport"]))
+             & ((m["rec_dport"] < 0) | (m["dport"] == m["rec_dport"])))
     m = m[ports & (m["dt"] <= MATCH_TOLERANCE_S)]
     exact = m["seqk"] >= 0
     nearest = m[~exact].sort_values(["rec", "dt", "ts"], kind="stable").drop_duplicates("rec", keep="first")

@@ -33,7 +33,8 @@ def _binned_median(x, y, edges):
 def pathloss_figure(res: Layer1Result, path: Path, seed: int = 0) -> Path:
     rng = seeding.generator(seed)
     k = len(res.groups)
-    fig, axes = plt.subplots(2, k, figsize=(3.3 * k, 6), sharex="col", gridspec_kw={"height_ratios": [3, 1.3]}, squeeze=False)
+    fig, axes = plt.subplots(2, k, figsize=(3.3 * k, 6), sharex="col", gridspec_kw={"height_ratios": [3, 1.3]},
+                             squeeze=False)
     for i, g in enumerate(res.groups):
         test = g.test
         d, y = g.samples.d3d_m[test], g.target_db[test]
@@ -41,12 +42,14 @@ def pathloss_figure(res: Layer1Result, path: Path, seed: int = 0) -> Path:
         ax = axes[0, i]
         ax.scatter(d[pick], y[pick], s=2, alpha=0.25, color="0.5", label="measured (held-out)")
         edges = np.geomspace(max(d.min(), 1.0), d.max(), 15)
-        for model, style, lab in (("logdistance", "-", "log-distance (fit)"), ("two_ray", "--", "two-ray (fit)"), ("uma_av", ":", "TR 36.777 UMa-AV")):
+        for model, style, lab in (("logdistance", "-", "log-distance (fit)"), ("two_ray", "--", "two-ray (fit)"),
+                                  ("uma_av", ":", "TR 36.777 UMa-AV")):
             xs, ys = _binned_median(d, res.predictions[(model, "heldout", i)], edges)
             ax.plot(xs, ys, style, lw=1.8, label=lab)
         ax.set_xscale("log")
         ax.xaxis.set_minor_formatter(NullFormatter())
-        ax.set_title(f"{g.altitude_m:g} m (n={res.profile.n[i]:.2f}, sigma={res.profile.sigma_db[i]:.1f} dB)", fontsize=9)
+        ax.set_title(f"{g.altitude_m:g} m (n={res.profile.n[i]:.2f}, sigma={res.profile.sigma_db[i]:.1f} dB)",
+                     fontsize=9)
         r = y - res.predictions[("logdistance", "heldout", i)]
         axr = axes[1, i]
         axr.scatter(d[pick], r[pick], s=2, alpha=0.25, color="0.5")
@@ -97,7 +100,8 @@ def mobility_figures(res: Layer2Result, out_dir: Path, seed: int = 0) -> list[Pa
         for tr in res.tracks[kind]["test"]:
             s = np.sort(tr.speeds())
             ax2.plot(s, np.linspace(0, 1, s.size), "-", label=f"AFAR {tr.name}")
-        s = np.sort(np.concatenate([t.speeds() for t in sim_track(kind, params[kind], real.duration_s, seed + 1, res.area)]))
+        s = np.sort(np.concatenate([t.speeds()
+                                    for t in sim_track(kind, params[kind], real.duration_s, seed + 1, res.area)]))
         ax2.plot(s, np.linspace(0, 1, s.size), "--", color="k", label="twin")
         ax2.set_title(kind, fontsize=9)
         ax2.set_xlabel("horizontal speed (m/s)")
@@ -132,7 +136,8 @@ def fidelity_figure(res: Layer4Result, path: Path) -> Path:
     centres = (res.edges[:-1] + res.edges[1:]) / 2
     for name, v in res.samples.items():
         h, _ = np.histogram(v, bins=res.edges)
-        ax.plot(centres, h / h.sum() / np.diff(res.edges), lw=1.2, ls="--" if name.startswith("sim") else "-", label=name)
+        ax.plot(centres, h / h.sum() / np.diff(res.edges), lw=1.2, ls="--" if name.startswith("sim") else "-",
+                label=name)
     ax.set_xlabel("RSS at 20 dBm EIRP, 0 dBi (dBm)")
     ax.set_ylabel("PDF (1/dB)")
     txt = ", ".join(f"H({k.replace('|', ',')})={v:.2f}" for k, v in list(res.hellinger.items())[:4])

@@ -182,8 +182,9 @@ def fit_logdistance(groups: list[Group], intercept: str = "ci", pattern_terms: b
     fspl = np.array([float(free_space_loss_db(1.0, MAENG_FC_GHZ))] * k)
     prof = PathLossProfile(
         name=name,
-        source=f"uavcas calibrate: Maeng LTE 3.51 GHz, {_INTERCEPT[intercept]}, {'effective antenna pattern, ' if use_pat else ''}training segments; sigma from 5 s local means; "
-        f"altitudes = median UAV height of the {', '.join(f'{g.altitude_m:g}' for g in groups)} m files",
+        source=f"uavcas calibrate: Maeng LTE 3.51 GHz, {_INTERCEPT[intercept]}, "
+        f"{'effective antenna pattern, ' if use_pat else ''}training segments; sigma from 5 s local means; altitudes = "
+        f"median UAV height of the {', '.join(f'{g.altitude_m:g}' for g in groups)} m files",
         fc_ghz=MAENG_FC_GHZ,
         altitude_m=tuple(float(np.median(g.samples.height_m)) for g in groups),
         n=tuple(float(v) for v in n),
@@ -201,7 +202,8 @@ def fit_logdistance(groups: list[Group], intercept: str = "ci", pattern_terms: b
     return LogDistanceFit(prof.model_copy(update={"sigma_db": tuple(sig)}), excess, pat, centre, tuple(sig_s))
 
 
-def logdist_loss_db(profile: PathLossProfile, g: Group, mask=slice(None), at_profile_altitude: int | None = None) -> np.ndarray:
+def logdist_loss_db(profile: PathLossProfile, g: Group, mask=slice(None),
+                    at_profile_altitude: int | None = None) -> np.ndarray:
     """The twin's LogDistance at the group's carrier; at the group's own profile altitude (a
     calibration file) or at the measured heights (another campaign: the twin interpolates)."""
     s = g.samples
@@ -219,7 +221,8 @@ def fit_decorrelation_m(groups: list[Group], fit: LogDistanceFit, max_lag_m: flo
         w = g.wins(g.train, K_WINDOW_S)
         if len(w) < 10:
             continue
-        resid = power_mean_db(g.pl_db - fit.correction_db(g), w) - power_mean_db(logdist_loss_db(fit.profile, g, slice(None), i), w)
+        resid = (power_mean_db(g.pl_db - fit.correction_db(g), w)
+                 - power_mean_db(logdist_loss_db(fit.profile, g, slice(None), i), w))
         xy = window_mean(np.c_[s.d2d_m * np.cos(s.azim_rad), s.d2d_m * np.sin(s.azim_rad)], w)
         joined = np.array([w[j + 1][0] == w[j][-1] + 1 for j in range(len(w) - 1)], dtype=bool)
         run_id = np.r_[0, np.cumsum(~joined)]  # windows of one contiguous training run share an id
@@ -303,7 +306,8 @@ class TwoRayFit:
                 "reflected_ray_pattern": self.pattern is not None}
 
 
-def fit_two_ray(groups: list[Group], pattern: PatternGain | None = None, max_samples: int = 20000, seed: int = 0) -> TwoRayFit:
+def fit_two_ray(groups: list[Group], pattern: PatternGain | None = None, max_samples: int = 20000,
+                seed: int = 0) -> TwoRayFit:
     """Vertical polarisation (the AERPAW antennas are vertical; a free polarisation lets the fit
     pick horizontal with eps_r -> 1, i.e. a ground that reflects nothing). Ground eps_r in
     [2, 80] (dry sand to water, ITU-R P.527), conductivity in [1e-5, 1] S/m, offset +-30 dB;
@@ -314,13 +318,15 @@ def fit_two_ray(groups: list[Group], pattern: PatternGain | None = None, max_sam
     idx = [np.sort(rng.choice(i, size=min(per, i.size), replace=False)) for i in idx]  # keeps the fit fast
 
     def make(p) -> TwoRayFit:
-        return TwoRayFit(TwoRay(eps_r=float(p[0]), conductivity_s_m=float(10 ** p[1]), polarisation="vertical"), float(p[2]), pattern)
+        return TwoRayFit(TwoRay(eps_r=float(p[0]), conductivity_s_m=float(10 ** p[1]), polarisation="vertical"),
+                         float(p[2]), pattern)
 
     def resid(p):
         fit = make(p)
         return np.concatenate([fit.predict(g, i) - g.target_db[i] for g, i in zip(groups, idx)])
 
-    sol = least_squares(resid, x0=[15.0, -3.0, 0.0], bounds=([2.0, -5.0, -30.0], [80.0, 0.0, 30.0]), loss="soft_l1", f_scale=5.0)
+    sol = least_squares(resid, x0=[15.0, -3.0, 0.0], bounds=([2.0, -5.0, -30.0], [80.0, 0.0, 30.0]), loss="soft_l1",
+                        f_scale=5.0)
     return make(sol.x)
 
 

@@ -99,7 +99,8 @@ class Track:
 
 def flight_xyz_m(f: AfarFlight) -> np.ndarray:
     """(T, 3) east/north/up metres about the rover (or the flight's mean if it has none)."""
-    lon0, lat0 = f.rover_lon_lat if f.rover_lon_lat is not None else (float(np.mean(f.lon_deg)), float(np.mean(f.lat_deg)))
+    lon0, lat0 = f.rover_lon_lat if f.rover_lon_lat is not None else (float(np.mean(f.lon_deg)),
+                                                                      float(np.mean(f.lat_deg)))
     x, y = local_xy_m(f.lon_deg, f.lat_deg, lon0, lat0)
     return np.c_[x, y, f.alt_m]
 
@@ -192,19 +193,24 @@ def fit_mission(kind: str, train: list[Track], area: Area, seed: int):
                  for s2 in (0.25, 0.5, 1.0, 2.0, 4.0, 8.0)]
 
         def gm_jsd(c) -> float:
-            p = gm.model_copy(update={"alpha": c[0], "mean_speed_mps": c[1] * float(np.mean(speeds)), "sigma2_mps2": c[2]})
-            return jsd_on_shared_bins(_speeds(sim_track(kind, p, dur, seed, area, RANDOM_SIM_UAV)), speeds, SPEED_BIN_MPS)[0]
+            p = gm.model_copy(update={"alpha": c[0], "mean_speed_mps": c[1] * float(np.mean(speeds)),
+                                      "sigma2_mps2": c[2]})
+            return jsd_on_shared_bins(_speeds(sim_track(kind, p, dur, seed, area, RANDOM_SIM_UAV)), speeds,
+                                      SPEED_BIN_MPS)[0]
 
         a, m, s2 = _argmin(cands, gm_jsd)
-        return gm.model_copy(update={"alpha": float(a), "mean_speed_mps": float(m * np.mean(speeds)), "sigma2_mps2": float(s2)})
+        return gm.model_copy(update={"alpha": float(a), "mean_speed_mps": float(m * np.mean(speeds)),
+                                     "sigma2_mps2": float(s2)})
     legs = leg_statistics(train)
     common = {k: legs[k] for k in ("speed_mps", "speed_cv", "altitude_m", "altitude_sd_m")}
     if kind == "spiral":
-        base = SpiralParams(**common, width_m=float(max(ext[0], 20.0)), height_m=float(max(ext[1], 20.0)), accel_mps2=1.0)
+        base = SpiralParams(**common, width_m=float(max(ext[0], 20.0)), height_m=float(max(ext[1], 20.0)),
+                            accel_mps2=1.0)
         base = best(base, "accel_mps2", ACCEL_GRID, speed_jsd)
         return best(base, "ring_spacing_m", (10.0, 15.0, 20.0, 30.0, 40.0, 60.0), heading_jsd)
     if kind == "grid":
-        base = GridParams(**common, box_width_m=float(max(ext[0], 20.0)), box_height_m=float(max(ext[1], 20.0)), accel_mps2=1.0)
+        base = GridParams(**common, box_width_m=float(max(ext[0], 20.0)), box_height_m=float(max(ext[1], 20.0)),
+                          accel_mps2=1.0)
         base = best(base, "accel_mps2", ACCEL_GRID, speed_jsd)
         return best(base, "lane_spacing_m", (10.0, 20.0, 30.0, 50.0, 80.0), heading_jsd)
     if kind == "hover_transit":
@@ -221,7 +227,8 @@ def score(kind: str, params, test: Track, area: Area, seed: int) -> dict:
     jsd_dist = float(np.sqrt(jsd_speed))
     jsd_head, _ = jsd_on_shared_bins(_heading(sims), test.heading_rates(), HEADING_BIN_RADPS)
     kl = float(np.mean([spatial_kl_bits(test.centred_xy(), s.centred_xy(), CELL_M) for s in sims]))
-    return {"flight": test.name, "jsd_speed": float(jsd_speed), "js_distance_speed": jsd_dist, "jsd_heading_rate": float(jsd_head), "kl_spatial_bits": kl,
+    return {"flight": test.name, "jsd_speed": float(jsd_speed), "js_distance_speed": jsd_dist,
+            "jsd_heading_rate": float(jsd_head), "kl_spatial_bits": kl,
             "real_mean_speed_mps": float(test.speeds().mean()), "sim_mean_speed_mps": float(_speeds(sims).mean())}
 
 
@@ -283,13 +290,15 @@ def run_layer2(flights: list[AfarFlight], seed: int = 0, assignment: dict[int, s
             "train_kinematics": {
                 "mean_speed_mps": float(_speeds(train).mean()),
                 "median_altitude_m": float(np.median(np.concatenate([t.pos_m[:, 2] for t in train]))),
-                "mean_abs_vertical_speed_mps": float(np.mean([np.abs(kinematics(t.pos_m, t.t_s).vertical_speed_mps).mean() for t in train])),
+                "mean_abs_vertical_speed_mps": float(np.mean([np.abs(kinematics(t.pos_m, t.t_s).vertical_speed_mps)
+                                                              .mean() for t in train])),
                 "median_abs_heading_rate_radps": float(np.median(_heading(train))),
             },
         }
     if not fitted:
         teams = sorted({t.team for t in tracks})
-        raise CalibrationDataError(f"no AFAR flight is assigned to a mission (teams found: {teams}); pass an assignment")
+        raise CalibrationDataError(f"no AFAR flight is assigned to a mission (teams found: {teams}); pass an "
+                                   "assignment")
     profile = MobilityProfile(
         name="calibrated", source=f"uavcas calibrate mobility: AFAR flights, step {STEP_S:g} s, seed {seed}",
         **{k: v for k, v in fitted.items()},
@@ -301,9 +310,11 @@ def layer2_json(res: Layer2Result) -> dict:
     return {
         "step_s": STEP_S,
         "assignment": res.assignment,
-        "jsd": "Jensen-Shannon divergence, base 2, in [0, 1]; shared bins of %.2f m/s covering both samples" % SPEED_BIN_MPS,
+        "jsd": ("Jensen-Shannon divergence, base 2, in [0, 1]; shared bins of %.2f m/s covering both samples"
+                % SPEED_BIN_MPS),
         "js_distance": "Jensen-Shannon distance = sqrt(divergence) (scipy.spatial.distance.jensenshannon, base 2)",
-        "kl_spatial": f"KL(real || sim) in bits, {CELL_M:g} m cells on centred tracks, skew-smoothed KL(p || 0.99 q + 0.01 p), bounded by 6.64 bits (metrics.KL_SKEW)",
+        "kl_spatial": f"KL(real || sim) in bits, {CELL_M:g} m cells on centred tracks, skew-smoothed KL(p || 0.99 q + "
+                      "0.01 p), bounded by 6.64 bits (metrics.KL_SKEW)",
         "sim_area": res.area.model_dump(),
         "missions": res.missions,
     }

@@ -102,7 +102,8 @@ def run_layer4(maeng_groups: list[Group], multibw_groups: list[Group], l3: Layer
     }
     samples = {k: v for k, v in samples.items() if v.size}
     edges = shared_edges(list(samples.values()), BIN_DB)
-    h = {f"{a}|{b}": hellinger_on_shared_bins(samples[a], samples[b], edges) for a, b in PAIRS if a in samples and b in samples}
+    h = {f"{a}|{b}": hellinger_on_shared_bins(samples[a], samples[b], edges)
+         for a, b in PAIRS if a in samples and b in samples}
     m = samples["maeng"]
     perm = rng.permutation(m.size)
     floor = hellinger_on_shared_bins(m[perm[: m.size // 2]], m[perm[m.size // 2 :]], edges)
@@ -114,7 +115,8 @@ def layer4_json(res: Layer4Result) -> dict:
         "held_out": "Maeng held-out segments (layer 1), AFAR held-out flights (layer 3), multi-band (never fitted)",
         "scale": f"RSS at {TX_DBM:g} dBm EIRP, 0 dBi (dBm) = {TX_DBM:g} - path loss; AFAR sounder + layer-3 offset",
         "metric": "Hellinger distance, textbook, in [0, 1]",
-        "bins": {"width_db": BIN_DB, "lo_dbm": float(res.edges[0]), "hi_dbm": float(res.edges[-1]), "n_bins": int(len(res.edges) - 1)},
+        "bins": {"width_db": BIN_DB, "lo_dbm": float(res.edges[0]), "hi_dbm": float(res.edges[-1]),
+                 "n_bins": int(len(res.edges) - 1)},
         "hellinger": res.hellinger,
         "same_distribution_floor": res.floor,
         "sources": {k: {"n": int(v.size), "mean_dbm": float(v.mean()), "std_db": float(v.std()),

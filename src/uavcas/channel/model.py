@@ -14,8 +14,8 @@ displacement since the previous call, so consecutive windows are correlated as G
 model says. Same seed, same node count and same sequence of calls give identical arrays.
 
 Geometry: antenna heights are the node positions' z (the plan puts a BS at z = its profile's
-mast height - 10 m, the AERPAW LW1 tower, in the calibrated profile - and UAVs at their altitude). For the 3GPP models h_UT is the UAV altitude and
-the BS height comes from its position; UAV-UAV links use each model's documented air-to-air
+mast height - 10 m, the AERPAW LW1 tower, in the calibrated profile - and UAVs at their altitude). For the 3GPP models
+h_UT is the UAV altitude and the BS height comes from its position; UAV-UAV links use each model's documented air-to-air
 rule (see `geometry`, `pathloss.logdist` and `pathloss.tr36777`: the aerial end's altitude for
 log-distance, the LOS branch for TR 36.777).
 

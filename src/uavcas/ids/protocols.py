@@ -232,7 +232,8 @@ def prepare_cross(df: pd.DataFrame, x: np.ndarray, notes: list[str], cfg: BenchC
     held = np.zeros(len(df), dtype=bool)
     for axis, value in cfg.holdout:
         if axis not in schema.AXIS_COLUMNS or axis not in df.columns:
-            raise ValueError(f"--holdout: {axis!r} is not an axis column of this dataset ({', '.join(schema.AXIS_COLUMNS)})")
+            raise ValueError(f"--holdout: {axis!r} is not an axis column of this dataset "
+                             f"({', '.join(schema.AXIS_COLUMNS)})")
         m = (df[axis].astype(str) == str(value)).to_numpy()
         if not m.any():
             raise ValueError(f"--holdout: no flow has {axis}={value} (values: {sorted(df[axis].astype(str).unique())})")
@@ -252,13 +253,15 @@ def prepare_cross(df: pd.DataFrame, x: np.ndarray, notes: list[str], cfg: BenchC
                 {"heldout": np.flatnonzero(held)})
 
 
-PREPARE = {"binary": prepare_binary, "multiclass": prepare_multiclass, "ood": prepare_ood, "cross-condition": prepare_cross}
+PREPARE = {"binary": prepare_binary, "multiclass": prepare_multiclass, "ood": prepare_ood,
+           "cross-condition": prepare_cross}
 
 
 def _split_rows(task: Task, seed: int, sp: Split) -> list[SplitRow]:
     out = [SplitRow(seed, g, part) for part, gs in sp.groups.items() for g in gs]
     for name, rows in task.fixed.items():
-        out += [SplitRow(seed, g, "heldout" if name == "heldout" else "ood-test") for g in sorted(set(task.groups[rows]))]
+        out += [SplitRow(seed, g, "heldout" if name == "heldout" else "ood-test")
+                for g in sorted(set(task.groups[rows]))]
     return out
 
 
@@ -313,7 +316,8 @@ def _importance(est, tf, task: Task, rows: np.ndarray, seed: int, model: str, cf
 
     r = permutation_importance(est, tf(rows), task.y[rows], scoring=scorer, n_repeats=cfg.importance_repeats,
                                random_state=seed, n_jobs=1)
-    return [Importance(seed, model, f, float(m), float(s)) for f, m, s in zip(features, r.importances_mean, r.importances_std)]
+    return [Importance(seed, model, f, float(m), float(s))
+            for f, m, s in zip(features, r.importances_mean, r.importances_std)]
 
 
 @dataclass

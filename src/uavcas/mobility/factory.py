@@ -56,5 +56,6 @@ def make_mission(
     elif isinstance(params, model):
         p = params
     else:
-        raise TypeError(f"params for {kind!r} must be {model.__name__}, a MobilityProfile or a dict; got {type(params).__name__}")
+        raise TypeError(f"params for {kind!r} must be {model.__name__}, a MobilityProfile or a dict; got "
+                        f"{type(params).__name__}")
     return _CLASSES[kind](n_uav, p, area, mission_seed(kind, seed))

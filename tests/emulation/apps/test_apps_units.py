@@ -149,7 +149,8 @@ def test_pacer_never_loses_a_signal_and_catches_up_after_a_stall():
 
 
 def test_capture_stats_parse():
-    err = "tcpdump: listening on s0\n1234 packets captured\n1240 packets received by filter\n6 packets dropped by kernel\n"
+    err = ("tcpdump: listening on s0\n1234 packets captured\n1240 packets received by filter\n"
+           "6 packets dropped by kernel\n")
     assert capture.parse_stats(err) == {"captured": 1234, "received by filter": 1240, "dropped by kernel": 6}
     argv = capture.argv("s3", capture.Path("/x/s-uav3.pcap"))
     assert "-p" not in argv and "-U" in argv and argv[argv.index("-Z") + 1] == "root"

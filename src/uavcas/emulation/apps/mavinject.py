@@ -6,8 +6,8 @@ component 1), packed by pymavlink (MAVLink 2, unsigned: the attacker has no key)
 MAV_CMD_NAV_RETURN_TO_LAUNCH, MAV_CMD_NAV_LAND or MAV_CMD_DO_CHANGE_SPEED (param1 1 = ground
 speed, param2 m/s, param3 -1 = throttle unchanged, as the ground station sends it), `--rate-hz`
 times a second from one ephemeral UDP port to the victim's MAVLink port, until `--count` have
-left (0: no limit; then it listens LINGER_S for the answers and exits) or it is stopped; the confirmation field counts the repeats (0, 1, ...), as a
-GCS's resends do. What comes back (COMMAND_ACK) is read and logged, never acted on.
+left (0: no limit; then it listens LINGER_S for the answers and exits) or it is stopped; the confirmation field counts
+the repeats (0, 1, ...), as a GCS's resends do. What comes back (COMMAND_ACK) is read and logged, never acted on.
 
 Discipline (as the flood's, `apps/flood.py`): the process is started before t0 (Python and
 pymavlink take seconds to load on a busy host), binds its socket, prints `ready` and waits for

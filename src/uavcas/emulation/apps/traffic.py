@@ -150,7 +150,8 @@ class BenignTraffic:
             if b.sysid is None:
                 raise ValueError(f"{b.name} has no MAVLink system id in the plan")
             served = [mavlink.gcs_target(self.plan, uav) for bs, uav in pairs if bs == b.name]
-            spec = mavlink.GcsSpec(name=b.name, sysid=b.sysid, rates=self.stream_rates, uavs=served, signing=self.signing,
+            spec = mavlink.GcsSpec(name=b.name, sysid=b.sysid, rates=self.stream_rates, uavs=served,
+                                   signing=self.signing,
                                    t0_path=self.t0_path, window_s=self.plan.window_s,
                                    n_windows=len(self.plan.windows), duration_s=app_s,
                                    log_path=self.log_dir / f"mavlink-{b.name}.jsonl")
