@@ -129,8 +129,8 @@ def test_streams_at_their_configured_rates_in_the_capture_table(run):
         sent = table[(table.src_ip == uav.ip) & (table.point == f"s-{uav.name}")]
         counts = message_counts(sent)
         for name, hz in want.items():
-            per_s = counts[counts.msg_name == name].set_index("second").messages.reindex(range(first, last),
-                                                                                         fill_value=0)
+            per_s = (counts[counts.msg_name == name].set_index("second").messages
+                     .reindex(range(first, last), fill_value=0))
             assert abs(per_s.mean() - hz) <= 0.1 * hz, (uav.name, name, per_s.tolist())
 
 

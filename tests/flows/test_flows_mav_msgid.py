@@ -56,8 +56,8 @@ def capture(tmp_path_factory):
         p = Ether() / IP(src="10.9.0.1", dst="10.9.0.10", id=k) / UDP(sport=40000, dport=14550) / Raw(payload)
         p.time = 1_700_000_000 + k * 0.01
         pkts.append(p)
-    tcp = Ether() / IP(src="10.9.0.1", dst="10.9.0.10",
-                       id=99) / TCP(sport=5000, dport=80, flags="PA") / Raw(frames[0][1])
+    tcp = (Ether() / IP(src="10.9.0.1", dst="10.9.0.10", id=99) / TCP(sport=5000, dport=80, flags="PA")
+           / Raw(frames[0][1]))
     tcp.time = 1_700_000_001
     pkts.append(tcp)  # a MAVLink frame in a TCP segment: not a UDP datagram, not decoded
     wrpcap(str(path), pkts)
