@@ -86,7 +86,8 @@ def _version(value: bool) -> None:
 
 @app.callback()
 def _root(
-    version: bool = typer.Option(False, "-V", "--version", callback=_version, is_eager=True, help="Print the version and exit."),
+    version: bool = typer.Option(False, "-V", "--version", callback=_version, is_eager=True,
+                                 help="Print the version and exit."),
 ) -> None:
     """uavcas command line."""
 

@@ -38,9 +38,11 @@ def diversity_cmd(
     seed: int = seed_option("Seed of the bootstrap and the samples."),
     view: View | None = typer.Option(None, "--view", help=VIEW_HELP),
     pairwise: bool = typer.Option(False, "--pairwise", help="Also average over random flow pairs."),
-    legacy: bool = typer.Option(True, "--legacy/--no-legacy", help="Also the authors' unbounded legacy metric (packet source only)."),
+    legacy: bool = typer.Option(True, "--legacy/--no-legacy",
+                                help="Also the authors' unbounded legacy metric (packet source only)."),
     iat_source: IatSource = typer.Option("auto", "--iat-source", help=IAT_HELP),
-    baseline_draws: int = typer.Option(50, "--baseline-draws", min=1, help="Benign samples drawn at each class's size for its baseline."),
+    baseline_draws: int = typer.Option(50, "--baseline-draws", min=1,
+                                       help="Benign samples drawn at each class's size for its baseline."),
 ) -> None:
     """Hellinger and JSD (base 2, bounded) of each class's IATs vs Benign, with CIs and a
     baseline drawn at the class's sample size."""
@@ -67,7 +69,8 @@ def diversity_cmd(
             raise fail(f"{path}: {e}") from None
     table = pd.concat([res.table for res in results], ignore_index=True)
     write_diversity(out, table, opt, results)
-    typer.echo(table[["dataset", "class", "hellinger", "jsd", "baseline_hellinger", "legacy_hellinger"]].to_string(index=False))
+    typer.echo(table[["dataset", "class", "hellinger", "jsd", "baseline_hellinger",
+                      "legacy_hellinger"]].to_string(index=False))
     console.print(f"IAT source: {source} (every dataset); wrote {out / 'diversity.csv'} and diversity.json")
 
 
@@ -96,11 +99,13 @@ def axes_cmd(
     if table.empty:
         raise fail(f"{dataset}: no configuration axis has two values among benign flows")
     write_axes(out, table, edges, source)
-    typer.echo(table[["axis", "low", "high", "hellinger", "jsd", "baseline_hellinger", "baseline_jsd"]].to_string(index=False))
+    typer.echo(table[["axis", "low", "high", "hellinger", "jsd", "baseline_hellinger",
+                      "baseline_jsd"]].to_string(index=False))
     for r in table.itertuples():
         if r.confounded_with:
-            err_console.print(f"[yellow]confounded[/]: {r.axis} {r.low} vs {r.high} also differs in {r.confounded_with} "
-                              f"(total-variation distance over runs); the difference is not the axis's alone")
+            err_console.print(f"[yellow]confounded[/]: {r.axis} {r.low} vs {r.high} also differs in "
+                              f"{r.confounded_with} (total-variation distance over runs); the difference is not the "
+                              "axis's alone")
 
 
 @analyze_app.command("separability")

@@ -61,21 +61,36 @@ def _parse_list(text: str, known: tuple[str, ...], option: str) -> tuple[str, ..
 
 @bench_app.command("ids")
 def ids_cmd(
-    dataset: Path = dataset_argument("Dataset directory (flows.parquet), the authors' CSV (*_ts.csv) or a CICIDS2017/UNSW-NB15 sample."),
+    dataset: Path = dataset_argument("Dataset directory (flows.parquet), the authors' CSV (*_ts.csv) or a "
+                                     "CICIDS2017/UNSW-NB15 sample."),
     out: Path = typer.Option(..., "--out", help="Output directory (one sub-directory per protocol when several)."),
-    protocol: str = typer.Option("multiclass", "--protocol", help="binary | multiclass | ood | cross-condition, comma-separated, or all."),
+    protocol: str = typer.Option("multiclass", "--protocol",
+                                 help="binary | multiclass | ood | cross-condition, comma-separated, or all."),
     models: str = typer.Option("all", "--models", help=_models_help()),
     scaler: str = typer.Option("standard", "--scaler", help="standard | minmax | robust."),
-    epochs: int = typer.Option(50, "--epochs", min=1, help="Max epochs of the neural models (early stopping on the grouped validation split)."),
+    epochs: int = typer.Option(50, "--epochs", min=1,
+                               help="Max epochs of the neural models (early stopping on the grouped validation "
+                                    "split)."),
     holdout: list[str] = typer.Option([], "--holdout", help="AXIS=VALUE held out (cross-condition; repeatable)."),
-    seeds: str = typer.Option("0,1,2,3,4", "--seeds", help="Comma-separated seeds: one grouped split and model seed each; mean ± std over them."),
-    features: str = typer.Option(None, "--features", help="A feature set of the schema (e.g. cic, paper) or comma-separated columns (default: the dataset's)."),
-    importance: bool = typer.Option(True, "--importance/--no-importance", help=f"Permutation importance of the tree models ({', '.join(s.display for s in detectors() if s.tree)})."),
-    train_cap: int = typer.Option(0, "--train-cap", min=0, help="At most N training (and validation) flows per run and class, seeded (0: all); test flows are never capped."),
-    min_class_runs: int = typer.Option(0, "--min-class-runs", min=0, help="Leave out the flows of classes held by fewer than N runs, listed in the notes (0: refuse such a class, naming it)."),
+    seeds: str = typer.Option("0,1,2,3,4", "--seeds",
+                              help="Comma-separated seeds: one grouped split and model seed each; mean ± std over "
+                                   "them."),
+    features: str = typer.Option(None, "--features",
+                                 help="A feature set of the schema (e.g. cic, paper) or comma-separated columns "
+                                      "(default: the dataset's)."),
+    importance: bool = typer.Option(True, "--importance/--no-importance",
+                                    help="Permutation importance of the tree models "
+                                         f"({', '.join(s.display for s in detectors() if s.tree)})."),
+    train_cap: int = typer.Option(0, "--train-cap", min=0,
+                                  help="At most N training (and validation) flows per run and class, seeded (0: all); "
+                                       "test flows are never capped."),
+    min_class_runs: int = typer.Option(0, "--min-class-runs", min=0,
+                                       help="Leave out the flows of classes held by fewer than N runs, listed in the "
+                                            "notes (0: refuse such a class, naming it)."),
     threads: int = typer.Option(0, "--threads", min=0, help="Threads per model (0: cores available)."),
     device: TorchDevice = typer.Option("auto", "--device", help="Where the torch models train: auto (CUDA when torch "
-                                                                "sees a GPU, else the CPU), cpu or cuda. Recorded per fit."),
+                                                                "sees a GPU, else the CPU), cpu or cuda. Recorded per "
+                                                                "fit."),
     fmt: BenchFormat = typer.Option("auto", "--format", help="What DATASET is (auto: by its files)."),
     view: View | None = typer.Option(None, "--view", help="Flow view when the dataset holds several."),
 ) -> None:
@@ -131,7 +146,8 @@ def ids_cmd(
 
 @bench_app.command("leaderboard")
 def leaderboard_cmd(
-    results: list[Path] = typer.Argument(..., help="Benchmark output directories (their results.csv, searched recursively)."),
+    results: list[Path] = typer.Argument(..., help="Benchmark output directories (their results.csv, searched "
+                                                   "recursively)."),
     out: Path = typer.Option(..., "--out", help="Output directory for leaderboard.csv and leaderboard.md."),
 ) -> None:
     """One leaderboard (mean ± std over seeds) from several `bench ids` outputs."""

@@ -14,11 +14,15 @@ _LAYERS = ("pathloss", "mobility", "link", "fidelity", "all")
 
 def calibrate_cmd(
     layer: one_of(_LAYERS) = typer.Argument(..., metavar="LAYER", help="What to calibrate."),
-    data: Path = typer.Option(..., "--data", help="Folder with the AERPAW data (shared layout or the original downloads)."),
+    data: Path = typer.Option(..., "--data",
+                              help="Folder with the AERPAW data (shared layout or the original downloads)."),
     out: Path = typer.Option(..., "--out", help="Output folder for JSON, markdown and figures."),
-    write_profile: str = typer.Option(None, "--write-profile", help="Save the fitted twin profile (with provenance) under this name, or to a path ending in .json."),
+    write_profile: str = typer.Option(None, "--write-profile",
+                                      help="Save the fitted twin profile (with provenance) under this name, or to a "
+                                           "path ending in .json."),
     seed: int = seed_option("Seed of the splits and simulations."),
-    missions: str = typer.Option(None, "--missions", help="AFAR team -> mission, e.g. '301=spiral,328=grid' (default: the paper's)."),
+    missions: str = typer.Option(None, "--missions",
+                                 help="AFAR team -> mission, e.g. '301=spiral,328=grid' (default: the paper's)."),
 ) -> None:
     """Calibrate the digital twin against real AERPAW measurements (paper sec. 4)."""
     from uavcas.calibration.loaders import CalibrationDataError

@@ -10,8 +10,18 @@ from rich.table import Table
 from uavcas.scenario import PRESETS, manifest, parse_shard, select_shard
 from uavcas.vocabulary import FIDELITY_POLICIES
 
-from .common import (ExtractView, Termination, check_output, console, fail,
-                     min_attack_fraction_option, one_of, profile_option, seed_option, termination_option)
+from .common import (
+    ExtractView,
+    Termination,
+    check_output,
+    console,
+    fail,
+    min_attack_fraction_option,
+    one_of,
+    profile_option,
+    seed_option,
+    termination_option,
+)
 
 Preset = one_of(PRESETS)
 
@@ -54,7 +64,8 @@ def run_cmd(
                                       "or 'retry' (try again up to --retries, then keep the last, flagged)."),
     report: bool = typer.Option(True, "--report/--no-report", help="Write DATASET_DIR/report/index.html at the end."),
     min_attack_fraction: float = min_attack_fraction_option(),
-    view: ExtractView = typer.Option("5tuple", "--view", help="What each run is extracted to: 5tuple, hostpair, window-hostpair "
+    view: ExtractView = typer.Option("5tuple", "--view",
+                                     help="What each run is extracted to: 5tuple, hostpair, window-hostpair "
                                                       "(flows) or window-host (one row per node per plan window)."),
     termination: Termination | None = termination_option(),
     mavlink_signing: bool = typer.Option(False, "--mavlink-signing/--no-mavlink-signing",
@@ -117,7 +128,8 @@ def run_cmd(
 
         console.print(f"report: {write_report(out, Path(out) / 'report').resolve()}")
     if result.failed:
-        raise fail(f"{len(result.failed)} run(s) failed: " + "; ".join(f"{o.index}: {o.error}" for o in result.failed[:3]), 1)
+        raise fail(f"{len(result.failed)} run(s) failed: "
+                   + "; ".join(f"{o.index}: {o.error}" for o in result.failed[:3]), 1)
 
 
 def register(app: typer.Typer) -> None:

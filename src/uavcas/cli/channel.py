@@ -40,13 +40,14 @@ def predict_cmd(
     model: one_of(pathloss_names()) = typer.Option(
         ..., "--model", help=f"The path-loss model (registry uavcas.channel.pathloss): {pathloss_help()}."),
     geom: Path = typer.Option(..., "--in", help="CSV with d3d_m, d2d_m, h_uav_m, h_bs_m (fc_ghz optional)."),
-    out: Path = typer.Option(..., "--out", help="Output CSV: the input plus pathloss_db, snr_db, mcs, rate_mbps, loss."),
+    out: Path = typer.Option(..., "--out",
+                             help="Output CSV: the input plus pathloss_db, snr_db, mcs, rate_mbps, loss."),
     profile: str = profile_option(),
     tx_dbm: float = typer.Option(20.0, "--tx-dbm", help="Transmit power (dBm)."),
     noise_dbm: float = typer.Option(-95.0, "--noise-dbm", help="Noise floor (dBm)."),
 ) -> None:
     """Evaluate a path-loss model and the link chain on your own geometry."""
-    from uavcas.channel.predict import D2D_TOLERANCE_M, GeometryError, prediction_csv, predict_frame, read_geometry
+    from uavcas.channel.predict import D2D_TOLERANCE_M, GeometryError, predict_frame, prediction_csv, read_geometry
     from uavcas.twin.profile import ProfileError, load_profile
 
     check_output(out, "file")

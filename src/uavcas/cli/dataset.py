@@ -8,15 +8,19 @@ import typer
 
 from .common import check_output, console, fail, seed_option
 
-dataset_app = typer.Typer(help="Datasets without an emulation: synthetic flows in the dataset schema.", no_args_is_help=True)
+dataset_app = typer.Typer(help="Datasets without an emulation: synthetic flows in the dataset schema.",
+                          no_args_is_help=True)
 
 
 @dataset_app.command("synth")
 def synth_cmd(
     out: Path = typer.Option(..., "--out", help="Dataset directory to create (must not exist, or be empty)."),
-    runs: int = typer.Option(48, "--runs", min=1, help="Runs; run r takes the medium preset's configuration r (16 compositions x 4 channel settings, cycling)."),
+    runs: int = typer.Option(48, "--runs", min=1,
+                             help="Runs; run r takes the medium preset's configuration r (16 compositions x 4 channel "
+                                  "settings, cycling)."),
     seed: int = seed_option("Seed of the flows (and of each run's seed)."),
-    flows_per_run: int = typer.Option(60, "--flows-per-run", min=1, help="Flows per run (about half are attack flows in attack runs)."),
+    flows_per_run: int = typer.Option(60, "--flows-per-run", min=1,
+                                      help="Flows per run (about half are attack flows in attack runs)."),
 ) -> None:
     """Synthetic flows with a known structure (floods separable, Wormhole identical to Benign),
     built by the real flow and feature code; for trying `analyze` and `bench` without root."""

@@ -18,11 +18,14 @@ CSV_HELP = ("csv: one row per flow, CICIDS2017's column names (Flow ID, Source I
 
 def export_cmd(
     dataset_dir: Path = dataset_argument(),
-    fmt: one_of(EXPORT_FORMATS) = typer.Option("uavcas-csv", "--format", help="uavcas-csv: the authors' UAV-CAS_stat.csv + "
-                                                                            "UAV-CAS_ts.csv, one row per host pair. " + CSV_HELP),
+    fmt: one_of(EXPORT_FORMATS) = typer.Option("uavcas-csv", "--format",
+                                               help="uavcas-csv: the authors' UAV-CAS_stat.csv + UAV-CAS_ts.csv, "
+                                                    "one row per host pair. " + CSV_HELP),
     out: Path = typer.Option(..., "--out", help="uavcas-csv: the directory to write the two files to; csv: the file."),
-    embed_config: bool = typer.Option(False, "--embed-config", help="uavcas-csv: the _cfg variants, Label = <class>|<config>."),
-    include_flags: bool = typer.Option(False, "--include-flags", help="uavcas-csv: add the packet_flag list column to the ts file."),
+    embed_config: bool = typer.Option(False, "--embed-config",
+                                      help="uavcas-csv: the _cfg variants, Label = <class>|<config>."),
+    include_flags: bool = typer.Option(False, "--include-flags",
+                                       help="uavcas-csv: add the packet_flag list column to the ts file."),
     view: View | None = typer.Option(None, "--view", help="The flow view to export when the dataset holds several."),
 ) -> None:
     """Export a dataset: in the authors' released layout (one stat and one ts CSV, one row per host

@@ -10,18 +10,34 @@ import typer
 from uavcas.schema import EPISODE_VIEW
 from uavcas.vocabulary import LABEL_MODES
 
-from .common import (ExtractView, Standard, Termination, allow_truncated_option, check_output, console,
-                     dataset_errors, fail, features_option, min_attack_fraction_option, one_of, run_dir_argument,
-                     termination_option, warn)
+from .common import (
+    ExtractView,
+    Standard,
+    Termination,
+    allow_truncated_option,
+    check_output,
+    console,
+    dataset_errors,
+    fail,
+    features_option,
+    min_attack_fraction_option,
+    one_of,
+    run_dir_argument,
+    termination_option,
+    warn,
+)
 
 
 def extract_cmd(
     run_dir: Path = run_dir_argument(),
     out: Path = typer.Option(..., "--out", help="Dataset directory to add the run's shard to."),
-    view: ExtractView = typer.Option("5tuple", "--view", help="Flow key: 5tuple, hostpair or window-hostpair (one flow per host pair per plan window); "
-                                                   "or window-host: episodes, one row per node per plan window (collaborative classes)."),
+    view: ExtractView = typer.Option("5tuple", "--view",
+                                     help="Flow key: 5tuple, hostpair or window-hostpair (one flow per host pair per "
+                                          "plan window); or window-host: episodes, one row per node per plan window "
+                                          "(collaborative classes)."),
     features: Standard = features_option(),
-    labels: one_of(LABEL_MODES) = typer.Option("ours", "--labels", help="ours (from each packet's effect) or paper (IP membership)."),
+    labels: one_of(LABEL_MODES) = typer.Option("ours", "--labels",
+                                               help="ours (from each packet's effect) or paper (IP membership)."),
     min_packets: int = typer.Option(None, "--min-packets", help="Drop smaller flows (default by view)."),
     termination: Termination | None = termination_option(),
     allow_truncated: bool = allow_truncated_option(),
@@ -44,7 +60,8 @@ def extract_cmd(
         warn([f"run {info.run_id} is incomplete (exit status {info.run_exit_status}); its shard is marked so"])
     counts = ", ".join(f"{k} {v}" for k, v in sorted(info.class_counts.items()))
     unit = "host-window rows" if info.view == EPISODE_VIEW else "flows"
-    console.print(f"run [bold]{info.run_id}[/]: {info.n_flows} {unit} from {info.n_packets} packets ({counts}) -> {out}", highlight=False)
+    console.print(f"run [bold]{info.run_id}[/]: {info.n_flows} {unit} from {info.n_packets} packets ({counts}) "
+                  f"-> {out}", highlight=False)
     if info.impure_dropped:
         console.print(f"{info.impure_dropped} flow(s) left out: attack_fraction below {min_attack_fraction:g}")
 

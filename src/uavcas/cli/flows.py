@@ -9,8 +9,22 @@ from pathlib import Path
 import typer
 from rich.table import Table
 
-from .common import (Standard, Termination, View, allow_truncated_option, atomic_write_text, check_output, console,
-                     dataset_errors, err_console, fail, features_option, one_of, termination_option, warn)
+from .common import (
+    Standard,
+    Termination,
+    View,
+    allow_truncated_option,
+    atomic_write_text,
+    check_output,
+    console,
+    dataset_errors,
+    err_console,
+    fail,
+    features_option,
+    one_of,
+    termination_option,
+    warn,
+)
 
 FlowsFormat = one_of(("table", "csv", "parquet"))
 
@@ -27,14 +41,22 @@ def flows_cmd(
     pcaps: list[Path] = typer.Argument(..., help="Capture file(s), pcap or pcapng; several = capture points."),
     view: View = typer.Option("5tuple", "--view", help="Flow key: 5tuple or hostpair (the authors')."),
     features: Standard = features_option(),
-    min_packets: int = typer.Option(None, "--min-packets", help="Drop smaller flows (default 1 for 5tuple, 2 under --termination cic, 10 for hostpair)."),
+    min_packets: int = typer.Option(None, "--min-packets",
+                                    help="Drop smaller flows (default 1 for 5tuple, 2 under --termination cic, 10 for "
+                                         "hostpair)."),
     fmt: FlowsFormat = typer.Option("table", "--format", help="table, csv or parquet."),
     out: Path = typer.Option(None, "--out", help="Output file (default: standard output; required for parquet)."),
     allow_truncated: bool = allow_truncated_option(),
     termination: Termination | None = termination_option(),
-    idle_timeout: float = typer.Option(None, "--idle-timeout", help="Idle timeout in s; 0 = none (default: connection 15, cic none, timeout 120)."),
-    active_timeout: float = typer.Option(None, "--active-timeout", help="Active timeout in s; 0 = none (default: connection and cic 120, timeout 1800)."),
-    close_grace: float = typer.Option(None, "--close-grace", help="connection: s after a close during which the connection's packets join it (default 60)."),
+    idle_timeout: float = typer.Option(None, "--idle-timeout",
+                                       help="Idle timeout in s; 0 = none (default: connection 15, cic none, timeout "
+                                            "120)."),
+    active_timeout: float = typer.Option(None, "--active-timeout",
+                                         help="Active timeout in s; 0 = none (default: connection and cic 120, timeout "
+                                              "1800)."),
+    close_grace: float = typer.Option(None, "--close-grace",
+                                      help="connection: s after a close during which the connection's packets join it "
+                                           "(default 60)."),
 ) -> None:
     """Flows of one capture (streamed, bounded memory) or of several capture points (de-duplicated)."""
     from uavcas.dataset.flow_files import write_csv, write_parquet

@@ -14,8 +14,11 @@ from .common import check_output, console, dataset_errors, err_console, fail, on
 
 
 def import_cmd(
-    src: Path = typer.Argument(..., help="Directory with UAV-CAS_stat.csv / UAV-CAS_ts.csv (or _cfg variants), or one of them."),
-    fmt: one_of(IMPORT_FORMATS) = typer.Option("uavcas-csv", "--format", help="uavcas-csv: the authors' released layout."),
+    src: Path = typer.Argument(...,
+                               help="Directory with UAV-CAS_stat.csv / UAV-CAS_ts.csv (or _cfg variants), or one of "
+                                    "them."),
+    fmt: one_of(IMPORT_FORMATS) = typer.Option("uavcas-csv", "--format",
+                                               help="uavcas-csv: the authors' released layout."),
     out: Path = typer.Option(..., "--out", help="New dataset directory to create."),
 ) -> None:
     """Import the authors' CSV layout (theirs as released, or ours) into a dataset directory."""
@@ -29,7 +32,8 @@ def import_cmd(
     for note in imp.notes:
         console.print(note, highlight=False)
     err_console.print(f"the layout lacks: {', '.join(imp.lacks)}", highlight=False, soft_wrap=True)
-    console.print(f"imported {card['n_flows']} flows ({card['features']['standard']} features) -> {out}", highlight=False)
+    console.print(f"imported {card['n_flows']} flows ({card['features']['standard']} features) -> {out}",
+                  highlight=False)
 
 
 def register(app: typer.Typer) -> None:

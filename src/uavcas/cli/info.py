@@ -38,7 +38,8 @@ def info_cmd(
         table.add_row(cls, str(n), percent(n, total))
     std = card_standard(card)
     table.caption = (f"features: {std}; views: {', '.join(card.get('views', []))}; "
-                     f"labels: {', '.join(card.get('label_modes', []))}; schema v{card.get('schema_version')}")  # fmt: skip
+                     f"labels: {', '.join(card.get('label_modes', []))}; "
+                     f"schema v{card.get('schema_version')}")
     console.print(table)
     runs = dataset_runs(dataset_dir, card)
     fid = card.get("fidelity") or {}

@@ -8,9 +8,18 @@ from pathlib import Path
 import typer
 from rich.table import Table
 
-
-from .common import (atomic_write_text, check_output, config_argument, console, plan_or_fail, profile_option,
-                     seed_option, window_s_option, windows_option, episodes_option)
+from .common import (
+    atomic_write_text,
+    check_output,
+    config_argument,
+    console,
+    episodes_option,
+    plan_or_fail,
+    profile_option,
+    seed_option,
+    window_s_option,
+    windows_option,
+)
 
 
 def plan_cmd(

@@ -11,7 +11,8 @@ from .common import check_output, console, dataset_argument, fail
 
 def report_cmd(
     dataset: Path = dataset_argument(),
-    out: Path = typer.Option(..., "--out", help="Directory for index.html, the one self-contained file written (figures inlined)."),
+    out: Path = typer.Option(..., "--out",
+                             help="Directory for index.html, the one self-contained file written (figures inlined)."),
 ) -> None:
     """Write a self-contained HTML report of a dataset: summary, runs, topology, fidelity, distributions, card."""
     from uavcas.dataset.store import DatasetError

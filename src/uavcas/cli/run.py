@@ -16,13 +16,26 @@ from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 from uavcas.vocabulary import MAVLINK_PAYLOADS
 
 from .audit import fidelity_line
-from .common import (check_output, config_argument, console, episodes_option, fail, plan_or_fail, prefix_option,
-                     prefix_or_fail, profile_option, seed_option, window_s_option, windows_option)
+from .common import (
+    check_output,
+    config_argument,
+    console,
+    episodes_option,
+    fail,
+    plan_or_fail,
+    prefix_option,
+    prefix_or_fail,
+    profile_option,
+    seed_option,
+    window_s_option,
+    windows_option,
+)
 
 
 def run_cmd(
     config: str = config_argument(),
-    out: Path = typer.Option(..., "--out", help="Run directory: plan.json, pcap/, attacks.jsonl, shaping.jsonl, run.json."),
+    out: Path = typer.Option(..., "--out",
+                             help="Run directory: plan.json, pcap/, attacks.jsonl, shaping.jsonl, run.json."),
     seed: int = seed_option("Plan seed."),
     windows: int = windows_option(),
     window_s: float = window_s_option(),
@@ -31,7 +44,8 @@ def run_cmd(
     prefix: str = prefix_option("Namespace prefix (default: random)."),
     think_s: float = typer.Option(0.5, "--think-s", min=0.0, help="Mean pause between a BS's image fetches."),
     video_kbps: int = typer.Option(None, "--video-kbps", min=1,
-                                   help="H.264 bitrate of each UAV's video in kbit/s (payload video, mixed; default 500)."),
+                                   help="H.264 bitrate of each UAV's video in kbit/s (payload video, mixed; default "
+                                        "500)."),
     mavlink_signing: bool = typer.Option(False, "--mavlink-signing/--no-mavlink-signing",
                                          help="MAVLink 2 message signing between ground stations and UAVs, with a "
                                               "per-run key (payload telemetry, video, mixed)."),
@@ -63,8 +77,8 @@ def run_cmd(
     console.print(f"[bold]{p.config}[/] seed={seed}: {len(p.nodes)} nodes, {len(p.windows)} windows x "
                   f"{p.window_s:g} s, shaper {feats.shaper} -> {out}", highlight=False)
     for a in p.attacks:
-        console.print(f"  scheduled {a.attack_id}: {','.join(a.attackers) or '(no swarm node)'} -> {','.join(a.victims)} "
-                      f"[{a.start_s:.2f}, {a.stop_s:.2f}) s", highlight=False)
+        console.print(f"  scheduled {a.attack_id}: {','.join(a.attackers) or '(no swarm node)'} -> "
+                      f"{','.join(a.victims)} [{a.start_s:.2f}, {a.stop_s:.2f}) s", highlight=False)
     with Progress(TextColumn("{task.description}"), BarColumn(), TextColumn("{task.completed:.0f}/{task.total:.0f}"),
                   TimeElapsedColumn(), console=console, transient=False) as progress:
         task = progress.add_task("setting up", total=len(p.windows))
@@ -82,7 +96,8 @@ def run_cmd(
                 r = e.record
                 rel = r.t_unix - t0[0] if t0[0] else 0.0
                 more = f" ({r.syn_count} SYNs)" if getattr(r, "syn_count", None) is not None else ""
-                more += f" ({r.dropped_frames} frames dropped)" if getattr(r, "dropped_frames", None) is not None else ""
+                if getattr(r, "dropped_frames", None) is not None:
+                    more += f" ({r.dropped_frames} frames dropped)"
                 progress.console.print(f"  t={rel:6.2f} s  {r.event:5s} {r.attack_id}{more}", highlight=False)
             elif isinstance(e, AttackLogged) and isinstance(e.record, AttackRate):
                 r = e.record
