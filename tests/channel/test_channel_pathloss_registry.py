@@ -4,17 +4,14 @@ error listing the registered ones, and a model is added by dropping one module i
 
 from __future__ import annotations
 
-import os
-import shutil
 import subprocess
 import sys
-import textwrap
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-import uavcas
+from helpers.plugin import check_ok, package_with
 from uavcas.channel.geometry import LinkGeometry
 from uavcas.channel.pathloss import (
     LosPathLossModel,
@@ -157,16 +154,11 @@ print("ok")
 @pytest.fixture(scope="module")
 def plugged(tmp_path_factory) -> tuple[Path, dict]:
     root = tmp_path_factory.mktemp("plug")
-    shutil.copytree(Path(uavcas.__file__).parent, root / "uavcas", ignore=shutil.ignore_patterns("__pycache__"))
-    (root / "uavcas" / "channel" / "pathloss" / "halfsplit.py").write_text(textwrap.dedent(PLUGIN))
-    env = {**os.environ, "PYTHONPATH": str(root), "COLUMNS": "250"}
-    return root, env
+    return root, package_with(root, "channel/pathloss/halfsplit.py", PLUGIN)
 
 
 def test_a_dropped_in_module_is_found_by_the_registry_codec_plan_channel_and_dictionary(plugged):
-    root, env = plugged
-    r = subprocess.run([sys.executable, "-c", CHECK, str(root)], capture_output=True, text=True, env=env, timeout=300)
-    assert r.returncode == 0 and r.stdout.strip() == "ok", r.stderr[-2000:]
+    check_ok(CHECK, *plugged)
 
 
 def test_a_dropped_in_module_is_offered_and_evaluated_by_channel_predict(plugged):

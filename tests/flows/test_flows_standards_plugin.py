@@ -4,18 +4,15 @@ and the dataset card's column entries all know it, with no other edit."""
 
 from __future__ import annotations
 
-import os
-import shutil
 import subprocess
 import sys
-import textwrap
 from pathlib import Path
 
 import pandas as pd
 import pytest
 
-import uavcas
 from helpers.pcapgen import http_session, write
+from helpers.plugin import check_ok, package_with
 
 PLUGIN = '''
 """Feature standard `tiny` (test only): a flow's packets and frame bytes."""
@@ -61,16 +58,11 @@ print("ok")
 @pytest.fixture(scope="module")
 def plugged(tmp_path_factory) -> tuple[Path, dict]:
     root = tmp_path_factory.mktemp("plug")
-    shutil.copytree(Path(uavcas.__file__).parent, root / "uavcas", ignore=shutil.ignore_patterns("__pycache__"))
-    (root / "uavcas" / "flows" / "standards" / "tiny.py").write_text(textwrap.dedent(PLUGIN))
-    env = {**os.environ, "PYTHONPATH": str(root), "COLUMNS": "250"}
-    return root, env
+    return root, package_with(root, "flows/standards/tiny.py", PLUGIN)
 
 
 def test_a_dropped_in_standard_is_in_the_registry_and_the_card(plugged):
-    root, env = plugged
-    r = subprocess.run([sys.executable, "-c", CHECK, str(root)], capture_output=True, text=True, env=env, timeout=300)
-    assert r.returncode == 0 and r.stdout.strip() == "ok", r.stderr[-2000:]
+    check_ok(CHECK, *plugged)
 
 
 def test_a_dropped_in_standard_is_offered_and_computed_by_the_cli(plugged, tmp_path):
