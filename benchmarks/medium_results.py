@@ -187,6 +187,10 @@ def checks(lb: pd.DataFrame, seeds: pd.DataFrame, classes: dict[str, pd.DataFram
             rows.append([f"window-host rows of {cls} (>= {MIN_ROWS} from >= {MIN_RUNS} runs)", f"{n} rows, {r} runs",
                          "met" if ok else "**not met**"])
     for view in VIEWS:
+        if lb.empty or not (lb["view"] == view).any():
+            rows.append([f"{view}: the context targets", "no `bench ids` output of this view among the inputs",
+                         "**not measured**"])
+            continue
         m = seed_margins(seeds, view)
         if not m.empty:
             won = int((m.margin >= STEALTH_MARGIN).sum())
@@ -442,6 +446,9 @@ def page(camp, classes, lb, seeds, metas, previous, torch_json) -> str:
                 + cross_section(lb, view) + context_section(lb, seeds, view))
         if body:
             out += [f"## {VIEWS[view].capitalize()}", "", *body]
+        else:
+            out += [f"## {VIEWS[view].capitalize()}", "",
+                    "Not benchmarked in this version: the inputs name no `bench ids` output of this view.", ""]
     out += fit_section(lb, metas) + torch_section(torch_json) + changes_section(lb, previous, classes)
     return "\n".join(out).rstrip() + "\n"
 
