@@ -13,7 +13,9 @@ import pytest
 from uavcas.dataset.dictionary import describe
 from uavcas.dataset.store import read_card
 
-pytestmark = [pytest.mark.root, pytest.mark.slow]
+# a real quick campaign (about 150 s quiet), then mlcroissant reads its ~28k records row by row
+# (pandas apply per field): past the suite's 600 s on a loaded machine (it timed out so once)
+pytestmark = [pytest.mark.root, pytest.mark.slow, pytest.mark.timeout(1800)]
 
 
 def _cli(*args, timeout: int) -> subprocess.CompletedProcess:
