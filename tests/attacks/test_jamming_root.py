@@ -12,8 +12,6 @@ jammer's window are not Jamming.
 from __future__ import annotations
 
 import math
-import subprocess
-import sys
 
 import numpy as np
 import pytest
@@ -22,6 +20,7 @@ from uavcas.extract import extract_detailed
 from uavcas.fidelity import read_fidelity
 from uavcas.labels import read_attack_log
 from uavcas.rundir import RunDir
+from uavcas.testing.audited import run_audited
 from uavcas.vocabulary import FAMILIES
 
 pytestmark = [pytest.mark.root, pytest.mark.slow]
@@ -38,9 +37,7 @@ def runs(tmp_path_factory):
     out = {}
     for name, cfg in CONFIGS.items():  # one at a time: two emulations at once strain the audit
         d = base / name.replace("+", "_")
-        r = subprocess.run([sys.executable, "-m", "uavcas.cli", "run", cfg, "--seed", str(SEED), "--windows", "6",
-                            "--out", str(d)], capture_output=True, text=True, timeout=300)
-        assert r.returncode == 0, f"{name}: {(r.stdout + r.stderr)[-2000:]}"
+        run_audited([cfg, "--seed", str(SEED), "--windows", "6"], d, timeout_s=300)
         out[name] = (RunDir(d), extract_detailed(d))
     return out
 

@@ -13,8 +13,6 @@ from __future__ import annotations
 
 import json
 import math
-import subprocess
-import sys
 
 import numpy as np
 import pytest
@@ -22,6 +20,7 @@ import pytest
 from uavcas.emulation.apps.mavlink import read_log
 from uavcas.events import AttackStart, AttackStop, read_attack_records
 from uavcas.rundir import RunDir
+from uavcas.testing.audited import run_audited
 
 pytestmark = [pytest.mark.root, pytest.mark.slow]
 CFG = "gps_spoof=3-6-2-telemetry-logdist-adaptive-random-30-95"
@@ -32,10 +31,7 @@ REPORTS = ("GLOBAL_POSITION_INT", "GPS_RAW_INT")
 @pytest.fixture(scope="module")
 def run(tmp_path_factory) -> RunDir:
     out = tmp_path_factory.mktemp("gps") / "run"
-    r = subprocess.run([sys.executable, "-m", "uavcas.cli", "run", CFG, "--seed", str(SEED), "--windows", "6",
-                        "--out", str(out)], capture_output=True, text=True, timeout=300)
-    assert r.returncode == 0, (r.stdout + r.stderr)[-2000:]
-    return RunDir(out)
+    return RunDir(run_audited([CFG, "--seed", str(SEED), "--windows", "6"], out, timeout_s=300))
 
 
 @pytest.fixture(scope="module")

@@ -15,13 +15,12 @@ MAVLinkInjection holds an affected packet. Run under the root lock:
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
 
 import pytest
 
 from uavcas.emulation.apps.mavlink import read_log
 from uavcas.rundir import RunDir
+from uavcas.testing.audited import run_audited
 
 pytestmark = [pytest.mark.root, pytest.mark.slow]
 CFG = "mavlink_inject=rtl-6-2-telemetry-logdist-adaptive-random-30-95"
@@ -34,11 +33,8 @@ def runs(tmp_path_factory) -> dict[bool, RunDir]:
     out = {}
     for signed in (False, True):  # one after the other: two emulations at once break the audit's tolerances
         d = base / ("on" if signed else "off")
-        r = subprocess.run([sys.executable, "-m", "uavcas.cli", "run", CFG, "--seed", str(SEED), "--windows", "4",
-                            "--out", str(d), *(["--mavlink-signing"] if signed else [])],
-                           capture_output=True, text=True, timeout=240)
-        assert r.returncode == 0, f"signing {signed}: {(r.stdout + r.stderr)[-2000:]}"
-        out[signed] = RunDir(d)
+        signing = ["--mavlink-signing"] if signed else []
+        out[signed] = RunDir(run_audited([CFG, "--seed", str(SEED), "--windows", "4", *signing], d, timeout_s=240))
     return out
 
 

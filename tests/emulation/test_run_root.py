@@ -251,7 +251,8 @@ def test_interrupted_run_leaves_nothing(tmp_path, sig, code, how):
                              "--windows", "3", "--out", str(out)], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                             text=True, start_new_session=True, preexec_fn=_ignore_sigint if how == "ignored" else None)
     prefix = rc.wait_registered(proc.pid, t)
-    time.sleep(4)
+    rc.wait_started(out)
+    time.sleep(2)  # traffic flows through the delay stage
     (os.killpg if how == "group" else os.kill)(proc.pid, sig)
     _, err = proc.communicate(timeout=60)
     assert proc.returncode == code, err
@@ -270,7 +271,8 @@ def test_kill_9_then_uavcas_clean_leaves_nothing(tmp_path):
                              "--out", str(out)], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
                             start_new_session=True)
     prefix = rc.wait_registered(proc.pid, t)
-    time.sleep(4)
+    rc.wait_started(out)
+    time.sleep(2)  # traffic flows through the delay stage
     os.kill(proc.pid, signal.SIGKILL)
     proc.wait(10)
     r = subprocess.run([UAVCAS, "clean", "--prefix", prefix], capture_output=True, text=True, timeout=60)

@@ -150,3 +150,21 @@ def wait_registered(pid: int, since_unix: float, timeout_s: float = 60.0) -> str
                 return p.name
         time.sleep(0.1)
     raise AssertionError("the run never registered")
+
+
+def wait_started(out_dir: Path, timeout_s: float = 120.0) -> float:
+    """Wait until the run writing `out_dir` reached its plan's t = 0; returns that wall-clock time.
+
+    Set-up (namespaces, the delay stage, MAVLink endpoints) takes from 2 s idle to over 10 s on a
+    loaded 2-core box, so a test that must interrupt a run *after* traffic started waits for this,
+    not for a fixed sleep."""
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        try:
+            t0 = json.loads((out_dir / ".uavcas-run").read_text()).get("t0_unix")
+        except (FileNotFoundError, ValueError):
+            t0 = None
+        if t0 is not None:
+            return float(t0)
+        time.sleep(0.1)
+    raise AssertionError(f"{out_dir}: the run never reached t = 0")

@@ -1,0 +1,41 @@
+"""`run_audited`: a real `uavcas run` for a root test, re-run once when its fidelity audit fails.
+
+The campaign's policy for flagged runs, applied to the tests that assert an audit passes. Under
+CPU contention (a loaded CI host, ffmpeg encoders starting beside saturated links) the delay stage
+is at times held up for milliseconds, and a saturated link's crossings come late: issue 28's open
+weak spot. The same seed and configuration run again is an independent draw of that contention,
+so "passes in one of two tries" is a claim that can still fail, where a single try flakes. The
+failed try stays beside the run (`OUT.try1`) for reading, and its figures go to the test log.
+"""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+import warnings
+from pathlib import Path
+
+TRIES = 2
+
+
+def verdict(run_dir: Path) -> dict | None:
+    """run.json's fidelity summary (None: the run was not audited)."""
+    return json.loads((run_dir / "run.json").read_text()).get("fidelity")
+
+
+def run_audited(args: list[str], out: Path, timeout_s: float, tries: int = TRIES) -> Path:
+    """`python -m uavcas.cli run ARGS --out OUT`; a try whose audit fails is moved to OUT.tryK and
+    the run made again, at most `tries` times. Returns OUT (the last try). Every try must exit 0."""
+    for k in range(1, tries + 1):
+        r = subprocess.run([sys.executable, "-m", "uavcas.cli", "run", *args, "--out", str(out)], capture_output=True,
+                           text=True, timeout=timeout_s)
+        assert r.returncode == 0, f"{' '.join(args)}: {(r.stdout + r.stderr)[-2000:]}"
+        fid = verdict(out)
+        if k == tries or fid is None or fid.get("verdict") == "pass":
+            return out
+        warnings.warn(f"{' '.join(args)}: try {k} failed its audit ({fid.get('failed')}; per-hop delay error "
+                      f"p50/p90/p99 {fid.get('delay_error_p50_ms')}/{fid.get('delay_error_p90_ms')}/"
+                      f"{fid.get('delay_error_p99_ms')} ms), run again", stacklevel=2)
+        out.rename(out.with_name(f"{out.name}.try{k}"))
+    return out
