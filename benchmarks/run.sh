@@ -30,6 +30,7 @@ if ((quick)); then
   run $PY benchmarks/ids_bench.py --runs 200 --epochs 5
   run $PY benchmarks/ids_cross_dataset.py --epochs 5 --out "$out/cross_dataset.csv"
   run $PY benchmarks/routing_quality.py --seeds 1
+  run $PY benchmarks/sizing.py --sizes 5,10,20 --out "$out/sizing-runs" --json "$out/sizing.json"
 else
   run $PY benchmarks/flows_throughput.py
   run $PY benchmarks/emulation_bench.py --json "$out/emulation.json"
@@ -39,11 +40,12 @@ else
   run $PY benchmarks/ids_bench.py
   run $PY benchmarks/ids_cross_dataset.py --out "$out/cross_dataset.csv"
   run $PY benchmarks/routing_quality.py
+  run $PY benchmarks/sizing.py --out "$out/sizing-runs" --json "$out/sizing.json"
 fi
 # The family runs' DDoS run, read back: SYN rates on the wire, and its flows against the most any
 # rule could label (on its extracted 5-tuple dataset).
 run $PY benchmarks/flood_fidelity.py "$ddos" --json "$out/flood_fidelity.json"
 run .venv/bin/uavcas extract "$ddos" --out "$out/ddos-dataset"
 run $PY benchmarks/attack_flow_bound.py "$ddos" "$out/ddos-dataset"
-rm -rf "$out/runs" "$out/ddos-dataset"  # pcaps of the family runs: about 1 GB per 20-UAV minute
+rm -rf "$out/runs" "$out/ddos-dataset" "$out/sizing-runs"  # pcaps of the family runs: about 1 GB per 20-UAV minute
 echo "results in $out"
