@@ -19,7 +19,8 @@ import pytest
 
 from uavcas.diagnostics import selftest
 from uavcas.diagnostics.selftest import HopConfig
-from uavcas.emulation import Emulation, cleanup, kernel
+from uavcas.emulation import cleanup, kernel
+from uavcas.emulation.emulation import Emulation
 from uavcas.emulation.naming import Naming, new_prefix
 from uavcas.emulation.probe import CGROUP_ROOT
 from uavcas.testing.handmade_plans import link, nodes, plan, window

@@ -49,7 +49,7 @@ def realize_request(req: WorkerRequest) -> WorkerResult:
     """Plan, check and realise one scenario into `req.out_dir` (in this process; needs root)."""
     from uavcas.emulation.preflight import preflight, probe_kernel
     from uavcas.emulation.runner import RunOptions, realize
-    from uavcas.twin import plan
+    from uavcas.twin.plan import plan
 
     p = plan(req.config, seed=req.seed, windows=req.windows, window_s=req.window_s, profile=req.profile,
              episodes=req.episodes)

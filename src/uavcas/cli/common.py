@@ -176,7 +176,7 @@ def path_fail(path: Path, error: Exception) -> "typer.Exit":
 def plan_or_fail(config: str, seed: int, windows: int, window_s: float, profile: str | None, episodes: int = 1):
     """The plan of a scenario, or a one-line error naming the bad field / profile (exit 2)."""
     from uavcas.scenario import ScenarioError
-    from uavcas.twin import plan as make_plan
+    from uavcas.twin.plan import plan as make_plan
     from uavcas.twin.profile import ProfileError
     from uavcas.twin.schedule import EpisodeError
 
