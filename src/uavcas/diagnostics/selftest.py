@@ -22,6 +22,8 @@ import sys
 import time
 from dataclasses import dataclass
 
+from scipy.stats import binom
+
 TCP_PAYLOAD_FRACTION = 1448 / 1514
 PORT = 5999
 SO_TIMESTAMPNS = 35  # = SCM_TIMESTAMPNS (asm-generic/socket.h); not exported by Python's socket
@@ -229,7 +231,6 @@ def measure_udp(emu, src: str, dst: str, count: int, pps: float, size: int = 200
 
 def binomial_interval(n: int, p: float, confidence: float = 0.99) -> tuple[float, float]:
     """Range of the observed loss *fraction* that a correct shaper yields with this confidence."""
-    from scipy.stats import binom
 
     lo, hi = binom.interval(confidence, n, p)
     return lo / n, hi / n
