@@ -12,11 +12,21 @@ import typer
 from rich.console import Console
 from rich.markup import escape
 
-from uavcas.atomic import atomic_path, atomic_write_bytes, atomic_write_text  # noqa: F401
+from uavcas.atomic import UnsafeOutput, atomic_path, atomic_write_bytes, atomic_write_text, check_out_dir, check_target  # noqa: F401
+from uavcas.dataset.external import ExternalFormatError
+from uavcas.dataset.store import DatasetError
+from uavcas.dataset.uavcas_csv import CsvFormatError
+from uavcas.emulation.naming import check_prefix as check
+from uavcas.flows import CaptureError
 from uavcas.flows.assemble import VIEWS
 from uavcas.flows.standards import DEFAULT_STANDARD, names, standards
 from uavcas.flows.termination import TERMINATIONS
+from uavcas.labels import LabelError
+from uavcas.scenario import ScenarioError
 from uavcas.schema import EPISODE_VIEW
+from uavcas.twin.plan import plan as make_plan
+from uavcas.twin.profile import ProfileError
+from uavcas.twin.schedule import EpisodeError
 
 
 def _console(stderr: bool = False) -> Console:
@@ -112,7 +122,6 @@ def prefix_option(help: str) -> Any:
 def prefix_or_fail(prefix: str | None) -> str | None:
     """A `--prefix` the emulation can use (`uavcas.emulation.naming`), or a one-line error (exit 2)."""
     if prefix is not None:
-        from uavcas.emulation.naming import check_prefix as check
 
         try:
             check(prefix)
@@ -128,7 +137,6 @@ def check_output(path: Path, kind: Literal["file", "dir"], option: str = "--out"
     rules). A file's folder must exist: uavcas creates no folder the user did not name (`plan --out
     /no/such/dir/plan.json` is refused). An output directory is named as one: it is created, like
     `mkdir -p`, with any missing parents, once the command has work to write."""
-    from uavcas.atomic import UnsafeOutput, check_out_dir, check_target
 
     try:
         (check_target if kind == "file" else check_out_dir)(path)
@@ -151,11 +159,6 @@ def fail(message: str, code: int = 2) -> "typer.Exit":
 
 def dataset_errors() -> tuple[type[Exception], ...]:
     """What reading captures, runs and datasets raises on bad input: each is a one-line error."""
-    from uavcas.dataset.external import ExternalFormatError
-    from uavcas.dataset.store import DatasetError
-    from uavcas.dataset.uavcas_csv import CsvFormatError
-    from uavcas.flows import CaptureError
-    from uavcas.labels import LabelError
 
     return (CaptureError, DatasetError, LabelError, CsvFormatError, ExternalFormatError, ValueError, OSError)
 
@@ -175,10 +178,6 @@ def path_fail(path: Path, error: Exception) -> "typer.Exit":
 
 def plan_or_fail(config: str, seed: int, windows: int, window_s: float, profile: str | None, episodes: int = 1):
     """The plan of a scenario, or a one-line error naming the bad field / profile (exit 2)."""
-    from uavcas.scenario import ScenarioError
-    from uavcas.twin.plan import plan as make_plan
-    from uavcas.twin.profile import ProfileError
-    from uavcas.twin.schedule import EpisodeError
 
     try:
         p = make_plan(config, seed=seed, windows=windows, window_s=window_s, profile=profile, episodes=episodes)
