@@ -3,12 +3,15 @@ in `import_`, a keyword), parses its arguments and calls the library; each modul
 adds its command. `COMMANDS` below, the one place they are registered, gives each one's name, module
 and one-line help, in the help's order: the root command lists them from it and imports a command's
 module only when that command is resolved (run, or asked for its help), so `uavcas --help` loads no
-command's dependencies. Options and checks several commands share are in `common`."""
+command's dependencies. Options and checks several commands share are in `common`; the output
+streams and one-line errors, which the root needs too, in `console`."""
 
 from __future__ import annotations
 
 import errno
 import importlib
+import os
+import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -21,13 +24,13 @@ from typer._click import exceptions as _click_errors  # typer >= 0.20 carries it
 from uavcas import __version__
 from uavcas.atomic import UnsafeOutput
 
-from .common import fail
+from .console import fail
 
 
 @dataclass(frozen=True)
 class Registered:
     """A top-level command or group: its name, the module of this package whose `register(app)`
-    adds it, and the help line the root's help lists (`tests/cli/test_lazy_root.py` holds it equal
+    adds it, and the help line the root's help lists (`tests/test_cli_layout.py` holds it equal
     to the command's own)."""
 
     name: str
@@ -85,8 +88,25 @@ class _Unloaded(typer.core.TyperCommand):
         self.entry = entry
 
 
+def _matplotlib_config_dir() -> None:
+    """Where matplotlib's config folder cannot be written (a user without a home, e.g. nobody),
+    choose a temporary one before a command's module imports matplotlib: matplotlib would use one
+    too, but warn on stderr, which holds one line per error here."""
+    if "MPLCONFIGDIR" in os.environ:
+        return
+    own = Path(os.environ.get("XDG_CONFIG_HOME") or Path.home() / ".config") / "matplotlib"
+    try:
+        own.mkdir(parents=True, exist_ok=True)
+        writable = os.access(own, os.W_OK)
+    except OSError:
+        writable = False
+    if not writable:
+        os.environ["MPLCONFIGDIR"] = tempfile.mkdtemp(prefix="matplotlib-")
+
+
 def load(entry: Registered) -> Command:
     """The click command or group `entry`'s module registers (its module imported now)."""
+    _matplotlib_config_dir()
     module = importlib.import_module(f"{__name__}.{entry.module}")
     holder = typer.Typer()
     module.register(holder)

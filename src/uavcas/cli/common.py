@@ -9,7 +9,6 @@ from pathlib import Path
 from typing import Any, Literal
 
 import typer
-from rich.console import Console
 from rich.markup import escape
 
 from uavcas.atomic import UnsafeOutput, atomic_path, atomic_write_bytes, atomic_write_text, check_out_dir, check_target  # noqa: F401
@@ -28,16 +27,7 @@ from uavcas.twin.plan import plan as make_plan
 from uavcas.twin.profile import ProfileError
 from uavcas.twin.schedule import EpisodeError
 
-
-def _console(stderr: bool = False) -> Console:
-    # Piped or redirected output is never cut to a terminal's width: rich would otherwise render
-    # tables at 80 columns and end cells with an ellipsis ("7.22e-..." in a file).
-    c = Console(stderr=stderr)
-    return c if c.is_terminal else Console(stderr=stderr, width=100_000)
-
-
-console = _console()
-err_console = _console(stderr=True)
+from .console import console, err_console, fail  # noqa: F401  (the commands take them from here)
 
 TERMINATION_HELP = ("How a TCP flow ends: connection (default: one connection one flow; closed on RST or the "
                     "acknowledged last FIN, its trailing packets within 60 s join it), cic (CICFlowMeter exactly: "
@@ -146,15 +136,6 @@ def check_output(path: Path, kind: Literal["file", "dir"], option: str = "--out"
     if kind == "file" and not os.path.lexists(path) and not parent.is_dir():
         raise fail(f"{option} {path}: its folder {parent} does not exist (create it first)")
     return path
-
-
-def fail(message: str, code: int = 2) -> "typer.Exit":
-    """Print a one-line error to stderr and return the Exit to raise.
-
-    The message is plain text: escaped, so brackets in it (a regex, a list) are printed as
-    they are instead of being taken for console markup."""
-    err_console.print(f"[bold red]error:[/] {escape(message)}", highlight=False, soft_wrap=True)
-    return typer.Exit(code)
 
 
 def dataset_errors() -> tuple[type[Exception], ...]:
