@@ -95,7 +95,6 @@ def run_cmd(
             preset = preset or "quick"
             entries = manifest(preset, seed=seed, shard=sh)
         if profile is not None:
-
             load_profile(profile)
         result = run_campaign(entries, out, jobs=jobs, scheduler=scheduler, profile=profile, retries=retries,
                               extraction=extraction, fidelity=fidelity, mavlink_signing=mavlink_signing)
@@ -124,7 +123,6 @@ def run_cmd(
             console.print(f"  {line}", highlight=False, soft_wrap=True, markup=False)
     console.print(f"dataset: {Path(out).resolve()}/flows.parquet")
     if report and card:
-
         console.print(f"report: {write_report(out, Path(out) / 'report').resolve()}")
     if result.failed:
         raise fail(f"{len(result.failed)} run(s) failed: "

@@ -112,7 +112,6 @@ def prefix_option(help: str) -> Any:
 def prefix_or_fail(prefix: str | None) -> str | None:
     """A `--prefix` the emulation can use (`uavcas.emulation.naming`), or a one-line error (exit 2)."""
     if prefix is not None:
-
         try:
             check(prefix)
         except ValueError as e:

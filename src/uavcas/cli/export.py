@@ -42,7 +42,6 @@ def export_cmd(
     if not path.is_file():
         raise fail(f"{dataset_dir}: no flows.parquet (not a dataset directory)")
     if fmt == "csv":
-
         try:
             n = write_flow_csv(dataset_dir, out, view=view)
         except dataset_errors() as exc:

@@ -45,7 +45,6 @@ def plan_cmd(
         atomic_write_text(out, p.to_json())
         console.print(f"plan written to {out}")
     if figure is not None:
-
         paths = draw_plan_windows(p, figure)
         console.print(f"{len(paths)} topology figures written to {figure}")
 

@@ -92,7 +92,6 @@ def prepare_out_dir(out: Path, prefix: str) -> None:
 def probe_kernel(features=None):
     """(kernel features, the reason a run cannot use them or None); probes in a throw-away netns."""
     if features is None:
-
         features = probe()
     if not features.netns:
         return features, "cannot create network namespaces here (ip netns add failed)"
