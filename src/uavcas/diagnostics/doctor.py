@@ -22,8 +22,8 @@ from uavcas.emulation.probe import Features, probe
 from uavcas.twin import model as m
 
 from . import selftest
+from .checks import Check, DelayTolerance, HopConfig, delay_checks, goodput_check, loss_check
 from .contention import Contention, ContentionProbe
-from .selftest import Check, DelayTolerance, HopConfig
 
 
 @dataclass(frozen=True)
@@ -117,9 +117,9 @@ def _measure(emu: Emulation, prof: DoctorProfile) -> list[Check]:
     goodput = selftest.measure_goodput(emu, "uav0", "uav2", startup_s=prof.startup_s)
     emu.apply_window(1)
     udp = selftest.measure_udp(emu, "uav0", "uav2", prof.udp_probes, prof.udp_pps, startup_s=prof.startup_s)
-    return [selftest.goodput_check(goodput, min(h.rate_mbps for h in prof.rate_hops)),
-            *selftest.delay_checks(udp["delays_ms"], prof.impair_hops, prof.tol),
-            selftest.loss_check(udp["loss"], prof.udp_probes, prof.impair_hops)]
+    return [goodput_check(goodput, min(h.rate_mbps for h in prof.rate_hops)),
+            *delay_checks(udp["delays_ms"], prof.impair_hops, prof.tol),
+            loss_check(udp["loss"], prof.udp_probes, prof.impair_hops)]
 
 
 def run_doctor(prefix: str | None = None, measure: bool = True, backend: str | None = None,
