@@ -101,3 +101,12 @@ def test_no_file_writer_in_the_cli():
         found = writers.findall(path.read_text())
         assert not found, f"{path.name} writes files itself ({found}): move the writer into the library"
 
+
+
+def test_a_command_whose_dependency_is_missing_fails_in_one_line():
+    code = ("import sys\nsys.modules['mlcroissant'] = None  # import mlcroissant -> ImportError\n"
+            "from uavcas.cli import main\nsys.argv = ['uavcas', 'publish', '-h']\nmain()")
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120,
+                       env={**os.environ, "PYTHONPATH": str(CLI_DIR.parents[1])})
+    assert r.returncode == 1 and r.stderr.count("\n") == 1, r.stderr[-500:]
+    assert r.stderr.startswith("error: publish cannot load: ") and "mlcroissant" in r.stderr

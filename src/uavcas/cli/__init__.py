@@ -130,7 +130,10 @@ class _OneLineErrors(typer.core.TyperGroup):
     def get_command(self, ctx: Context | None, cmd_name: str) -> Command | None:
         cmd = self.commands.get(cmd_name)
         if isinstance(cmd, _Unloaded) and not self._listing:
-            cmd = self.commands[cmd_name] = load(cmd.entry)
+            try:
+                cmd = self.commands[cmd_name] = load(cmd.entry)
+            except ImportError as e:  # a partial installation: one line naming what is missing
+                raise fail(f"{cmd_name} cannot load: {e}; reinstall uavcas with its dependencies", 1) from None
         return cmd
 
     def format_help(self, ctx: Context, formatter) -> None:
