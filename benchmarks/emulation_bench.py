@@ -17,7 +17,8 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parents[1]
 from uavcas.atomic import atomic_write_text
 from uavcas.diagnostics import selftest
-from uavcas.emulation import Emulation, kernel
+from uavcas.emulation import kernel
+from uavcas.emulation.emulation import Emulation
 from uavcas.emulation.naming import new_prefix
 from uavcas.testing.handmade_plans import link, nn_plan, nodes, plan, random_plan, window
 

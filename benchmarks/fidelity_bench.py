@@ -35,7 +35,7 @@ from uavcas.emulation import nfqdelay
 from uavcas.emulation.preflight import probe_kernel
 from uavcas.emulation.runner import RunOptions, realize
 from uavcas.fidelity import write_fidelity
-from uavcas.twin import plan
+from uavcas.twin.plan import plan
 
 CASES = {
     "20-benign": "benign-20-2-image-logdist-adaptive-random-30-95",

@@ -12,7 +12,7 @@ from __future__ import annotations
 import argparse
 import itertools
 
-from uavcas.twin import plan
+from uavcas.twin.plan import plan
 from uavcas.twin.profile import load_profile
 
 

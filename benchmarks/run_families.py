@@ -109,7 +109,7 @@ def main() -> None:
     ap.add_argument("--json", type=Path)
     args = ap.parse_args()
     from uavcas.emulation.runner import realize
-    from uavcas.twin import plan
+    from uavcas.twin.plan import plan
 
     results = []
     for fam in args.families.split(","):

@@ -3,9 +3,17 @@ the options several commands share declared once (`uavcas.cli.common`), no file 
 
 from __future__ import annotations
 
+import importlib
+import inspect
 import keyword
+import os
 import re
+import subprocess
+import sys
 from pathlib import Path
+
+import typer
+import typer.main as typer_main
 
 import uavcas.cli as cli
 from uavcas.cli import app
@@ -27,21 +35,53 @@ def _callbacks(group) -> list:
     return out
 
 
+def _registered(entry: cli.Registered) -> typer.Typer:
+    """A Typer holding what `entry`'s module registers."""
+    holder = typer.Typer()
+    importlib.import_module(f"uavcas.cli.{entry.module}").register(holder)
+    return holder
+
+
 def test_every_command_and_group_lives_in_the_module_of_its_name():
     names = []
-    for c in app.registered_commands:
-        name = c.name or c.callback.__name__
-        names.append(name)
-        assert c.callback.__module__ == _module_of(name), (name, c.callback.__module__)
-    for g in app.registered_groups:
-        names.append(g.name)
-        modules = {cb.__module__ for cb in _callbacks(g.typer_instance)}
-        assert modules == {_module_of(g.name)}, (g.name, modules)
+    holders = set()
+    for entry in cli.COMMANDS:
+        names.append(entry.name)
+        assert f"uavcas.cli.{entry.module}" == _module_of(entry.name), entry
+        holder = _registered(entry)
+        registered = [c.name or c.callback.__name__ for c in holder.registered_commands] + \
+            [g.name for g in holder.registered_groups]
+        assert registered == [entry.name], (entry, registered)  # one command or group per module
+        modules = {cb.__module__ for cb in _callbacks(holder)}
+        assert modules == {_module_of(entry.name)}, (entry.name, modules)
+        holders |= {m.rsplit(".", 1)[1] for m in modules}
     assert {"flows", "extract", "export", "import", "info", "doctor", "clean", "channel", "bench"} <= set(names)
     # every command module holds commands: no module left behind by a move
-    helpers = {"__init__", "__main__", "common"}
-    holders = {cb.__module__.rsplit(".", 1)[1] for cb in _callbacks(app)}
+    helpers = {"__init__", "__main__", "common", "console"}
     assert {p.stem for p in CLI_DIR.glob("*.py")} - helpers == holders
+
+
+def test_the_root_lists_each_commands_own_help_line_in_the_registered_order():
+    root = typer_main.get_command(app)
+    assert root.list_commands(None) == [e.name for e in cli.COMMANDS]
+    for entry in cli.COMMANDS:
+        cmd = cli.load(entry)
+        # what typer's command table shows of a command: the first paragraph of its help
+        assert inspect.cleandoc(cmd.short_help or cmd.help or "").split("\n\n")[0] == entry.help, entry.name
+        panel = getattr(cmd.rich_help_panel, "value", cmd.rich_help_panel)  # typer's DefaultPlaceholder or a name
+        assert not cmd.hidden and not cmd.deprecated and panel is None, entry.name  # as the unloaded entry shows
+        assert root.get_command(None, entry.name).name == entry.name
+
+
+def test_the_root_help_imports_no_command_module():
+    code = ("import sys\nfrom uavcas.cli import main\nsys.argv = ['uavcas', '--help']\n"
+            "try:\n    main()\nexcept SystemExit:\n    pass\n"
+            "print('loaded:', sorted(m for m in sys.modules if m.startswith('uavcas.cli.')))")
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120,
+                       env={**os.environ, "PYTHONPATH": str(CLI_DIR.parents[1])})
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.splitlines()[-1] == "loaded: ['uavcas.cli.console']", r.stdout[-500:]
+    assert "Commands" in r.stdout and all(e.name in r.stdout for e in cli.COMMANDS)
 
 
 def test_the_shared_options_are_declared_once_in_common():
@@ -61,3 +101,12 @@ def test_no_file_writer_in_the_cli():
         found = writers.findall(path.read_text())
         assert not found, f"{path.name} writes files itself ({found}): move the writer into the library"
 
+
+
+def test_a_command_whose_dependency_is_missing_fails_in_one_line():
+    code = ("import sys\nsys.modules['mlcroissant'] = None  # import mlcroissant -> ImportError\n"
+            "from uavcas.cli import main\nsys.argv = ['uavcas', 'publish', '-h']\nmain()")
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120,
+                       env={**os.environ, "PYTHONPATH": str(CLI_DIR.parents[1])})
+    assert r.returncode == 1 and r.stderr.count("\n") == 1, r.stderr[-500:]
+    assert r.stderr.startswith("error: publish cannot load: ") and "mlcroissant" in r.stderr

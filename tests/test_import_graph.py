@@ -12,12 +12,20 @@
    functions, not under TYPE_CHECKING), and, for each, the packages on the way (importing `a.b.c`
    runs `a/__init__` and `a/b/__init__` first, unless the importer is inside them). A cycle here
    is an ImportError (or a half-initialised module) depending on which module is imported first.
+
+And no import hides in a function (issue 26) but a deferred optional heavy dependency: `torch`
+(the `dl` extra) and dask's `distributed`, or a project module that imports one of them at module
+level (`uavcas.ids.nets`), each with a comment on its line or the line above saying why. The one
+other: `uavcas.__getattr__` (PEP 562) gives `uavcas.load_dataset` without pandas loading with
+every `import uavcas` (the CLI's root, each emulated app's process).
 """
 
 from __future__ import annotations
 
 import ast
 import functools
+import io
+import tokenize
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
@@ -189,6 +197,78 @@ def cycles(src: Path = SRC, root: str = ROOT, on_import: bool = False) -> list[s
         steps = "\n".join(f"    {a} -> {b}  ({where[a, b]})" for a, b in zip(cyc, cyc[1:]))
         msgs.append(f"{len(comp)} modules in a cycle: {', '.join(comp)}\n  e.g.\n{steps}")
     return msgs
+
+
+DEFERRED_OK = ("torch", "dask", "distributed")  # optional and heavy: loaded only where used
+LAZY_ATTRIBUTES = {"uavcas": "uavcas.dataset.load"}  # package -> the module its __getattr__ may import
+
+
+def _comment_lines(text: str) -> set[int]:
+    return {t.start[0] for t in tokenize.generate_tokens(io.StringIO(text).readline) if t.type == tokenize.COMMENT}
+
+
+def _loads_deferred_ok(module: str, mods: dict[str, Path]) -> bool:
+    """A project module that imports torch/dask/distributed when it is imported."""
+    tree = ast.parse(mods[module].read_text(encoding="utf-8"))
+    return any(t.split(".")[0] in DEFERRED_OK for node in _run_on_import(tree) for t in _targets(module, mods, node))
+
+
+def function_imports(src: Path = SRC, root: str = ROOT) -> list[str]:
+    """One line per import inside a function that is not a commented, deferred optional dependency."""
+    mods = _modules(src, root)
+    bad = []
+    for module, path in mods.items():
+        text = path.read_text(encoding="utf-8")
+        tree = ast.parse(text, filename=str(path))
+        comments = _comment_lines(text)
+        seen: set[int] = set()
+        for fn in ast.walk(tree):
+            if not isinstance(fn, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                continue
+            for node in ast.walk(fn):
+                if not isinstance(node, (ast.Import, ast.ImportFrom)) or id(node) in seen:
+                    continue
+                seen.add(id(node))
+                targets = list(_targets(module, mods, node))
+                ok = all(t.split(".")[0] in DEFERRED_OK or (t in mods and _loads_deferred_ok(t, mods))
+                         or (fn.name == "__getattr__" and LAZY_ATTRIBUTES.get(module) == t) for t in targets)
+                where = f"{path.relative_to(src)}:{node.lineno}: {ast.unparse(node)}"
+                if not ok:
+                    bad.append(f"{where}  (not a deferred optional dependency: import it at module level)")
+                elif not comments & {node.lineno, node.lineno - 1}:
+                    bad.append(f"{where}  (deferred without a comment saying why)")
+    return bad
+
+
+def test_the_function_import_check_tells_deferred_from_hidden(tmp_path):
+    src = _tree(tmp_path, {
+        "pkg/__init__.py": "def __getattr__(name):\n    from pkg.low import x  # lazy attribute\n",
+        "pkg/low.py": "import os\n",
+        "pkg/net.py": "try:\n    import torch\nexcept ImportError:\n    raise\n",
+        "pkg/ok.py": "def f():\n    # the dl extra\n    import torch\n"
+                     "    from pkg.net import N  # torch at module level\n"
+                     "def g():\n    from distributed import Client  # heavy\n",
+        "pkg/hidden.py": "def f():\n    import json  # why not\n    from . import low  # a cycle, postponed\n",
+        "pkg/bare.py": "class C:\n    def m(self):\n        import torch\n",
+    })
+    _modules.cache_clear()
+    try:
+        assert function_imports(src, "pkg") == [
+            "pkg/__init__.py:2: from pkg.low import x  (not a deferred optional dependency: import it at module level)",
+            "pkg/bare.py:3: import torch  (deferred without a comment saying why)",
+            "pkg/hidden.py:2: import json  (not a deferred optional dependency: import it at module level)",
+            "pkg/hidden.py:3: from . import low  (not a deferred optional dependency: import it at module level)",
+        ]
+        LAZY_ATTRIBUTES["pkg"] = "pkg.low"
+        assert not any(b.startswith("pkg/__init__") for b in function_imports(src, "pkg"))
+    finally:
+        LAZY_ATTRIBUTES.pop("pkg", None)
+        _modules.cache_clear()
+
+
+def test_imports_in_functions_are_only_deferred_optional_dependencies():
+    found = function_imports()
+    assert not found, f"{len(found)} imports inside functions in src/uavcas:\n" + "\n".join(found)
 
 
 def _tree(tmp: Path, files: dict[str, str]) -> Path:

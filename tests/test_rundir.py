@@ -10,8 +10,8 @@ import pytest
 from helpers.synth_run import CONFIG, build_run, run_info
 from uavcas.extract import extract
 from uavcas.rundir import RunDir, RunDirError, RunInfo
-from uavcas.twin import plan
 from uavcas.twin.load import plan_from_data, read_plan
+from uavcas.twin.plan import plan
 
 
 @pytest.fixture(scope="module")

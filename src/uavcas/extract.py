@@ -30,8 +30,10 @@ import pandas as pd
 from uavcas.flows import DEFAULT_STANDARD, VIEWS, FlowConfig, Flows, PacketTable, flows_of, read_packets
 from uavcas.flows.context import CONTEXT_WINDOW_S, context_frames
 from uavcas.flows.follow import Followed, follow_run
-from uavcas.labels import PacketTruth, TruthContext, label_flows, packet_truth, read_attack_log, rule_text
+from uavcas.labels import read_attack_log
+from uavcas.labels.effects import PacketTruth, TruthContext, packet_truth
 from uavcas.labels.episodes import episode_rule_text, host_window_frame
+from uavcas.labels.label import label_flows, rule_text
 from uavcas.rundir import RunDir, RunDirError, RunInfo
 from uavcas.schema import CONTEXT_FEATURES, EPISODE_VIEW
 from uavcas.vocabulary import EFFECTS

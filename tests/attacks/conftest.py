@@ -17,7 +17,8 @@ def truth_ctx(synth_run_dir):
     """A TruthContext of the synthetic run (packets, follower, attack log, plan) and its flows."""
     from uavcas.flows import FlowConfig, extract_flows
     from uavcas.flows.follow import follow_run
-    from uavcas.labels import TruthContext, read_attack_log
+    from uavcas.labels import read_attack_log
+    from uavcas.labels.effects import TruthContext
     from uavcas.rundir import RunDir
 
     rd = RunDir(synth_run_dir)

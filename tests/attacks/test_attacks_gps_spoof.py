@@ -14,7 +14,7 @@ from uavcas.attacks.gps_spoof import DEFAULT_DRIFT_MPS, LURE_MAX_M, LURE_MIN_M, 
 from uavcas.labels.attacklog import AttackWindow
 from uavcas.labels.effects import packet_truth
 from uavcas.scenario import parse
-from uavcas.twin import plan
+from uavcas.twin.plan import plan
 from uavcas.vocabulary import EFFECTS, FAMILIES
 
 CFG = "gps_spoof={drift}-6-2-{payload}-logdist-adaptive-random-30-95"

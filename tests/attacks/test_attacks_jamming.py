@@ -14,8 +14,8 @@ from uavcas.channel.budget import link_chain
 from uavcas.channel.interference import jammed_chain, received_dbm, sinr_db
 from uavcas.channel.pathloss import FreeSpace
 from uavcas.scenario import parse
-from uavcas.twin import plan
 from uavcas.twin.interference import MATERIAL_LOSS, MATERIAL_RATE_REL, material
+from uavcas.twin.plan import plan
 
 CONFIG = "jamming=20-6-2-telemetry-logdist-adaptive-grid-30-95"
 
@@ -179,9 +179,8 @@ def test_same_seed_and_config_give_the_same_plan_json():
 def test_truth_rule_on_hand_built_packets():
     from helpers.hand_truth import IPS, PLAN, T0, pkt, table
     from uavcas.flows.follow import Timeline, follow
-    from uavcas.labels import TruthContext
     from uavcas.labels.attacklog import AttackLog, AttackWindow
-    from uavcas.labels.effects import packet_truth
+    from uavcas.labels.effects import TruthContext, packet_truth
     from uavcas.twin.model import LinkOverride
 
     def over(src, dst, rate, loss, mcs):

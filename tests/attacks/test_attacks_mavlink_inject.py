@@ -7,7 +7,7 @@ import pytest
 from uavcas.attacks import ScenarioError, family
 from uavcas.attacks.mavlink_inject import DEFAULT_SPEED_MPS, MavlinkInjectSpec
 from uavcas.scenario import parse
-from uavcas.twin import plan
+from uavcas.twin.plan import plan
 
 REST = "-6-2-telemetry-logdist-adaptive-random-30-95"
 

@@ -7,7 +7,7 @@ import pytest
 from uavcas import attacks
 from uavcas.attacks import AttackFamily, families, family, register
 from uavcas.attacks.base import ScheduleDraw
-from uavcas.labels import SOURCES
+from uavcas.labels.label import SOURCES
 from uavcas.scenario import parse
 from uavcas.vocabulary import FAMILIES
 

@@ -6,7 +6,7 @@ import numpy as np
 
 from uavcas.attacks import ScheduleDraw, family
 from uavcas.attacks.wormhole import WormholeSpec
-from uavcas.twin import plan
+from uavcas.twin.plan import plan
 
 
 def test_attacker_is_off_the_victims_route_where_possible():
@@ -47,9 +47,8 @@ def test_udp_datagrams_detoured_through_the_attacker_are_wormhole():
     from helpers.hand_truth import pkt, rows_of, table, window
     from helpers.synth_run import T0, make_plan
     from uavcas.flows.follow import Timeline, follow
-    from uavcas.labels import TruthContext
     from uavcas.labels.attacklog import AttackLog
-    from uavcas.labels.effects import packet_truth
+    from uavcas.labels.effects import TruthContext, packet_truth
 
     wplan = make_plan(wormhole=True)
     detoured = pkt(1.0, "uav0", "bs0", 14555, 14550, proto=17, ip_id=0, payload=40, at=["uav0", "uav2", "bs0"])

@@ -15,7 +15,7 @@ from uavcas.calibration.pipeline import build_profile
 from uavcas.channel import PAPER_ANCHORED_PROFILE, KFactorProfile, LogDistance, PathLossProfile
 from uavcas.cli import app
 from uavcas.mobility import GridParams, MobilityProfile
-from uavcas.twin import plan as make_plan
+from uavcas.twin.plan import plan as make_plan
 from uavcas.twin.profile import PAPER_PROFILE, ProfileError, load_profile, profile_sha256, save_profile
 
 from .synthetic import write_maeng, write_multibw

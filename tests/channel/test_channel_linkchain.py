@@ -25,7 +25,7 @@ from typer.testing import CliRunner
 from uavcas.channel import LinkChain, LinkGeometry
 from uavcas.cli import app
 from uavcas.scenario import manifest
-from uavcas.twin import plan
+from uavcas.twin.plan import plan
 from uavcas.twin.profile import load_profile
 
 DB_TOL = 5e-3  # mm positions and 1e-3 dB rounding

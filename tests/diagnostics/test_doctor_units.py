@@ -7,8 +7,8 @@ import json
 import numpy as np
 
 from helpers.contention import quiet
+from uavcas.diagnostics.checks import Check, HopConfig, loss_check
 from uavcas.diagnostics.doctor import DoctorResult
-from uavcas.diagnostics.selftest import Check, HopConfig, loss_check
 from uavcas.emulation.probe import Features
 
 FEATS = Features(root=True, netns=True, netem=False, htb=True, tbf=True, nft=True, nft_bridge_numgen=True,

@@ -8,15 +8,9 @@ import struct
 
 import pytest
 
+from uavcas.diagnostics.checks import DelayTolerance, HopConfig, binomial_interval, delay_checks, loss_check
 from uavcas.diagnostics.doctor import EMULATED_CPU
-from uavcas.diagnostics.selftest import (
-    DelayTolerance,
-    HopConfig,
-    binomial_interval,
-    delay_checks,
-    kernel_rx_ns,
-    loss_check,
-)
+from uavcas.diagnostics.selftest import kernel_rx_ns
 
 HOPS = [HopConfig(20, 3.0, 0.0), HopConfig(20, 4.0, 0.0)]
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import sys
 import time
 
-from uavcas.emulation import Emulation
+from uavcas.emulation.emulation import Emulation
 from uavcas.testing.handmade_plans import link, nodes, plan, window
 
 prefix = sys.argv[1]

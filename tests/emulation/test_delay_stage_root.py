@@ -14,7 +14,8 @@ from pathlib import Path
 import pytest
 
 from uavcas.diagnostics import selftest
-from uavcas.emulation import Emulation, kernel, new_prefix, nfqdelay
+from uavcas.emulation import kernel, new_prefix, nfqdelay
+from uavcas.emulation.emulation import Emulation
 from uavcas.twin import model
 
 pytestmark = pytest.mark.root

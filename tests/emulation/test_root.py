@@ -18,8 +18,9 @@ from pathlib import Path
 import pytest
 
 from uavcas.diagnostics import selftest
-from uavcas.diagnostics.selftest import HopConfig
-from uavcas.emulation import Emulation, cleanup, kernel
+from uavcas.diagnostics.checks import HopConfig, loss_check
+from uavcas.emulation import cleanup, kernel
+from uavcas.emulation.emulation import Emulation
 from uavcas.emulation.naming import Naming, new_prefix
 from uavcas.emulation.probe import CGROUP_ROOT
 from uavcas.testing.handmade_plans import link, nodes, plan, window
@@ -66,12 +67,12 @@ def test_two_shaped_hops_accumulate_delay_and_loss():
 
         r = selftest.measure_udp(emu, "uav0", "uav1", 1000, 1000)
         assert abs(r["delays_ms"]["median"] - 3.0) <= 1.0, r
-        c = selftest.loss_check(r["loss"], 1000, hops[:1], LOSS_CONFIDENCE)
+        c = loss_check(r["loss"], 1000, hops[:1], LOSS_CONFIDENCE)
         assert c.ok, c
 
         r = selftest.measure_udp(emu, "uav0", "uav2", 2000, 1000)
         assert abs(r["delays_ms"]["median"] - 8.0) <= 1.0, r
-        c = selftest.loss_check(r["loss"], 2000, hops, LOSS_CONFIDENCE)  # 1 - 0.95 * 0.90 = 14.5 %
+        c = loss_check(r["loss"], 2000, hops, LOSS_CONFIDENCE)  # 1 - 0.95 * 0.90 = 14.5 %
         assert c.ok, c
 
 

@@ -19,8 +19,9 @@ from pathlib import Path
 import pytest
 
 from helpers.runplans import attack, link, make_plan, nodes
-from uavcas.emulation import Emulation, kernel
+from uavcas.emulation import kernel
 from uavcas.emulation.attacks import AttackExecutor
+from uavcas.emulation.emulation import Emulation
 from uavcas.emulation.runner import realize
 from uavcas.testing import runcheck as rc
 
@@ -307,7 +308,7 @@ def test_every_file_of_a_real_run_reads_through_the_typed_models(tmp_path):
     from uavcas.events import AttackRate, AttackStart, AttackStop, Inject
     from uavcas.extract import extract
     from uavcas.rundir import RunDir, RunDirError
-    from uavcas.twin import plan as twin_plan
+    from uavcas.twin.plan import plan as twin_plan
 
     # dos + replay: every record type (a blackhole on the shared victim would starve the replayer)
     p = twin_plan("dos=1000+replay=50,200,10,5,inc-4-1-image-logdist-adaptive-random-30-95", seed=2,

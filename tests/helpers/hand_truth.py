@@ -13,8 +13,8 @@ import numpy as np
 from helpers.synth_run import HOP_S, IPS, T0, make_plan
 from uavcas.flows.follow import Timeline, follow
 from uavcas.flows.packets import COLUMNS, PacketTable, address_to_words, empty_columns
-from uavcas.labels import TruthContext
 from uavcas.labels.attacklog import AttackLog, AttackWindow, Injection
+from uavcas.labels.effects import TruthContext
 
 FIN, SYN, RST, PSH, ACK = 0x01, 0x02, 0x04, 0x08, 0x10
 PLAN = make_plan()

@@ -14,7 +14,7 @@ from helpers.fidsynth import Traffic, build
 from helpers.fidsynth import plan as fid_plan
 from uavcas.dataset.synthetic import make_flows, write_dataset
 from uavcas.fidelity import write_fidelity
-from uavcas.twin import plan as make_plan
+from uavcas.twin.plan import plan as make_plan
 
 PLANNED = ("run00000", "run00001", "run00007", "run00009")  # benign, dos, blackhole+dos, dos+wormhole
 AUDITED = {"run00000": 0.0, "run00005": 0.002}  # run -> the emulator's lateness per hop (s): pass, fail

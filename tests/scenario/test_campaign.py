@@ -110,7 +110,7 @@ def test_every_medium_composition_is_a_declared_class_and_repeats_on_fresh_victi
     """The medium preset's compositions are classes of the vocabulary (pairs included), and its
     three episodes per run attack three different victims, never overlapping."""
     from uavcas.scenario.campaign import PRESETS
-    from uavcas.twin import plan
+    from uavcas.twin.plan import plan
     from uavcas.twin.schedule import EPISODE_GAP_S
     from uavcas.vocabulary import CLASSES, class_name
 

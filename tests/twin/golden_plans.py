@@ -13,7 +13,7 @@ import json
 from pathlib import Path
 
 from uavcas.scenario import manifest
-from uavcas.twin import plan
+from uavcas.twin.plan import plan
 
 OUT = Path(__file__).resolve().parent / "data" / "plan_digests.json"
 

@@ -7,7 +7,9 @@ import pytest
 
 from uavcas.scenario import PRESETS, parse
 from uavcas.topology.routing import USABLE_LOSS_MAX, Topology
-from uavcas.twin import Plan, plan, read_plan
+from uavcas.twin import Plan
+from uavcas.twin.load import read_plan
+from uavcas.twin.plan import plan
 
 MISSIONS = ("spiral", "grid", "hover_transit", "random")
 

@@ -6,9 +6,10 @@ import math
 
 import pytest
 
-from uavcas.twin import Site, plan, read_plan
-from uavcas.twin.load import plan_from_data
+from uavcas.twin import Site
+from uavcas.twin.load import plan_from_data, read_plan
 from uavcas.twin.model import SCHEMA_VERSION
+from uavcas.twin.plan import plan
 from uavcas.twin.track import WGS84_A_M, WGS84_E2, Track, geodetic_to_local, local_to_geodetic
 
 CFG = "benign-6-2-telemetry-logdist-adaptive-random-30-95"

@@ -6,6 +6,8 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+from sklearn.manifold import TSNE
+from sklearn.preprocessing import StandardScaler
 
 from uavcas import seeding
 from uavcas.atomic import atomic_write_text
@@ -73,9 +75,6 @@ def stratified_sample(labels, n: int, seed: int = 0) -> np.ndarray:
 def tsne_embedding(df: pd.DataFrame, n_samples: int = 2000, seed: int = 0) -> pd.DataFrame:
     """2-D t-SNE of the dataset standard's features (signed log, standardised) on a seeded subsample stratified
     by class (`stratified_sample`)."""
-    # on use: scikit-learn's manifold module is slow to import and only this figure needs it
-    from sklearn.manifold import TSNE
-    from sklearn.preprocessing import StandardScaler
 
     sub = df.iloc[stratified_sample(df["label"].astype(str).to_numpy(), n_samples, seed)]
     if len(sub) < 5:

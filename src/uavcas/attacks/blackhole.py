@@ -27,6 +27,8 @@ from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
+from uavcas.emulation import kernel
+from uavcas.emulation.naming import Naming
 from uavcas.scenario_model import SpecBase
 
 from .base import AttackExecutor, AttackFamily, ScheduleDraw, TruthContext
@@ -55,16 +57,11 @@ def ruleset(table: str, ports: list[str], victim_ip: str) -> str:
 
 
 def drop_on(fabric_ns: str, table: str, ports: list[str], victim_ip: str) -> None:
-    # deferred: uavcas.emulation's __init__ loads the emulator, which reads plans through this registry
-    from uavcas.emulation import kernel
-
     kernel.run(["ip", "netns", "exec", fabric_ns, "nft", "-f", "-"], input_text=ruleset(table, ports, victim_ip))
 
 
 def drop_off(fabric_ns: str, table: str) -> int:
     """Delete the table; returns how many frames it dropped (both rules)."""
-    # deferred: uavcas.emulation's __init__ loads the emulator, which reads plans through this registry
-    from uavcas.emulation import kernel
 
     dropped = 0
     r = kernel.run(["ip", "netns", "exec", fabric_ns, "nft", "-j", "list", "table", "bridge", table], check=False)
@@ -79,8 +76,6 @@ def drop_off(fabric_ns: str, table: str) -> int:
 
 def switch_ports(index: int) -> list[str]:
     """The victim switch's host port and (by wildcard) every link port it has or will get."""
-    # deferred: uavcas.emulation's __init__ loads the emulator, which reads plans through this registry
-    from uavcas.emulation.naming import Naming
 
     return [Naming.host_port(index), Naming.link_port(index, 0).rsplit("-", 1)[0] + "-*"]
 

@@ -31,6 +31,7 @@ from typing import TYPE_CHECKING, Any, Literal
 import numpy as np
 from pydantic import Field
 
+from uavcas.emulation.apps.flood import Flood, close_all, collect_all, quiet_after_s, start_all
 from uavcas.events import AttackRate
 from uavcas.scenario_model import ScenarioError, SpecBase, int_field
 
@@ -101,9 +102,6 @@ class _Flood(AttackFamily):
 
     # executor ----------------------------------------------------------------------------------
     def prepare(self, ex: "AttackExecutor", attack: "Attack") -> None:
-        # deferred: uavcas.emulation's __init__ loads the emulator, which reads plans through this registry
-        from uavcas.emulation.apps.flood import Flood
-
         nominal = ex.spec(attack).nominal_pps
         floods = [Flood(ex.emu, attack.attack_id, x, ex.ip(v), nominal, ex.log_dir, ex.duration_s + 30)
                   for x in attack.attackers for v in attack.victims]
@@ -113,9 +111,6 @@ class _Flood(AttackFamily):
                 ex.add_process(proc)
 
     def start(self, ex: "AttackExecutor", attack: "Attack") -> dict[str, Any]:
-        # deferred: uavcas.emulation's __init__ loads the emulator, which reads plans through this registry
-        from uavcas.emulation.apps.flood import start_all
-
         floods = ex.state[attack.attack_id]
         t = start_all(floods)  # every gate open, no SYN paced yet: the first one can go from t on
         return {"t_unix": t, "hping_interval_us": [f.interval_us for f in floods]}
@@ -124,9 +119,6 @@ class _Flood(AttackFamily):
         return self.halt(ex, attack)()
 
     def halt(self, ex: "AttackExecutor", attack: "Attack") -> Callable[[], dict[str, Any]]:
-        # deferred: uavcas.emulation's __init__ loads the emulator, which reads plans through this registry
-        from uavcas.emulation.apps.flood import close_all, collect_all, quiet_after_s
-
         floods = ex.state.pop(attack.attack_id, [])
         t_closed = close_all(floods)
 

@@ -43,6 +43,7 @@ import numpy as np
 from pydantic import Field
 from pymavlink.dialects.v20 import common
 
+from uavcas.emulation.apps.mavlink.gps import POSITION_MESSAGES, Spoofing, control_path, publish
 from uavcas.scenario_model import ScenarioError, SpecBase
 from uavcas.vocabulary import MAVLINK_PAYLOADS
 
@@ -109,9 +110,6 @@ class GpsSpoof(AttackFamily):
 
     # executor ----------------------------------------------------------------------------------
     def _control(self, ex: "AttackExecutor", attack: "Attack"):
-        # deferred: uavcas.emulation's __init__ loads the emulator, which reads plans through this registry
-        from uavcas.emulation.apps.mavlink.gps import Spoofing, control_path
-
         s: GpsSpoofSpec = ex.spec(attack)  # type: ignore[assignment]
         paths = [control_path(ex.work_dir, v) for v in attack.victims]
         base = Spoofing(start_unix=0.0, drift_mps=s.drift_mps, bearing_deg=float(attack.params["lure_bearing_deg"]),
@@ -119,9 +117,6 @@ class GpsSpoof(AttackFamily):
         return paths, base
 
     def start(self, ex: "AttackExecutor", attack: "Attack") -> dict[str, Any]:
-        # deferred: uavcas.emulation's __init__ loads the emulator, which reads plans through this registry
-        from uavcas.emulation.apps.mavlink.gps import publish
-
         paths, base = self._control(ex, attack)
         t = publish(paths, lambda t: base.model_copy(update={"start_unix": t}))
         ex.state[attack.attack_id] = t
@@ -131,9 +126,6 @@ class GpsSpoof(AttackFamily):
         return self.halt(ex, attack)()
 
     def halt(self, ex: "AttackExecutor", attack: "Attack") -> Callable[[], dict[str, Any]]:
-        # deferred: uavcas.emulation's __init__ loads the emulator, which reads plans through this registry
-        from uavcas.emulation.apps.mavlink.gps import publish
-
         paths, base = self._control(ex, attack)
         start = ex.state.pop(attack.attack_id)
         t = publish(paths, lambda t: base.model_copy(update={"start_unix": start, "stop_unix": t}))
@@ -141,9 +133,6 @@ class GpsSpoof(AttackFamily):
 
     # ground truth ------------------------------------------------------------------------------
     def effects(self, ctx: "TruthContext", windows: list["AttackWindow"]) -> np.ndarray:
-        # deferred: uavcas.emulation's __init__ loads the emulator, which reads plans through this registry
-        from uavcas.emulation.apps.mavlink.gps import POSITION_MESSAGES
-
         ids = [getattr(common, f"MAVLINK_MSG_ID_{name}") for name in POSITION_MESSAGES]  # 33 and 24
         reports = np.isin(ctx.packets["mav_msgid"], ids)
         hit = np.zeros(ctx.n, dtype=bool)

@@ -50,6 +50,7 @@ import numpy as np
 from pydantic import Field
 
 from uavcas.scenario_model import ScenarioError, SpecBase, choice, int_field
+from uavcas.twin.interference import rate_or_loss_changed
 
 from .base import AttackExecutor, AttackFamily, Emitter, EmitterContext, ScheduleDraw, TruthContext
 from .registry import register
@@ -156,9 +157,6 @@ class Jamming(AttackFamily):
 
     # ground truth ------------------------------------------------------------------------------
     def effects(self, ctx: "TruthContext", windows: list["AttackWindow"]) -> np.ndarray:
-        # deferred: twin's package __init__ loads the planner, which loads this package
-        from uavcas.twin.interference import rate_or_loss_changed
-
         plan, fol = ctx.plan, ctx.followed
         index = {x.name: x.index for x in plan.nodes}
         node = ctx.point_node

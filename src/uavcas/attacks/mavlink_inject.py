@@ -46,6 +46,10 @@ from typing import TYPE_CHECKING, Any, Literal
 import numpy as np
 from pydantic import Field
 
+from uavcas.emulation.apps.flood import quiet_after_s
+from uavcas.emulation.apps.mavinject import read_log
+from uavcas.emulation.apps.mavlink.specs import UAV_PORT
+from uavcas.emulation.apps.procs import spawn, wait_for
 from uavcas.scenario_model import ScenarioError, SpecBase, choice, int_field
 from uavcas.vocabulary import MAVLINK_PAYLOADS
 
@@ -128,9 +132,6 @@ class MavlinkInject(AttackFamily):
 
     # executor ----------------------------------------------------------------------------------
     def prepare(self, ex: "AttackExecutor", attack: "Attack") -> None:
-        # deferred: uavcas.emulation's __init__ loads the emulator, which reads plans through this registry
-        from uavcas.emulation.apps.procs import spawn, wait_for
-
         s: MavlinkInjectSpec = ex.spec(attack)  # type: ignore[assignment]
         v = attack.victims[0]
         gcs = ex.plan.node(ex.bs_of(v))
@@ -171,10 +172,6 @@ class MavlinkInject(AttackFamily):
         return self.halt(ex, attack)()
 
     def halt(self, ex: "AttackExecutor", attack: "Attack") -> Callable[[], dict[str, Any]]:
-        # deferred: uavcas.emulation's __init__ loads the emulator, which reads plans through this registry
-        from uavcas.emulation.apps.flood import quiet_after_s
-        from uavcas.emulation.apps.mavinject import read_log
-
         procs = ex.state.pop(attack.attack_id, {})
         for proc, _, _ in procs.values():  # its handler exits at once (after the frame being sent, if any)
             if proc.alive():
@@ -195,9 +192,6 @@ class MavlinkInject(AttackFamily):
 
     # ground truth ------------------------------------------------------------------------------
     def effects(self, ctx: "TruthContext", windows: list["AttackWindow"]) -> np.ndarray:
-        # deferred: uavcas.emulation's __init__ loads the emulator, which reads plans through this registry
-        from uavcas.emulation.apps.mavlink.specs import UAV_PORT
-
         p = ctx.packets
         to_autopilot = (p["proto"] == 17) & (p["dport"] == UAV_PORT)
         return ctx.spread(ctx.attacker_to_victim(windows, to_autopilot))

@@ -42,7 +42,11 @@ import numpy as np
 import pandas as pd
 from pydantic import Field
 
+from uavcas.emulation import kernel
+from uavcas.emulation.apps.procs import spawn, wait_for
+from uavcas.emulation.naming import Naming
 from uavcas.flows.packets import address_to_words
+from uavcas.labels.attacklog import AttackLog
 from uavcas.scenario_model import ScenarioError, SpecBase, choice, int_field
 from uavcas.vocabulary import SEQ_MODES, SeqMode
 
@@ -101,16 +105,10 @@ def mirror_lines(victim_port: str, attacker_port: str) -> list[str]:
 
 
 def mirror_on(fabric_ns: str, victim_port: str, attacker_port: str) -> None:
-    # deferred: uavcas.emulation's __init__ loads the emulator, which reads plans through this registry
-    from uavcas.emulation import kernel
-
     kernel.run_batch("tc", fabric_ns, mirror_lines(victim_port, attacker_port))
 
 
 def mirror_off(fabric_ns: str, victim_port: str) -> None:
-    # deferred: uavcas.emulation's __init__ loads the emulator, which reads plans through this registry
-    from uavcas.emulation import kernel
-
     # Only the replay puts a clsact on a host port; deleting it removes both filters.
     kernel.run(["tc", "-n", fabric_ns, "qdisc", "del", "dev", victim_port, "clsact"], check=False)
 
@@ -153,10 +151,6 @@ class Replay(AttackFamily):
 
     # executor ----------------------------------------------------------------------------------
     def prepare(self, ex: "AttackExecutor", attack: "Attack") -> None:
-        # deferred: uavcas.emulation's __init__ loads the emulator, which reads plans through this registry
-        from uavcas.emulation.apps.procs import spawn, wait_for
-        from uavcas.emulation.naming import Naming
-
         s: ReplaySpec = ex.spec(attack)  # type: ignore[assignment]
         for attacker in attack.attackers:
             log = ex.log_dir / f"inject-{attack.attack_id}-{attacker}.jsonl"
@@ -213,9 +207,6 @@ class Replay(AttackFamily):
 
     # ground truth ------------------------------------------------------------------------------
     def effects(self, ctx: "TruthContext", windows: list["AttackWindow"]) -> np.ndarray:
-        # deferred: uavcas.labels' __init__ loads the labeller, which runs this registry's rules
-        from uavcas.labels.attacklog import AttackLog
-
         ids = {w.attack_id for w in windows}
         mine = AttackLog(injections=tuple(i for i in ctx.log.injections if i.attack_id in ids))
         return ctx.spread(injected_packets(ctx.packets, mine))

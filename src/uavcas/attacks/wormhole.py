@@ -24,13 +24,13 @@ from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
+from uavcas.emulation.controller import Detour
 from uavcas.scenario_model import SpecBase
 
 from .base import AttackExecutor, AttackFamily, ScheduleDraw, TruthContext
 from .registry import register
 
 if TYPE_CHECKING:  # types only: the twin's and labels' package __init__s load this registry
-    from uavcas.emulation.controller import Detour
     from uavcas.labels.attacklog import AttackWindow
     from uavcas.twin.model import Attack, Window
 
@@ -68,9 +68,6 @@ class Wormhole(AttackFamily):
         return ex.reapply_window()
 
     def overrides(self, ex: "AttackExecutor", attack: "Attack", window: "Window") -> list["Detour"]:
-        # deferred: uavcas.emulation's __init__ loads the emulator, which reads plans through this registry
-        from uavcas.emulation.controller import Detour
-
         return [Detour(o.victim, o.attacker, o.bs, tuple(o.hops)) for o in window.wormholes
                 if o.victim in attack.victims and o.attacker in attack.attackers]
 

@@ -24,6 +24,7 @@ it is measured here on the same samples, target and contiguous split as `layer1_
 
 from __future__ import annotations
 
+import lightgbm as lgb
 import numpy as np
 
 from uavcas import seeding
@@ -70,8 +71,6 @@ def _geometry(g: Group) -> np.ndarray:
 
 
 def _gbm(groups: list[Group], train, test, seed: int) -> dict:
-    import lightgbm as lgb  # a core dependency; imported here so the fits that do not need it stay light
-
     x, y = [_geometry(g) for g in groups], [g.target_db for g in groups]
 
     def pick(arrays: list[np.ndarray], masks) -> np.ndarray:

@@ -34,6 +34,11 @@ import pandas as pd
 import scipy.io
 from scipy.optimize import least_squares
 
+try:
+    import h5py  # optional (the `mat73` extra): only MATLAB v7.3 files need it
+except ImportError:
+    h5py = None
+
 
 class CalibrationDataError(ValueError):
     """A measurement file that cannot be used; the message is one line naming the file."""
@@ -55,12 +60,10 @@ def _read_mat(path: Path) -> dict[str, np.ndarray]:
 
 
 def _read_mat73(path: Path) -> dict[str, np.ndarray]:
-    try:
-        import h5py  # optional: only MATLAB v7.3 files need it
-    except ImportError:
+    if h5py is None:
         raise CalibrationDataError(
             f"{path}: MATLAB v7.3 (HDF5) file; install h5py or re-save it with save(..., '-v7')"
-        ) from None
+        )
     out: dict[str, np.ndarray] = {}
     with h5py.File(path, "r") as f:
         for k, v in f.items():

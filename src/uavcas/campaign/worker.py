@@ -20,6 +20,9 @@ from pathlib import Path
 from pydantic import BaseModel, ConfigDict, ValidationError
 
 from uavcas.atomic import atomic_write_text
+from uavcas.emulation.preflight import preflight, probe_kernel
+from uavcas.emulation.runner import RunOptions, realize
+from uavcas.twin.plan import plan
 
 TERM_GRACE_S = 30.0  # after SIGTERM, the child's teardown gets this long before SIGKILL
 
@@ -47,9 +50,6 @@ class WorkerResult(BaseModel):
 
 def realize_request(req: WorkerRequest) -> WorkerResult:
     """Plan, check and realise one scenario into `req.out_dir` (in this process; needs root)."""
-    from uavcas.emulation.preflight import preflight, probe_kernel
-    from uavcas.emulation.runner import RunOptions, realize
-    from uavcas.twin import plan
 
     p = plan(req.config, seed=req.seed, windows=req.windows, window_s=req.window_s, profile=req.profile,
              episodes=req.episodes)

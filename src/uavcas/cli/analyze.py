@@ -4,9 +4,14 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import pandas as pd
 import typer
 
-from uavcas.analysis.iat import IAT_SOURCES
+from uavcas.analysis.axes import axis_diversity, write_axes
+from uavcas.analysis.diversity import DiversityOptions, diversity_table, write_diversity
+from uavcas.analysis.iat import IAT_SOURCES, choose_source
+from uavcas.analysis.separability import separability_stats, tsne_embedding, write_separability
+from uavcas.dataset.read import load_any
 
 from .common import View, check_output, console, dataset_argument, err_console, fail, one_of, path_fail, seed_option
 
@@ -20,8 +25,6 @@ IAT_HELP = ("packet (every IAT, needs per-packet sequences) | flow-mean (one mea
 
 
 def _load(path: Path, view: str | None = None):
-    from uavcas.dataset.read import load_any
-
     try:
         return load_any(path, view=view)
     except (FileNotFoundError, ValueError, KeyError, OSError) as e:
@@ -46,10 +49,7 @@ def diversity_cmd(
 ) -> None:
     """Hellinger and JSD (base 2, bounded) of each class's IATs vs Benign, with CIs and a
     baseline drawn at the class's sample size."""
-    import pandas as pd
 
-    from uavcas.analysis.diversity import DiversityOptions, diversity_table, write_diversity
-    from uavcas.analysis.iat import choose_source
 
     check_output(out, "dir")
     paths = [dataset, *reference]
@@ -86,8 +86,6 @@ def axes_cmd(
 ) -> None:
     """Internal diversity per configuration axis on benign flows (extreme values), with a
     size-matched baseline; axes confounded with others in this dataset are flagged."""
-    from uavcas.analysis.axes import axis_diversity, write_axes
-    from uavcas.analysis.iat import choose_source
 
     check_output(out, "dir")
     df = _load(dataset, view)
@@ -117,7 +115,6 @@ def separability_cmd(
     view: View | None = typer.Option(None, "--view", help=VIEW_HELP),
 ) -> None:
     """Per-class mean/std of IAT, packet rate, packet size, duration; t-SNE and distribution figures."""
-    from uavcas.analysis.separability import separability_stats, tsne_embedding, write_separability
 
     check_output(out, "dir")
     df = _load(dataset, view)

@@ -12,6 +12,10 @@ from pathlib import Path
 import typer
 from rich.table import Table
 
+from uavcas.fidelity import Tolerances, write_fidelity
+from uavcas.flows import CaptureError
+from uavcas.rundir import RunDir, RunDirError
+
 from .common import console, fail, run_dir_argument
 
 
@@ -38,9 +42,6 @@ def audit_cmd(
     links: int = typer.Option(8, "--links", min=0, help="Show this many worst link directions."),
 ) -> None:
     """Audit a run's timing, loss and rate fidelity against its plan; write fidelity.json."""
-    from uavcas.fidelity import Tolerances, write_fidelity
-    from uavcas.flows import CaptureError
-    from uavcas.rundir import RunDir, RunDirError
 
     rd = RunDir(run_dir)
     if not rd.root.is_dir():

@@ -6,10 +6,14 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import pandas as pd
 import typer
 
-from uavcas.dataset.read import FORMATS
+from uavcas.dataset.read import FORMATS, load_any
 from uavcas.ids.detectors import KIND_NEEDS, KINDS, baselines, detector, detectors, names
+from uavcas.ids.protocols import PROTOCOLS, SCALERS, BenchConfig, execute, prepare
+from uavcas.ids.results import ResultsError, collect_results, results_frame, write_leaderboard, write_results
+from uavcas.ids.torch_estimator import DL_MISSING
 from uavcas.vocabulary import TORCH_DEVICES
 
 from .common import View, check_output, dataset_argument, err_console, fail, one_of, path_fail
@@ -96,12 +100,7 @@ def ids_cmd(
 ) -> None:
     """Train and evaluate the baselines; writes results/summary/splits/confusion CSVs, figures,
     results.md per protocol and leaderboard.csv/md."""
-    import pandas as pd
 
-    from uavcas.dataset.read import load_any
-    from uavcas.ids.protocols import PROTOCOLS, SCALERS, BenchConfig, execute, prepare
-    from uavcas.ids.results import results_frame, write_leaderboard, write_results
-    from uavcas.ids.torch_estimator import DL_MISSING
 
     check_output(out, "dir")
     protocols = _parse_list(protocol, PROTOCOLS, "--protocol")
@@ -113,7 +112,7 @@ def ids_cmd(
         chosen = _parse_list(models, names(), "--models")
     if any(detector(m).needs_torch for m in chosen):
         try:
-            import torch  # noqa: F401
+            import torch  # noqa: F401  (deferred: the optional `dl` extra, checked when a deep detector is chosen)
         except ImportError:
             raise fail(DL_MISSING) from None
     feats = None
@@ -151,7 +150,6 @@ def leaderboard_cmd(
     out: Path = typer.Option(..., "--out", help="Output directory for leaderboard.csv and leaderboard.md."),
 ) -> None:
     """One leaderboard (mean ± std over seeds) from several `bench ids` outputs."""
-    from uavcas.ids.results import ResultsError, collect_results, write_leaderboard
 
     check_output(out, "dir")
     try:

@@ -7,6 +7,10 @@ from pathlib import Path
 
 import typer
 
+from uavcas.calibration.loaders import CalibrationDataError
+from uavcas.calibration.pipeline import LAYERS, parse_assignment, run
+from uavcas.twin.profile import ProfileError
+
 from .common import check_output, console, fail, one_of, seed_option
 
 _LAYERS = ("pathloss", "mobility", "link", "fidelity", "all")
@@ -25,9 +29,6 @@ def calibrate_cmd(
                                  help="AFAR team -> mission, e.g. '301=spiral,328=grid' (default: the paper's)."),
 ) -> None:
     """Calibrate the digital twin against real AERPAW measurements (paper sec. 4)."""
-    from uavcas.calibration.loaders import CalibrationDataError
-    from uavcas.calibration.pipeline import LAYERS, parse_assignment, run
-    from uavcas.twin.profile import ProfileError
 
     if not data.is_dir():
         raise fail(f"--data {data}: not a folder")

@@ -7,7 +7,12 @@ from pathlib import Path
 import typer
 from rich.table import Table
 
+from uavcas.campaign import CampaignError, Extraction, read_manifest, run_campaign, write_manifest
+from uavcas.dataset.runs import dataset_runs, flagged_lines
+from uavcas.report.dataset_report import write_report
 from uavcas.scenario import PRESETS, manifest, parse_shard, select_shard
+from uavcas.schema import CLASSES
+from uavcas.twin.profile import load_profile
 from uavcas.vocabulary import FIDELITY_POLICIES
 
 from .common import (
@@ -41,7 +46,6 @@ def manifest_cmd(
         sh = parse_shard(shard) if shard is not None else None
     except ValueError as e:
         raise fail(f"--{e}") from None
-    from uavcas.campaign import write_manifest
 
     entries = manifest(preset, seed=seed, shard=sh)
     write_manifest(out, entries)
@@ -74,8 +78,6 @@ def run_cmd(
 ) -> None:
     """Plan, emulate, extract and label every scenario; append each run's shard to the dataset."""
     check_output(out, "dir")
-    from uavcas.campaign import CampaignError, Extraction, read_manifest, run_campaign
-    from uavcas.schema import CLASSES
 
     try:  # before anything is planned or created
         extraction = Extraction(view=view, termination=termination, min_attack_fraction=min_attack_fraction)
@@ -93,8 +95,6 @@ def run_cmd(
             preset = preset or "quick"
             entries = manifest(preset, seed=seed, shard=sh)
         if profile is not None:
-            from uavcas.twin.profile import load_profile
-
             load_profile(profile)
         result = run_campaign(entries, out, jobs=jobs, scheduler=scheduler, profile=profile, retries=retries,
                               extraction=extraction, fidelity=fidelity, mavlink_signing=mavlink_signing)
@@ -115,7 +115,6 @@ def run_cmd(
         f"runs: {len(result.done)} done now, {len(result.skipped)} already done, {len(result.failed)} failed; "
         f"flows: {card.get('n_flows', 0)}; wall time {result.wall_s:.0f} s"
     )
-    from uavcas.dataset.runs import dataset_runs, flagged_lines
 
     flagged = flagged_lines(dataset_runs(out, card)) if card else []
     if flagged:  # kept in the dataset (counted in dataset.json), so say which and why
@@ -124,8 +123,6 @@ def run_cmd(
             console.print(f"  {line}", highlight=False, soft_wrap=True, markup=False)
     console.print(f"dataset: {Path(out).resolve()}/flows.parquet")
     if report and card:
-        from uavcas.report.dataset_report import write_report
-
         console.print(f"report: {write_report(out, Path(out) / 'report').resolve()}")
     if result.failed:
         raise fail(f"{len(result.failed)} run(s) failed: "

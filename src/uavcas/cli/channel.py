@@ -26,9 +26,13 @@ from __future__ import annotations
 from pathlib import Path
 
 import typer
+from rich.table import Table
 
 from uavcas.channel.pathloss import help_text as pathloss_help
 from uavcas.channel.pathloss import names as pathloss_names
+from uavcas.channel.pathloss import specs
+from uavcas.channel.predict import D2D_TOLERANCE_M, GeometryError, predict_frame, prediction_csv, read_geometry
+from uavcas.twin.profile import ProfileError, load_profile
 
 from .common import atomic_write_text, check_output, console, err_console, fail, one_of, profile_option
 
@@ -47,8 +51,6 @@ def predict_cmd(
     noise_dbm: float = typer.Option(-95.0, "--noise-dbm", help="Noise floor (dBm)."),
 ) -> None:
     """Evaluate a path-loss model and the link chain on your own geometry."""
-    from uavcas.channel.predict import D2D_TOLERANCE_M, GeometryError, predict_frame, prediction_csv, read_geometry
-    from uavcas.twin.profile import ProfileError, load_profile
 
     check_output(out, "file")
     try:
@@ -70,9 +72,7 @@ def predict_cmd(
 @app.command("models")
 def models_cmd() -> None:
     """The registered path-loss models: name, standard and version, LOS state, calibration fit."""
-    from rich.table import Table
 
-    from uavcas.channel.pathloss import specs
 
     t = Table(title="path-loss models (uavcas.channel.pathloss)", title_justify="left")
     for col in ("name", "model", "standard", "LOS state", "calibration fit"):

@@ -6,6 +6,8 @@ import os
 
 import typer
 
+from uavcas.emulation.cleanup import clean as do_clean
+
 from .common import console, fail, prefix_option, prefix_or_fail
 
 
@@ -14,7 +16,6 @@ def clean(
     force: bool = typer.Option(False, "--force", help="Also clean a run that is still alive."),
 ) -> None:
     """Remove what crashed emulation runs left: processes, namespaces (with their links and rules), cgroups."""
-    from uavcas.emulation.cleanup import clean as do_clean
 
     if os.geteuid() != 0:
         raise fail("clean needs root")

@@ -9,25 +9,25 @@ from pathlib import Path
 from typing import Any, Literal
 
 import typer
-from rich.console import Console
 from rich.markup import escape
 
-from uavcas.atomic import atomic_path, atomic_write_bytes, atomic_write_text  # noqa: F401
+from uavcas.atomic import UnsafeOutput, atomic_path, atomic_write_bytes, atomic_write_text, check_out_dir, check_target  # noqa: F401
+from uavcas.dataset.external import ExternalFormatError
+from uavcas.dataset.store import DatasetError
+from uavcas.dataset.uavcas_csv import CsvFormatError
+from uavcas.emulation.naming import check_prefix as check
+from uavcas.flows import CaptureError
 from uavcas.flows.assemble import VIEWS
 from uavcas.flows.standards import DEFAULT_STANDARD, names, standards
 from uavcas.flows.termination import TERMINATIONS
+from uavcas.labels import LabelError
+from uavcas.scenario import ScenarioError
 from uavcas.schema import EPISODE_VIEW
+from uavcas.twin.plan import plan as make_plan
+from uavcas.twin.profile import ProfileError
+from uavcas.twin.schedule import EpisodeError
 
-
-def _console(stderr: bool = False) -> Console:
-    # Piped or redirected output is never cut to a terminal's width: rich would otherwise render
-    # tables at 80 columns and end cells with an ellipsis ("7.22e-..." in a file).
-    c = Console(stderr=stderr)
-    return c if c.is_terminal else Console(stderr=stderr, width=100_000)
-
-
-console = _console()
-err_console = _console(stderr=True)
+from .console import console, err_console, fail  # noqa: F401  (the commands take them from here)
 
 TERMINATION_HELP = ("How a TCP flow ends: connection (default: one connection one flow; closed on RST or the "
                     "acknowledged last FIN, its trailing packets within 60 s join it), cic (CICFlowMeter exactly: "
@@ -112,8 +112,6 @@ def prefix_option(help: str) -> Any:
 def prefix_or_fail(prefix: str | None) -> str | None:
     """A `--prefix` the emulation can use (`uavcas.emulation.naming`), or a one-line error (exit 2)."""
     if prefix is not None:
-        from uavcas.emulation.naming import check_prefix as check
-
         try:
             check(prefix)
         except ValueError as e:
@@ -128,7 +126,6 @@ def check_output(path: Path, kind: Literal["file", "dir"], option: str = "--out"
     rules). A file's folder must exist: uavcas creates no folder the user did not name (`plan --out
     /no/such/dir/plan.json` is refused). An output directory is named as one: it is created, like
     `mkdir -p`, with any missing parents, once the command has work to write."""
-    from uavcas.atomic import UnsafeOutput, check_out_dir, check_target
 
     try:
         (check_target if kind == "file" else check_out_dir)(path)
@@ -140,22 +137,8 @@ def check_output(path: Path, kind: Literal["file", "dir"], option: str = "--out"
     return path
 
 
-def fail(message: str, code: int = 2) -> "typer.Exit":
-    """Print a one-line error to stderr and return the Exit to raise.
-
-    The message is plain text: escaped, so brackets in it (a regex, a list) are printed as
-    they are instead of being taken for console markup."""
-    err_console.print(f"[bold red]error:[/] {escape(message)}", highlight=False, soft_wrap=True)
-    return typer.Exit(code)
-
-
 def dataset_errors() -> tuple[type[Exception], ...]:
     """What reading captures, runs and datasets raises on bad input: each is a one-line error."""
-    from uavcas.dataset.external import ExternalFormatError
-    from uavcas.dataset.store import DatasetError
-    from uavcas.dataset.uavcas_csv import CsvFormatError
-    from uavcas.flows import CaptureError
-    from uavcas.labels import LabelError
 
     return (CaptureError, DatasetError, LabelError, CsvFormatError, ExternalFormatError, ValueError, OSError)
 
@@ -175,10 +158,6 @@ def path_fail(path: Path, error: Exception) -> "typer.Exit":
 
 def plan_or_fail(config: str, seed: int, windows: int, window_s: float, profile: str | None, episodes: int = 1):
     """The plan of a scenario, or a one-line error naming the bad field / profile (exit 2)."""
-    from uavcas.scenario import ScenarioError
-    from uavcas.twin import plan as make_plan
-    from uavcas.twin.profile import ProfileError
-    from uavcas.twin.schedule import EpisodeError
 
     try:
         p = make_plan(config, seed=seed, windows=windows, window_s=window_s, profile=profile, episodes=episodes)

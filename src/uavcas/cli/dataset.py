@@ -6,6 +6,8 @@ from pathlib import Path
 
 import typer
 
+from uavcas.dataset.synthetic import make_flows, write_dataset
+
 from .common import check_output, console, fail, seed_option
 
 dataset_app = typer.Typer(help="Datasets without an emulation: synthetic flows in the dataset schema.",
@@ -24,7 +26,6 @@ def synth_cmd(
 ) -> None:
     """Synthetic flows with a known structure (floods separable, Wormhole identical to Benign),
     built by the real flow and feature code; for trying `analyze` and `bench` without root."""
-    from uavcas.dataset.synthetic import make_flows, write_dataset
 
     check_output(out, "dir")
     if out.exists() and (not out.is_dir() or any(out.iterdir())):

@@ -11,6 +11,9 @@ import typer
 from rich.markup import escape
 from rich.table import Table
 
+from uavcas.diagnostics import contention, vm
+from uavcas.diagnostics.doctor import DoctorResult, run_doctor
+
 from .common import atomic_write_text, check_output, console, fail, one_of, prefix_option, prefix_or_fail
 
 VmAccel = one_of(("auto", "kvm", "tcg"))
@@ -28,7 +31,6 @@ def doctor(
                                                          help="auto (KVM if it boots, else TCG), kvm or tcg."),
 ) -> None:
     """Report kernel features, the chosen shaper and tools; measure a two-hop shaped path."""
-    from uavcas.diagnostics.doctor import run_doctor
 
     if json_out is not None:
         check_output(json_out, "file", "--json")
@@ -58,9 +60,6 @@ def doctor(
 
 
 def _doctor_vm(accel: str, json_out: Path | None) -> None:
-    from uavcas.diagnostics import contention, vm
-    from uavcas.diagnostics.doctor import DoctorResult
-
     if accel not in ("auto", "kvm", "tcg"):
         raise fail(f"--vm-accel: {accel!r} is not one of auto, kvm, tcg")
     why = vm.unavailable()

@@ -7,7 +7,10 @@ from pathlib import Path
 
 import typer
 
-from uavcas.dataset.read import EXPORT_FORMATS
+from uavcas.dataset.cic_csv import write_flow_csv
+from uavcas.dataset.parquet import read_flows
+from uavcas.dataset.read import EXPORT_FORMATS, select_view
+from uavcas.dataset.uavcas_csv import layout_rows, write_layout
 
 from .common import View, check_output, console, dataset_argument, dataset_errors, fail, one_of, warn
 
@@ -31,9 +34,6 @@ def export_cmd(
     """Export a dataset: in the authors' released layout (one stat and one ts CSV, one row per host
     pair: 5-tuple flows are merged into host pairs from their packet sequences), or as one plain
     CSV row per flow for CICIDS2017-style tooling (--format csv)."""
-    from uavcas.dataset.parquet import read_flows
-    from uavcas.dataset.read import select_view
-    from uavcas.dataset.uavcas_csv import layout_rows, write_layout
 
     if fmt == "csv" and (embed_config or include_flags):
         raise fail(f"{'--embed-config' if embed_config else '--include-flags'}: applies to --format uavcas-csv only")
@@ -42,8 +42,6 @@ def export_cmd(
     if not path.is_file():
         raise fail(f"{dataset_dir}: no flows.parquet (not a dataset directory)")
     if fmt == "csv":
-        from uavcas.dataset.cic_csv import write_flow_csv
-
         try:
             n = write_flow_csv(dataset_dir, out, view=view)
         except dataset_errors() as exc:

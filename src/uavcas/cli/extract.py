@@ -7,6 +7,7 @@ from pathlib import Path
 
 import typer
 
+from uavcas.dataset.store import extract_run
 from uavcas.schema import EPISODE_VIEW
 from uavcas.vocabulary import LABEL_MODES
 
@@ -47,7 +48,6 @@ def extract_cmd(
 ) -> None:
     """Extract one run into the dataset directory --out (its shard is replaced if it was extracted before)."""
     check_output(out, "dir")
-    from uavcas.dataset.store import extract_run
 
     try:
         info = extract_run(run_dir, out, view=view, labels=labels, min_packets=min_packets, termination=termination,

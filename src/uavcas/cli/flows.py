@@ -3,11 +3,17 @@ the files are written by `uavcas.dataset.flow_files`)."""
 
 from __future__ import annotations
 
+import io
 import sys
 from pathlib import Path
 
+import pandas as pd
 import typer
+from rich.console import Console
 from rich.table import Table
+
+from uavcas.dataset.flow_files import write_csv, write_parquet
+from uavcas.flows import FlowConfig, StreamReport, iter_flow_frames
 
 from .common import (
     Standard,
@@ -59,8 +65,6 @@ def flows_cmd(
                                            "(default 60)."),
 ) -> None:
     """Flows of one capture (streamed, bounded memory) or of several capture points (de-duplicated)."""
-    from uavcas.dataset.flow_files import write_csv, write_parquet
-    from uavcas.flows import FlowConfig, StreamReport, iter_flow_frames
 
     if fmt == "parquet" and out is None:
         raise fail("--format parquet needs --out FILE")
@@ -97,10 +101,7 @@ def flows_cmd(
 
 
 def _print_table(shown: list, view: str, report, out: Path | None) -> None:
-    import io
 
-    import pandas as pd
-    from rich.console import Console
 
     head = pd.concat(shown, ignore_index=True).head(TABLE_ROWS) if shown else None
     table = Table(title=f"{report.flows} flows ({view}) from {report.packets} packets")

@@ -9,6 +9,7 @@ from pathlib import Path
 import typer
 
 from uavcas.dataset.read import IMPORT_FORMATS
+from uavcas.dataset.store import import_layout
 
 from .common import check_output, console, dataset_errors, err_console, fail, one_of
 
@@ -22,7 +23,6 @@ def import_cmd(
     out: Path = typer.Option(..., "--out", help="New dataset directory to create."),
 ) -> None:
     """Import the authors' CSV layout (theirs as released, or ours) into a dataset directory."""
-    from uavcas.dataset.store import import_layout
 
     check_output(out, "dir")
     try:

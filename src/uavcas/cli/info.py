@@ -6,8 +6,13 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
+import pyarrow.parquet as pq
 import typer
 from rich.table import Table
+
+from uavcas.dataset.dictionary import DictionaryError, columns
+from uavcas.dataset.runs import dataset_runs, percent
+from uavcas.dataset.store import card_standard, read_card
 
 from .common import console, dataset_argument, dataset_errors, fail
 
@@ -18,8 +23,6 @@ def info_cmd(
                                                          "and meaning (tab-separated) instead."),
 ) -> None:
     """Class counts, feature standard, views, fidelity and the runs of a dataset (or its columns)."""
-    from uavcas.dataset.runs import dataset_runs, percent
-    from uavcas.dataset.store import card_standard, read_card
 
     try:
         card = read_card(dataset_dir)
@@ -58,10 +61,7 @@ def info_cmd(
 
 def _print_columns(dataset_dir: Path, card: dict) -> None:
     """Every column of flows.parquet, from the data dictionary: name, dtype, unit, meaning (TSV)."""
-    import pyarrow.parquet as pq
 
-    from uavcas.dataset.dictionary import DictionaryError, columns
-    from uavcas.dataset.store import card_standard
 
     path = Path(dataset_dir) / "flows.parquet"
     if not path.is_file():

@@ -4,8 +4,12 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import pandas as pd
 import typer
+from rich.console import Console
 from rich.table import Table
+
+from uavcas.mavlink_capture import TABLE_SUFFIXES, mavlink_table, problems, write_table
 
 from .common import allow_truncated_option, check_output, console, err_console, fail, run_dir_argument, warn
 
@@ -25,7 +29,6 @@ def mavlink_cmd(
     time, addresses, header, fields (JSON and position columns in the message's units), CRC check,
     a position report's offset from the plan's track (claimed minus true, metres east/north/up: a
     spoofed GPS's drift) and the packet's effect and family from the ground truth."""
-    from uavcas.mavlink_capture import TABLE_SUFFIXES, mavlink_table, problems, write_table
 
     if out is not None and out.suffix.lower() not in TABLE_SUFFIXES:
         raise fail(f"--out: {out} must end in {' or '.join(TABLE_SUFFIXES)}")
@@ -45,9 +48,6 @@ def mavlink_cmd(
 
 
 def _print(df, point: str | None) -> None:
-    import pandas as pd
-    from rich.console import Console
-
     where = f"at {point}" if point else "over all capture points (one row per observation)"
     table = Table(title=f"{len(df)} MAVLink rows {where}")
     for c in ("ts_s", "point", "src", "dst", "sysid", "compid", "seq", "msg_name", "crc_ok", "offset e/n/u m",

@@ -8,6 +8,8 @@ from pathlib import Path
 import typer
 from rich.table import Table
 
+from uavcas.report.topology import draw_plan_windows
+
 from .common import (
     atomic_write_text,
     check_output,
@@ -43,8 +45,6 @@ def plan_cmd(
         atomic_write_text(out, p.to_json())
         console.print(f"plan written to {out}")
     if figure is not None:
-        from uavcas.report.topology import draw_plan_windows
-
         paths = draw_plan_windows(p, figure)
         console.print(f"{len(paths)} topology figures written to {figure}")
 

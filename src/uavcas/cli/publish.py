@@ -7,6 +7,10 @@ from pathlib import Path
 
 import typer
 
+from uavcas.dataset.croissant import CroissantError
+from uavcas.dataset.publish import publish
+from uavcas.dataset.store import DatasetError
+
 from .common import check_output, console, dataset_argument, err_console, fail
 
 
@@ -25,13 +29,6 @@ def publish_cmd(
     card, a Croissant file validated by mlcroissant, and a README dataset card (classes, labelling
     rules, fidelity, every column with its unit, the calibration data's licence)."""
     check_output(out, "dir")
-    try:
-        import mlcroissant  # noqa: F401
-    except ImportError as e:  # mlcroissant is a dependency; a partial installation says so in one line
-        raise fail(f"publish needs mlcroissant ({e}); pip install mlcroissant") from None
-    from uavcas.dataset.croissant import CroissantError
-    from uavcas.dataset.publish import publish
-    from uavcas.dataset.store import DatasetError
 
     try:
         p = publish(dataset, out, name=name, license=license, version=version, url=url)

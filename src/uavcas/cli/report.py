@@ -6,6 +6,9 @@ from pathlib import Path
 
 import typer
 
+from uavcas.dataset.store import DatasetError
+from uavcas.report.dataset_report import ReportError, write_report
+
 from .common import check_output, console, dataset_argument, fail
 
 
@@ -15,8 +18,6 @@ def report_cmd(
                              help="Directory for index.html, the one self-contained file written (figures inlined)."),
 ) -> None:
     """Write a self-contained HTML report of a dataset: summary, runs, topology, fidelity, distributions, card."""
-    from uavcas.dataset.store import DatasetError
-    from uavcas.report.dataset_report import ReportError, write_report
 
     check_output(out, "dir")
     try:

@@ -13,6 +13,9 @@ from pathlib import Path
 import typer
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
+from uavcas.emulation.preflight import preflight, probe_kernel
+from uavcas.emulation.runner import RunOptions, realize
+from uavcas.events import AttackLogged, AttackRate, RunDone, SetupDone, WindowApplied
 from uavcas.vocabulary import MAVLINK_PAYLOADS
 
 from .audit import fidelity_line
@@ -59,18 +62,15 @@ def run_cmd(
         raise fail(f"--mavlink-signing: payload {p.scenario.payload!r} carries no MAVLink "
                    f"(use {', '.join(MAVLINK_PAYLOADS)})")
     prefix_or_fail(prefix)
-    from uavcas.emulation.preflight import preflight
 
     reason = preflight(p, out)
     if reason:
         raise fail(reason)
-    from uavcas.emulation.preflight import probe_kernel
 
     feats, reason = probe_kernel()
     if reason:
         raise fail(reason)
 
-    from uavcas.emulation.runner import RunOptions, realize
 
     opts = RunOptions(prefix=prefix, think_mean_s=think_s, audit=audit, mavlink_signing=mavlink_signing,
                       **({"video_kbps": video_kbps} if video_kbps is not None else {}))
@@ -85,8 +85,6 @@ def run_cmd(
         t0 = [0.0]
 
         def on_event(e) -> None:
-            from uavcas.events import AttackLogged, AttackRate, RunDone, SetupDone, WindowApplied
-
             if isinstance(e, SetupDone):
                 progress.update(task, description=f"setup {e.seconds:.2f} s (prefix {e.prefix})")
             elif isinstance(e, WindowApplied):

@@ -19,6 +19,7 @@ import datetime as dt
 from dataclasses import dataclass
 from pathlib import Path
 
+import mlcroissant as mlc
 import pyarrow as pa
 
 from .dictionary import columns
@@ -58,7 +59,6 @@ class DatasetInfo:
 
 def _data_type(t: pa.DataType):
     """(Croissant data type, is_array) of an Arrow type."""
-    import mlcroissant as mlc  # on use, as below: heavy (rdflib, etc.), only `publish` needs it
 
     if pa.types.is_list(t) or pa.types.is_large_list(t):
         return _data_type(t.value_type)[0], True
@@ -86,7 +86,6 @@ def metadata_json(info: DatasetInfo, files: list[FileEntry], schema: pa.Schema, 
                   episodes: bool) -> dict:
     """The Croissant JSON-LD of the published directory; raises CroissantError if mlcroissant
     finds an error while building it."""
-    import mlcroissant as mlc  # on use: heavy, only `publish` needs it
 
     ctx = mlc.Context(conforms_to=CROISSANT_VERSION)
     shards = [f for f in files if f.path.startswith(f"{SHARDS}/")]
@@ -122,7 +121,6 @@ def metadata_json(info: DatasetInfo, files: list[FileEntry], schema: pa.Schema, 
 def validate(path: Path) -> list[str]:
     """Read the Croissant file at `path` back with mlcroissant (as a user's loader will): its
     warnings, sorted; CroissantError on an error."""
-    import mlcroissant as mlc  # on use: heavy, only `publish` needs it
 
     try:
         ds = mlc.Dataset(jsonld=path)

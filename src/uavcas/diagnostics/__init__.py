@@ -2,8 +2,8 @@
 
 - `doctor`: the verdict (kernel features, a two-hop shaped path measured end to end, CPU
   contention), also `python -m uavcas.diagnostics.doctor` for a VM guest;
-- `selftest`: the measurement endpoints started inside the namespaces and the checks of their
-  figures against the plan (tolerances, binomial loss interval);
+- `selftest`: the measurement endpoints started inside the namespaces;
+- `checks`: their figures against the plan (tolerances, binomial loss interval);
 - `contention`: how contended this machine's CPUs are over an interval;
 - `vm`: the same self-test in a stock Debian kernel under QEMU (`uavcas doctor --vm`).
 

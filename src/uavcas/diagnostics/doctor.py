@@ -10,15 +10,20 @@ be. A figure outside tolerance is measured once more before it counts as a failu
 
 from __future__ import annotations
 
+import argparse
+import json
 from dataclasses import dataclass, field
+from pathlib import Path
 
+from uavcas.atomic import atomic_write_text
 from uavcas.emulation.emulation import Emulation
 from uavcas.emulation.naming import new_prefix
 from uavcas.emulation.probe import Features, probe
+from uavcas.twin import model as m
 
 from . import selftest
+from .checks import Check, DelayTolerance, HopConfig, delay_checks, goodput_check, loss_check
 from .contention import Contention, ContentionProbe
-from .selftest import Check, DelayTolerance, HopConfig
 
 
 @dataclass(frozen=True)
@@ -50,8 +55,6 @@ PROFILES = {p.name: p for p in (NATIVE, EMULATED_CPU)}
 
 
 def two_hop_plan(windows: list[list[HopConfig]]):
-    from uavcas.twin import model as m
-
     nodes = [m.Node(name=f"uav{i}", kind="uav", index=i, ip=f"10.78.0.{i + 1}", mac=f"02:00:00:78:00:{i:02x}")
              for i in range(3)]
     wins = []
@@ -114,9 +117,9 @@ def _measure(emu: Emulation, prof: DoctorProfile) -> list[Check]:
     goodput = selftest.measure_goodput(emu, "uav0", "uav2", startup_s=prof.startup_s)
     emu.apply_window(1)
     udp = selftest.measure_udp(emu, "uav0", "uav2", prof.udp_probes, prof.udp_pps, startup_s=prof.startup_s)
-    return [selftest.goodput_check(goodput, min(h.rate_mbps for h in prof.rate_hops)),
-            *selftest.delay_checks(udp["delays_ms"], prof.impair_hops, prof.tol),
-            selftest.loss_check(udp["loss"], prof.udp_probes, prof.impair_hops)]
+    return [goodput_check(goodput, min(h.rate_mbps for h in prof.rate_hops)),
+            *delay_checks(udp["delays_ms"], prof.impair_hops, prof.tol),
+            loss_check(udp["loss"], prof.udp_probes, prof.impair_hops)]
 
 
 def run_doctor(prefix: str | None = None, measure: bool = True, backend: str | None = None,
@@ -145,11 +148,7 @@ def run_doctor(prefix: str | None = None, measure: bool = True, backend: str | N
 def main(argv: list[str] | None = None) -> None:
     """`python -m uavcas.diagnostics.doctor --json FILE`: the measurement alone, as JSON (what the
     VM guest runs: the CLI would import every sub-command on a slow emulated CPU)."""
-    import argparse
-    import json
-    from pathlib import Path
 
-    from uavcas.atomic import atomic_write_text
 
     ap = argparse.ArgumentParser(description=main.__doc__.splitlines()[0])
     ap.add_argument("--json", type=Path, required=True)

@@ -18,6 +18,9 @@ from typing import TYPE_CHECKING
 from uavcas.attacks import family
 from uavcas.rundir import CAPTURE_SUFFIXES, RunDir, RunDirError, RunOwner
 
+from .cleanup import is_live
+from .probe import probe
+
 if TYPE_CHECKING:
     from uavcas.twin.model import Plan
 
@@ -61,7 +64,6 @@ def out_dir_problem(out: Path) -> str | None:
     prefixes = sorted({p for p in (info.prefix if info else None, owner.prefix if owner else None) if p})
     if len(prefixes) > 1:
         return f"--out {out} holds files of two runs (prefixes {', '.join(prefixes)}); choose another directory"
-    from .cleanup import is_live
 
     if prefixes and is_live(prefixes[0]):
         return f"--out {out} belongs to a live run (prefix {prefixes[0]}); choose another directory"
@@ -90,8 +92,6 @@ def prepare_out_dir(out: Path, prefix: str) -> None:
 def probe_kernel(features=None):
     """(kernel features, the reason a run cannot use them or None); probes in a throw-away netns."""
     if features is None:
-        from .probe import probe
-
         features = probe()
     if not features.netns:
         return features, "cannot create network namespaces here (ip netns add failed)"

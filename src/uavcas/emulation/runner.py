@@ -34,6 +34,7 @@ from typing import TYPE_CHECKING
 from uavcas.atomic import atomic_write_text
 from uavcas.attacks import family
 from uavcas.events import AttackLogged, Progress, RunDone, SetupDone, WindowApplied, attack_log_text
+from uavcas.fidelity import record_audit_error, write_fidelity
 from uavcas.rundir import CaptureRecord, RunDir, RunInfo
 from uavcas.versions import package_versions
 
@@ -146,7 +147,6 @@ def realize(plan: "Plan", out_dir: str | Path, options: RunOptions = RunOptions(
 
 def _audit(st: _State) -> None:
     """The run's fidelity audit (default tolerances for its swarm); a failure to audit is recorded."""
-    from uavcas.fidelity import record_audit_error, write_fidelity
 
     try:
         write_fidelity(st.out)

@@ -22,6 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from uavcas.emulation.shaping import netem_limit_pkts, queue_limit_pkts
 from uavcas.flows.follow import Timeline
 from uavcas.twin.model import Plan
 
@@ -45,8 +46,6 @@ class PortShaping:
     def queue_limit_pkts(self, k: np.ndarray, netem: bool = False) -> np.ndarray:
         """The queue limit of settings k, as the shaper sized it from the rate (`emulation.shaping`):
         the pfifo's, or with netem, netem's own (it also holds the frames in their delay)."""
-        # lazily: reading a run needs no emulation package (docs/architecture.md, dependencies)
-        from uavcas.emulation.shaping import netem_limit_pkts, queue_limit_pkts
 
         if netem:
             return np.array([netem_limit_pkts(float(r), float(d)) for r, d in zip(self.rate_mbps[k], self.delay_ms[k])],

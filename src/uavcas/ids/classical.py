@@ -11,8 +11,10 @@ on the protocol's grouped validation split (runs never trained on), not on rando
 
 from __future__ import annotations
 
+import lightgbm as lgb
 import numpy as np
 from sklearn.metrics import log_loss
+from sklearn.neural_network import MLPClassifier
 
 from .base import EarlyStoppingClassifier
 from .torch_estimator import default_threads
@@ -34,8 +36,6 @@ class GroupedMLPClassifier(EarlyStoppingClassifier):
         self.random_state = random_state
 
     def _fit_core(self, X, yi, X_val, yv, rng) -> None:
-        from sklearn.neural_network import MLPClassifier  # on use: only the MLP detector needs it
-
         labels = np.arange(len(self.classes_))
         # a RandomState instance (not an int) so that each partial_fit call draws a new batch order
         state = np.random.RandomState(None if self.random_state is None else int(self.random_state))
@@ -89,7 +89,6 @@ class LightGBMClassifier(EarlyStoppingClassifier):
     def _boost(self, X, yi, X_val, yv, init_score=None, val_init_score=None):
         """One LightGBM model, early-stopped on (X_val, yv) when given; boosting starts from
         `init_score` (raw scores, and `val_init_score` on the validation rows) when given."""
-        import lightgbm as lgb  # on use: heavy, and the MLP shares this module
 
         params = self._lgbm_params()
         model = lgb.LGBMClassifier(**params)

@@ -22,9 +22,13 @@ RNNs to flow statistics. Choices (the paper cites the references but gives no la
 
 from __future__ import annotations
 
-from .torch_estimator import import_torch
+from .torch_estimator import DL_MISSING
 
-torch = import_torch()  # without torch: the `dl` extra's install line, not a bare ModuleNotFoundError
+try:
+    import torch
+except ImportError as e:  # without torch: the `dl` extra's install line, not a bare ModuleNotFoundError
+    raise ImportError(DL_MISSING) from e
+
 nn = torch.nn
 F = torch.nn.functional
 

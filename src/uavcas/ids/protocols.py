@@ -22,6 +22,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
+from sklearn.inspection import permutation_importance
+from sklearn.metrics import f1_score
 from sklearn.preprocessing import MinMaxScaler, RobustScaler, StandardScaler
 from threadpoolctl import threadpool_limits
 
@@ -305,9 +307,6 @@ def _fit_one(res: ProtocolResult, task: Task, sp: Split, name: str, seed: int, c
 def _importance(est, tf, task: Task, rows: np.ndarray, seed: int, model: str, cfg: BenchConfig,
                 features: list[str]) -> list[Importance]:
     """Drop in macro-F1 (declared classes) when one feature's test values are shuffled."""
-    # on use: only the importance table needs them
-    from sklearn.inspection import permutation_importance
-    from sklearn.metrics import f1_score
 
     if len(rows) > cfg.importance_rows:
         rows = np.sort(seeding.generator(seed).choice(rows, cfg.importance_rows, replace=False))

@@ -20,6 +20,7 @@ import numpy as np
 import pandas as pd
 
 from uavcas.atomic import atomic_write_text
+from uavcas.report.figure import plt, save_png
 
 from .leaderboard import leaderboard_markdown, summarize
 from .protocols import ProtocolResult
@@ -59,7 +60,6 @@ def confusion_long(res: ProtocolResult) -> pd.DataFrame:
 
 def confusion_figure(labels: list[str], cm: np.ndarray, title: str, path: Path) -> Path:
     """Counts in each cell, colour = share of the true class's flows."""
-    from uavcas.report.figure import plt, save_png  # on use: matplotlib is heavy, only figures need it
 
     n = len(labels)
     size = max(4.0, 0.45 * n + 2)

@@ -36,7 +36,7 @@ PREDICT_BATCH = 8192
 
 def import_torch():
     try:
-        import torch
+        import torch  # deferred: the optional `dl` extra; the classical detectors share this module's base
     except ImportError as e:  # a clear message instead of a bare ModuleNotFoundError
         raise ImportError(DL_MISSING) from e
     return torch

@@ -1,6 +1,6 @@
 """Typed values of a plan: what the twin should do, per window.
 
-A `Plan` is pure data. It is produced by `uavcas.twin.plan()` without root or side effects and is
+A `Plan` is pure data. It is produced by `uavcas.twin.plan.plan()` without root or side effects and is
 consumed by the emulator (`uavcas.emulation`), the labeller and the reports. Its JSON form
 (`plan.json`) is the contract between those stages; `SCHEMA_VERSION` changes when it does.
 

@@ -9,7 +9,7 @@ from scapy.layers.l2 import Ether
 
 from uavcas.emulation.apps import client, images, replayer
 from uavcas.emulation.apps.traffic import BenignTraffic
-from uavcas.twin import plan
+from uavcas.twin.plan import plan
 
 IMAGES = tuple(f"img{k:03d}.jpg" for k in range(24))
 

@@ -118,7 +118,7 @@ def test_autopilot_reports_the_spoofers_drift_between_the_logged_times(tmp_path)
     from helpers.mavlink_relay import Relay, free_port, parse_each, run_endpoints
     from uavcas.emulation.apps import mavlink as mv
     from uavcas.emulation.attacks import AttackExecutor
-    from uavcas.twin import plan
+    from uavcas.twin.plan import plan
     from uavcas.twin.track import geodetic_to_local
 
     p = plan("gps_spoof=5-6-2-telemetry-logdist-adaptive-random-30-95", seed=14, windows=4, window_s=1.5)

@@ -20,7 +20,7 @@ from uavcas.emulation.apps import mavlink as mv
 from uavcas.emulation.apps.mavinject import read_log as read_injector_log
 from uavcas.emulation.apps.mavlink.commands import COPTER_MODE_RTL
 from uavcas.emulation.apps.mavlink.specs import COPTER_MODE_AUTO
-from uavcas.twin import plan
+from uavcas.twin.plan import plan
 
 pytestmark = pytest.mark.slow
 CFG = "mavlink_inject=rtl-6-2-telemetry-logdist-adaptive-random-30-95"

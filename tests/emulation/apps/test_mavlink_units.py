@@ -12,7 +12,7 @@ import pytest
 
 from helpers.mavlink_relay import Relay, free_port, parse_each, run_endpoints, type_of
 from uavcas.emulation.apps import mavlink as mv
-from uavcas.twin import plan
+from uavcas.twin.plan import plan
 from uavcas.twin.track import Track, geodetic_to_local
 
 pytestmark = pytest.mark.slow

@@ -313,7 +313,7 @@ def test_stream_rate_at_the_sink(tmp_path):
 def test_the_runs_video_seeds_fit_ffmpeg_whatever_the_plan_seed(tmp_path):
     # campaign runs carry seeds up to 2**32 - 1; ffmpeg's noise seed is a C int
     from uavcas.emulation.apps.traffic import BenignTraffic
-    from uavcas.twin import plan
+    from uavcas.twin.plan import plan
 
     p = plan("benign-4-2-video-logdist-adaptive-random-30-95", seed=2**32 - 1, windows=1)
     t = BenignTraffic(None, p, tmp_path, 5.0)

@@ -33,6 +33,8 @@ import sys
 import time
 from pathlib import Path
 
+from pymavlink.dialects.v20 import common as m
+
 from .mavlink.specs import COMPONENT_AUTOPILOT, COMPONENT_GCS, UAV_PORT
 
 READY = "ready"
@@ -88,7 +90,6 @@ def main(argv: list[str] | None = None) -> int:
     if a.rate_hz <= 0 or a.count < 0:
         print("mavinject: --rate-hz must be > 0 and --count >= 0", file=sys.stderr)
         return 2
-    from pymavlink.dialects.v20 import common as m  # after the argument checks: it builds its classes (~0.2 s)
 
     deadline = time.time() + a.seconds
     sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)

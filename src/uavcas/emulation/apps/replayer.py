@@ -43,6 +43,8 @@ import zlib
 from dataclasses import dataclass
 
 import numpy as np
+from scapy.layers.inet import IP, TCP, UDP
+from scapy.layers.l2 import Ether
 
 from uavcas import seeding
 from uavcas.events import Inject
@@ -99,9 +101,6 @@ def new_seq(orig: int, k: int, mode: str, rng: np.random.Generator) -> int:
 
 def mutate(frame: bytes, k: int, mode: str, ttl_dec: int, rng: np.random.Generator) -> tuple[bytes, int | None]:
     """The injected frame: TTL - ttl_dec, TCP seq per mode, checksums recomputed (scapy)."""
-    # scapy is slow to import; `run` imports it before the replayer says ready
-    from scapy.layers.inet import IP, TCP, UDP
-    from scapy.layers.l2 import Ether
 
     pkt = Ether(frame)
     ip = pkt[IP]
@@ -188,7 +187,6 @@ def run(args: argparse.Namespace) -> dict:
     stop = []
     signal.signal(signal.SIGTERM, lambda *_: stop.append(1))
     signal.signal(signal.SIGINT, lambda *_: stop.append(1))
-    import scapy.layers.inet  # noqa: F401  (import before "ready": the first mutate must be quick)
 
     log = open(args.log, "a", buffering=1)
     print("ready", flush=True)

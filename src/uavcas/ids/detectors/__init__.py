@@ -3,7 +3,8 @@
 Adding a detector: one module here that calls `register(DetectorSpec(...))` (plus its tests).
 Every module of this package is imported below, so the CLI's `--models` choices and help, the
 benchmark's lists and the leaderboard's order all see it; nothing else needs editing.
-Importing this package imports no estimator library: each factory imports its own on use.
+Each module imports its estimator library at module level; only torch (the optional `dl` extra)
+waits until a deep detector is built (its factory imports `uavcas.ids.nets`).
 """
 
 from __future__ import annotations

@@ -3,14 +3,13 @@ flow model's scores on the `ctx_*` columns (two stages; `uavcas.ids.context`).""
 
 from __future__ import annotations
 
+from uavcas.ids.context import ContextClassifier
+
 from .registry import register
 from .spec import DetectorSpec
 
 
 def _factory():
-    # LightGBM and scikit-learn are imported when the detector is built, not with the registry (the CLI reads it)
-    from uavcas.ids.context import ContextClassifier
-
     return ContextClassifier(inputs="both")
 
 

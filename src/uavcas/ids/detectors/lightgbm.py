@@ -3,14 +3,13 @@ paper baseline (Silva et al. 2023; `uavcas.ids.classical.LightGBMClassifier`).""
 
 from __future__ import annotations
 
+from uavcas.ids.classical import LightGBMClassifier
+
 from .registry import register
 from .spec import DetectorSpec
 
 
 def _factory():
-    # scikit-learn is imported when the detector is built, not with the registry (the CLI reads it)
-    from uavcas.ids.classical import LightGBMClassifier
-
     return LightGBMClassifier(n_estimators=200, learning_rate=0.1, num_leaves=31)
 
 

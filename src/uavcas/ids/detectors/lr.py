@@ -2,14 +2,13 @@
 
 from __future__ import annotations
 
+from sklearn.linear_model import LogisticRegression
+
 from .registry import register
 from .spec import DetectorSpec
 
 
 def _factory():
-    # scikit-learn is imported when the detector is built, not with the registry (the CLI reads it)
-    from sklearn.linear_model import LogisticRegression
-
     return LogisticRegression(max_iter=1000, random_state=0)
 
 

@@ -3,15 +3,14 @@ paper baseline (Hassler et al. 2024; `uavcas.ids.classical.GroupedMLPClassifier`
 
 from __future__ import annotations
 
+from uavcas.ids.base import PATIENCE
+from uavcas.ids.classical import GroupedMLPClassifier
+
 from .registry import register
 from .spec import DetectorSpec
 
 
 def _factory():
-    # scikit-learn is imported when the detector is built, not with the registry (the CLI reads it)
-    from uavcas.ids.base import PATIENCE
-    from uavcas.ids.classical import GroupedMLPClassifier
-
     return GroupedMLPClassifier(max_iter=50, n_iter_no_change=PATIENCE)
 
 

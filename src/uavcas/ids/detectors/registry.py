@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
+from uavcas.ids.torch_estimator import default_threads
+
 from .spec import DetectorSpec
 
 if TYPE_CHECKING:
@@ -57,8 +59,6 @@ def make_model(name: str, random_state: int = 0, epochs: int = 50, n_threads: in
                device: str = "auto") -> BaseEstimator:
     """`baseline(name)` with the benchmark's common knobs mapped to each detector's own parameter
     (`device` reaches the torch models only: the others run on the CPU)."""
-    # on use, like the factories: torch_estimator's base class imports scikit-learn
-    from uavcas.ids.torch_estimator import default_threads
 
     spec = detector(name)
     params: dict[str, object] = {}

@@ -2,14 +2,13 @@
 
 from __future__ import annotations
 
+from sklearn.ensemble import RandomForestClassifier
+
 from .registry import register
 from .spec import DetectorSpec
 
 
 def _factory():
-    # scikit-learn is imported when the detector is built, not with the registry (the CLI reads it)
-    from sklearn.ensemble import RandomForestClassifier
-
     return RandomForestClassifier(n_estimators=100, random_state=0)
 
 

@@ -2,14 +2,13 @@
 
 from __future__ import annotations
 
+from sklearn.linear_model import SGDClassifier
+
 from .registry import register
 from .spec import DetectorSpec
 
 
 def _factory():
-    # scikit-learn is imported when the detector is built, not with the registry (the CLI reads it)
-    from sklearn.linear_model import SGDClassifier
-
     # log loss so that predict_proba exists (AUROC and PR-AUC need scores)
     return SGDClassifier(loss="log_loss", max_iter=1000, tol=1e-4, random_state=0)
 

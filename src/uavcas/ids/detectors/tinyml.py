@@ -3,15 +3,16 @@
 
 from __future__ import annotations
 
+from uavcas.ids.base import PATIENCE
+from uavcas.ids.torch_estimator import TorchClassifier
+
 from .registry import register
 from .spec import DetectorSpec
 
 
 def _factory():
-    # torch (the optional `dl` extra) is imported when the detector is built, never with the registry
-    from uavcas.ids.base import PATIENCE
+    # deferred: `nets` imports torch (the optional `dl` extra) at module level; the registry loads without it
     from uavcas.ids.nets import TinyML
-    from uavcas.ids.torch_estimator import TorchClassifier
 
     return TorchClassifier(network=TinyML, epochs=50, patience=PATIENCE)
 

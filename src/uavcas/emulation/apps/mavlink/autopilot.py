@@ -7,17 +7,19 @@ import socket
 import time
 from collections import Counter
 
+from pymavlink.dialects.v20 import common
+
 from uavcas.twin.track import local_to_geodetic
 
 from . import signing
 from .commands import VehicleState
 from .gps import POSITION_MESSAGES, GpsReceiver, course_deg
 from .link import Log, Peer, Periodic, Stop, await_t0, recv_all
-from .specs import COMPONENT_AUTOPILOT, GPS_FIX_3D, GPS_SATELLITES, STREAM_MESSAGES, UavSpec, _mavlink
+from .specs import COMPONENT_AUTOPILOT, GPS_FIX_3D, GPS_SATELLITES, STREAM_MESSAGES, UavSpec
 
 
 def run_uav(spec: UavSpec) -> dict:
-    m = _mavlink()
+    m = common
     stop = Stop()
     sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
     sock.bind((spec.bind_ip, spec.bind_port))

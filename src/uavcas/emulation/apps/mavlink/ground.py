@@ -6,13 +6,15 @@ import socket
 import time
 from collections import Counter
 
+from pymavlink.dialects.v20 import common
+
 from . import signing
 from .link import Log, Peer, Periodic, Stop, await_t0, recv_all
-from .specs import COMPONENT_AUTOPILOT, COMPONENT_GCS, GcsSpec, GcsTarget, _mavlink
+from .specs import COMPONENT_AUTOPILOT, COMPONENT_GCS, GcsSpec, GcsTarget
 
 
 def run_gcs(spec: GcsSpec) -> dict:
-    m = _mavlink()
+    m = common
     stop = Stop()
     sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
     sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)

@@ -26,6 +26,7 @@ import hashlib
 import time
 
 from pydantic import BaseModel, ConfigDict, Field
+from pymavlink.dialects.v20 import common
 
 KEY_TAG = b"uavcas/mavlink-signing/v1"
 SIGNING_EPOCH_UNIX = 1420070400  # 2015-01-01T00:00:00Z, the origin of MAVLink 2 signing timestamps
@@ -65,7 +66,6 @@ def timestamp_now() -> int:
 def new_signing_state(spec: SigningSpec):
     """A pymavlink `MAVLinkSigning` holding the key: signs what its MAVLink object sends and
     rejects unsigned or wrongly signed frames it parses (shareable between parsers)."""
-    from pymavlink.dialects.v20 import common  # on use: it builds its message classes at import (~0.2 s)
 
     state = common.MAVLinkSigning()
     state.secret_key = spec.key

@@ -6,6 +6,7 @@ from pathlib import Path
 from typing import Literal
 
 from pydantic import BaseModel, ConfigDict, Field
+from pymavlink.dialects.v20 import common
 
 from uavcas.twin.model import Site
 from uavcas.twin.track import Track, local_to_geodetic
@@ -22,13 +23,6 @@ COMPONENT_GCS = 190  # MAV_COMP_ID_MISSIONPLANNER, what ground stations use
 COPTER_MODE_AUTO = 3  # ArduCopter custom_mode AUTO: flying the uploaded mission
 GPS_FIX_3D = 3
 GPS_SATELLITES = 12
-
-
-def _mavlink():
-    # imported on use: pymavlink builds its message classes at import (~0.2 s)
-    from pymavlink.dialects.v20 import common
-
-    return common
 
 
 class _Frozen(BaseModel):
@@ -50,7 +44,7 @@ class StreamRates(_Frozen):
 
     def requests(self) -> list[tuple[int, int]]:
         """(MAV_DATA_STREAM id, rate Hz) pairs the GCS sends."""
-        m = _mavlink()
+        m = common
         return [(m.MAV_DATA_STREAM_EXTENDED_STATUS, self.ext_stat_rate_hz),
                 (m.MAV_DATA_STREAM_POSITION, self.position_rate_hz),
                 (m.MAV_DATA_STREAM_EXTRA1, self.extra1_rate_hz),
