@@ -226,3 +226,59 @@ def test_gap_longer_than_a_hop_splits(max_hop_s):
     rows = _send(1.0, ["uav0", "uav1", "bs0"])[:1] + [{"t": 1.0 + 1.0, "at": "uav1", "src": "uav0", "dst": "bs0"}]
     f = follow(_table(rows), TL, max_hop_s=max_hop_s)
     assert f.n_packets == (2 if max_hop_s < 1.0 else 1)
+
+
+def _busy(t0, n, at="uav1", length=1514):
+    """n back-to-back frames of another flow seen at `at` from t0 (s from T0): a busy port into it."""
+    gap = length * 8 / 24e6  # the links' planned 24 Mbit/s
+    return [{"t": t0 + k * gap, "at": at, "src": "uav0", "dst": at, "id": 100 + k, "len": length} for k in range(n)]
+
+
+SYNACK = {"proto": 6, "sport": 80, "dport": 40000, "seq": 7, "flags": 0x12, "id": 0, "len": 66}
+
+
+def test_identical_copies_leave_a_queued_link_in_the_order_they_entered():
+    # A SYN-ACK (IP id 0) and its retransmission, byte for byte, 2 ms apart on uav0, queued
+    # behind 2 ms of other frames at uav1: the first copy leaves at 7 ms, the second right behind
+    # it. The step closest to the planned 5 ms is the second copy's: FIFO order is the evidence.
+    a, b = _send(1.0, ["uav0", "uav1", "bs0"], **SYNACK), _send(1.002, ["uav0", "uav1", "bs0"], **SYNACK)
+    a[1]["t"], a[2]["t"] = 1.007, 1.012
+    b[1]["t"], b[2]["t"] = 1.00703, 1.01203
+    f = follow(_table(a + b + _busy(1.005, 4)), TL)
+    synack = [p for p in range(f.n_packets) if len(f.path(p)[0]) == 3]
+    assert len(synack) == 2
+    got = sorted([round(float(t) - T0, 5) for t in f.path(p)[1]] for p in synack)
+    assert got == [[1.0, 1.007, 1.012], [1.002, 1.00703, 1.01203]]
+    assert not f.revisit.any()
+
+
+def test_a_copy_lost_on_the_link_does_not_take_the_next_copys_observation():
+    # the first copy is lost on uav0 -> uav1; nothing kept that port busy, so the frame seen at
+    # uav1 at 7 ms (5 ms after the second copy) is the second copy's, not the first's 2 ms late
+    a = _send(1.0, ["uav0", "uav1", "bs0"], **SYNACK)[:1]
+    b = _send(1.002, ["uav0", "uav1", "bs0"], **SYNACK)
+    f = follow(_table(a + b), TL)
+    assert f.n_packets == 2 and f.delivered.tolist() == [False, True]
+    assert np.allclose(np.diff(f.path(1)[1]), D_MS / 1000, atol=1e-6)
+    assert [(POINTS[x], POINTS[y]) for x, y in zip(f.losses.from_point, f.losses.to_point)] == [("s-uav0", "s-uav1")]
+
+
+def test_a_frame_that_comes_back_to_a_switch_is_a_loop_not_a_new_packet():
+    # while uav1's table is being changed it sends bs0's traffic back to uav0, which sends it
+    # to uav1 again: one packet seen at uav0, uav1, uav0, uav1, bs0
+    loop = {**TL_NH[0], "uav1": {**TL_NH[0]["uav1"], "bs0": "uav0"}}
+    tl = Timeline.from_epochs(PLAN, [ForwardingEpoch(t_begin_unix=T0, t_unix=T0, window=0, next_hop=TL_NH[0]),
+                                     ForwardingEpoch(t_begin_unix=T0 + 1.001, t_unix=T0 + 1.001, window=0,
+                                                     next_hop=loop),
+                                     ForwardingEpoch(t_begin_unix=T0 + 1.012, t_unix=T0 + 1.012, window=0,
+                                                     next_hop=TL_NH[0])])
+    rows = [{"t": 1.0 + 0.005 * k, "at": n, "src": "uav0", "dst": "bs0", "id": 3}
+            for k, n in enumerate(["uav0", "uav1", "uav0", "uav1", "bs0"])]
+    f = follow(_table(rows), tl)
+    assert f.n_packets == 1 and f.delivered.tolist() == [True] and len(f.losses) == 0
+    assert f.path(0)[0] == ["s-uav0", "s-uav1", "s-uav0", "s-uav1", "s-bs0"]
+    assert f.revisit[np.argsort(f.hop)].tolist() == [False, False, True, True, False]
+    assert f.crossings().revisit.tolist() == [False, True, True, False]
+    # without the loop in the tables, the frame back at uav0 is a new transmission, not a loop
+    f = follow(_table(rows), TL)
+    assert not f.revisit.any() and f.n_packets == 2

@@ -1,0 +1,170 @@
+"""Identical copies in flight together: which observation belongs to which transmission.
+
+The follower (`follow`) chains most packets at once; the rest are segments of byte-identical
+observations of several transmissions at once (SYN-ACKs and unconnected UDP with IP id 0,
+duplicate ACKs, a flood's reused header). `match` strings them into chains, observation by
+observation in time order, with what a link can and cannot do:
+
+* **FIFO.** A link is FIFO (the delay stage and the HTB rate stage both are), so copies leave a
+  link in the order they entered it: an observation goes to the *oldest* open chain that it can
+  be the next step of. (Picking the chain whose step is closest to the planned delay, as the
+  follower once did, swaps copies under queueing: the real step is planned delay + queue wait.)
+* **Bounds** (`LinkBounds`). A step is no shorter than the link's planned delay (less `EARLY_S`)
+  and no longer than the planned delay plus a full queue drained at the planned rate (plus
+  `LATE_S`); a jammer's override in the window widens both.
+* **A copy lost on the link** must not take the next copy's observation: pairing the
+  observation with an older copy means that copy waited in the queue, so the port was busy
+  sending all that time. When the frames the next switch saw meanwhile (`Load`: from every port
+  into it, an upper bound on this port's) cannot fill the wait, less `BUSY_SLACK_S`, the older
+  copy was lost and the observation goes to a younger one (`lost_on_link`).
+* **Loops.** An observation at a switch that a chain already crossed continues that chain only
+  when the forwarding in force sent the frame back there and the step fits the link: the
+  frame looped (`revisit`). Otherwise it is a new transmission, and a chain never takes two
+  observations at one point in a row.
+
+Chains that are neither expected nor joined by a link to the observation's switch are skipped;
+where no chain fits, the observation starts a new one.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from uavcas.emulation.shaping import queue_limit_pkts
+from uavcas.twin.model import Plan
+
+MTU_FRAME_B = 1514  # the largest frame a queue holds: its limit in packets, in time (emulation.shaping)
+EARLY_S = 0.001  # a step may be this much shorter than the planned delay (pcap stamps, timer slack)
+LATE_S = 0.005  # ... and this much longer than planned delay + a full queue (scheduling lateness)
+# a queue wait that the port's traffic cannot account for by more than this (the p99 delay-error
+# tolerance: lateness the emulator may have) means the copy was lost, not late
+BUSY_SLACK_S = 0.0005
+
+
+@dataclass(frozen=True)
+class LinkBounds:
+    """What the plan allows one step i -> j in one window (every setting of the window, a jammer's
+    override included): the planned delay, and how long a frame can wait in the link's queue."""
+
+    delay_min_s: float
+    delay_max_s: float
+    rate_min_bps: float
+
+    @property
+    def wait_max_s(self) -> float:
+        """A full queue (`queue_limit_pkts` MTU frames) drained at the slowest rate."""
+        return queue_limit_pkts(self.rate_min_bps / 1e6) * MTU_FRAME_B * 8.0 / self.rate_min_bps
+
+    def admits(self, step_s: float) -> bool:
+        return self.delay_min_s - EARLY_S <= step_s <= self.delay_max_s + self.wait_max_s + LATE_S
+
+
+def link_bounds(plan: Plan) -> dict[tuple[int, int, int], LinkBounds]:
+    """(window, i, j) -> `LinkBounds`, both directions of every link of every window."""
+    idx = {n.name: n.index for n in plan.nodes}
+    out = {}
+    for w in plan.windows:
+        for lk in w.links:
+            for a, b in ((lk.a, lk.b), (lk.b, lk.a)):
+                ov = [o for o in w.link_overrides if (o.src, o.dst) == (a, b)]
+                delays = [lk.delay_ms] + [o.delay_ms for o in ov]
+                rates = [lk.rate_mbps] + [o.rate_mbps for o in ov]
+                out[(w.index, idx[a], idx[b])] = LinkBounds(min(delays) / 1000.0, max(delays) / 1000.0,
+                                                            max(min(rates), 1e-3) * 1e6)
+    return out
+
+
+class Load:
+    """The frame bits each node's switch saw, by time: how busy a port into it can have been."""
+
+    def __init__(self, ts: np.ndarray, node: np.ndarray, frame_len: np.ndarray, n_nodes: int) -> None:
+        order = np.lexsort((ts, node))
+        self._t = ts[order]
+        self._bits = np.concatenate([[0.0], np.cumsum(frame_len[order].astype(np.float64) * 8.0)])
+        nodes = np.arange(n_nodes)
+        self._lo = np.searchsorted(node[order], nodes, side="left")
+        self._hi = np.searchsorted(node[order], nodes, side="right")
+
+    def bits(self, node: int, t_a: float, t_b: float) -> float:
+        """Bits of the frames seen at `node`'s switch in [t_a, t_b)."""
+        lo, hi = int(self._lo[node]), int(self._hi[node])
+        a = lo + int(np.searchsorted(self._t[lo:hi], t_a, side="left"))
+        b = lo + int(np.searchsorted(self._t[lo:hi], t_b, side="left"))
+        return float(self._bits[b] - self._bits[a])
+
+
+def lost_on_link(link: LinkBounds, load: Load, j: int, t_in: float, t_out: float) -> bool:
+    """Whether a copy that entered link i -> j at t_in cannot be the frame seen at j at t_out: it
+    would have waited longer than the port can have been busy, so it would have left earlier.
+
+    The port was busy sending the frames j saw meanwhile (from every port into it: an upper bound
+    on this port's) and paying the rate stage's debt from before the copy was ready: at most the
+    cost of the frame it sent last, which j saw within one MTU frame's time before."""
+    ready = t_in + link.delay_min_s
+    wait = t_out - t_in - link.delay_max_s
+    mtu_s = MTU_FRAME_B * 8.0 / link.rate_min_bps
+    if wait <= BUSY_SLACK_S:
+        return False
+    return wait > load.bits(j, ready - mtu_s, t_out) / link.rate_min_bps + BUSY_SLACK_S
+
+
+@dataclass
+class _Chain:
+    id: int
+    node: int  # where it was last seen
+    t: float  # when
+    window: int  # the window in force then
+    visited: set[int] = field(default_factory=set)
+    expected: set[int] = field(default_factory=set)  # where the forwarding sent it from there
+
+
+def match(seg: np.ndarray, t: np.ndarray, node: np.ndarray, window: np.ndarray, now: np.ndarray, nxt: np.ndarray,
+          links: dict[tuple[int, int, int], LinkBounds], load: Load, max_hop_s: float,
+          first_id: int) -> tuple[np.ndarray, np.ndarray]:
+    """Chain ids (from `first_id`) and revisit flags of rows of ambiguous segments (rows in time
+    order within each segment); `now`, `nxt`: the next hops in force at each row (`Timeline.hops`)."""
+    out = np.empty(seg.shape[0], dtype=np.int64)
+    revisit = np.zeros(seg.shape[0], dtype=bool)
+    next_id = first_id
+    last_seg = -1
+    chains: list[_Chain] = []
+    for r in range(seg.shape[0]):
+        if seg[r] != last_seg:
+            last_seg, chains = seg[r], []
+        p, tr = int(node[r]), float(t[r])
+        best, best_cost = None, None
+        for c in chains:
+            cost = _cost(c, p, tr, links, load, max_hop_s)
+            if cost is not None and (best_cost is None or cost < best_cost):
+                best, best_cost = c, cost
+        if best is None:
+            best = _Chain(next_id, p, tr, int(window[r]))
+            next_id += 1
+            chains.append(best)
+        else:
+            revisit[r] = best_cost[0]
+        best.node, best.t, best.window = p, tr, int(window[r])
+        best.visited.add(p)
+        best.expected = {int(h) for h in (now[r], nxt[r]) if h >= 0}
+        out[r] = best.id
+    return out, revisit
+
+
+def _cost(c: _Chain, p: int, tr: float, links: dict[tuple[int, int, int], LinkBounds], load: Load,
+          max_hop_s: float) -> tuple[bool, bool, bool, float, int] | None:
+    """How well an observation at p at time tr continues chain c (lower is better; None: it
+    cannot): (a loop, not where the forwarding sent it, outside what the link allows, oldest first)."""
+    dt = tr - c.t
+    if dt < 0 or dt > max_hop_s or c.node == p:
+        return None
+    expected = p in c.expected
+    link = links.get((c.window, c.node, p)) if p >= 0 and c.node >= 0 else None
+    if not expected and c.expected and link is None:
+        return None  # forwarding sends it elsewhere and no link joins the two switches
+    fits = link is None or (link.admits(dt) and not lost_on_link(link, load, p, c.t, tr))
+    loop = p in c.visited
+    if loop and not (expected and fits):
+        return None  # only the forwarding brings a frame back, over a step the link allows
+    return (loop, not expected, not fits, c.t, c.id)
