@@ -228,10 +228,12 @@ def test_gap_longer_than_a_hop_splits(max_hop_s):
     assert f.n_packets == (2 if max_hop_s < 1.0 else 1)
 
 
-def _busy(t0, n, at="uav1", length=1514):
-    """n back-to-back frames of another flow seen at `at` from t0 (s from T0): a busy port into it."""
+def _busy(t0, n, frm="uav0", length=1514):
+    """n back-to-back frames of another flow crossing `frm` -> uav1, seen at uav1 from t0 (s from
+    T0): they keep that port busy."""
     gap = length * 8 / 24e6  # the links' planned 24 Mbit/s
-    return [{"t": t0 + k * gap, "at": at, "src": "uav0", "dst": at, "id": 100 + k, "len": length} for k in range(n)]
+    return [{"t": t0 + k * gap - dt, "at": at, "src": frm, "dst": "uav1", "id": 100 + k, "len": length}
+            for k in range(n) for at, dt in ((frm, D_MS / 1000), ("uav1", 0.0))]
 
 
 SYNACK = {"proto": 6, "sport": 80, "dport": 40000, "seq": 7, "flags": 0x12, "id": 0, "len": 66}
@@ -253,13 +255,16 @@ def test_identical_copies_leave_a_queued_link_in_the_order_they_entered():
 
 
 def test_a_copy_lost_on_the_link_does_not_take_the_next_copys_observation():
-    # the first copy is lost on uav0 -> uav1; nothing kept that port busy, so the frame seen at
-    # uav1 at 7 ms (5 ms after the second copy) is the second copy's, not the first's 2 ms late
+    # the first copy is lost on uav0 -> uav1; nothing kept that port busy (uav1 was busy with
+    # bs0's frames: another port), so the frame seen at uav1 at 7 ms (5 ms after the second copy)
+    # is the second copy's, not the first's 2 ms late
     a = _send(1.0, ["uav0", "uav1", "bs0"], **SYNACK)[:1]
     b = _send(1.002, ["uav0", "uav1", "bs0"], **SYNACK)
-    f = follow(_table(a + b), TL)
-    assert f.n_packets == 2 and f.delivered.tolist() == [False, True]
-    assert np.allclose(np.diff(f.path(1)[1]), D_MS / 1000, atol=1e-6)
+    f = follow(_table(a + b + _busy(1.005, 4, frm="bs0")), TL)
+    synack = [p for p in range(f.n_packets) if f.path(p)[0][0] == "s-uav0"]
+    assert len(synack) == 2 and f.delivered[synack].tolist() == [False, True]
+    assert f.n_packets == 6
+    assert np.allclose(np.diff(f.path(synack[1])[1]), D_MS / 1000, atol=1e-6)
     assert [(POINTS[x], POINTS[y]) for x, y in zip(f.losses.from_point, f.losses.to_point)] == [("s-uav0", "s-uav1")]
 
 

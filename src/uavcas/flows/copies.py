@@ -14,9 +14,9 @@ observation in time order, with what a link can and cannot do:
   `LATE_S`); a jammer's override in the window widens both.
 * **A copy lost on the link** must not take the next copy's observation: pairing the
   observation with an older copy means that copy waited in the queue, so the port was busy
-  sending all that time. When the frames the next switch saw meanwhile (`Load`: from every port
-  into it, an upper bound on this port's) cannot fill the wait, less `BUSY_SLACK_S`, the older
-  copy was lost and the observation goes to a younger one (`lost_on_link`).
+  sending all that time. When the frames the port delivered meanwhile (`Load`: an upper bound)
+  cannot fill the wait, less `BUSY_SLACK_S`, the older copy was lost and the observation goes
+  to a younger one (`lost_on_link`).
 * **Loops.** An observation at a switch that a chain already crossed continues that chain only
   when the forwarding in force sent the frame back there and the step fits the link: the
   frame looped (`revisit`). Otherwise it is a new transmission, and a chain never takes two
@@ -77,37 +77,49 @@ def link_bounds(plan: Plan) -> dict[tuple[int, int, int], LinkBounds]:
 
 
 class Load:
-    """The frame bits each node's switch saw, by time: how busy a port into it can have been."""
+    """The frame bits each port delivered, by time: how busy a port can have been.
 
-    def __init__(self, ts: np.ndarray, node: np.ndarray, frame_len: np.ndarray, n_nodes: int) -> None:
-        order = np.lexsort((ts, node))
-        self._t = ts[order]
-        self._bits = np.concatenate([[0.0], np.cumsum(frame_len[order].astype(np.float64) * 8.0)])
-        nodes = np.arange(n_nodes)
-        self._lo = np.searchsorted(node[order], nodes, side="left")
-        self._hi = np.searchsorted(node[order], nodes, side="right")
+    A frame counts for port i -> j when the follower's fast path saw it step from i to j (an
+    unambiguous packet); an ambiguous frame seen at j counts for every port into j (its step is
+    what `match` is working out), so the load is an upper bound on each port's."""
 
-    def bits(self, node: int, t_a: float, t_b: float) -> float:
-        """Bits of the frames seen at `node`'s switch in [t_a, t_b)."""
-        lo, hi = int(self._lo[node]), int(self._hi[node])
+    def __init__(self, ts: np.ndarray, node: np.ndarray, via: np.ndarray, frame_len: np.ndarray,
+                 n_nodes: int) -> None:
+        """Rows seen at `node`'s switch, having come from `via` (-1: from no port, the first
+        observation; -2: ambiguous)."""
+        self.n = n_nodes
+        use = (node >= 0) & (via != -1)
+        key = np.where(via[use] >= 0, via[use] * n_nodes + node[use], n_nodes * n_nodes + node[use])
+        order = np.lexsort((ts[use], key))
+        self._key = key[order]
+        self._t = ts[use][order]
+        self._bits = np.concatenate([[0.0], np.cumsum(frame_len[use][order].astype(np.float64) * 8.0)])
+
+    def _sum(self, key: int, t_a: float, t_b: float) -> float:
+        lo = int(np.searchsorted(self._key, key, side="left"))
+        hi = int(np.searchsorted(self._key, key, side="right"))
         a = lo + int(np.searchsorted(self._t[lo:hi], t_a, side="left"))
         b = lo + int(np.searchsorted(self._t[lo:hi], t_b, side="left"))
         return float(self._bits[b] - self._bits[a])
 
+    def bits(self, i: int, j: int, t_a: float, t_b: float) -> float:
+        """Bits port i -> j can have delivered to j in [t_a, t_b)."""
+        return self._sum(i * self.n + j, t_a, t_b) + self._sum(self.n * self.n + j, t_a, t_b)
 
-def lost_on_link(link: LinkBounds, load: Load, j: int, t_in: float, t_out: float) -> bool:
+
+def lost_on_link(link: LinkBounds, load: Load, i: int, j: int, t_in: float, t_out: float) -> bool:
     """Whether a copy that entered link i -> j at t_in cannot be the frame seen at j at t_out: it
     would have waited longer than the port can have been busy, so it would have left earlier.
 
-    The port was busy sending the frames j saw meanwhile (from every port into it: an upper bound
-    on this port's) and paying the rate stage's debt from before the copy was ready: at most the
-    cost of the frame it sent last, which j saw within one MTU frame's time before."""
+    The port was busy sending the frames it delivered meanwhile (`Load`, an upper bound) and
+    paying the rate stage's debt from before the copy was ready: at most the cost of the frame
+    it sent last, which j saw within one MTU frame's time before."""
     ready = t_in + link.delay_min_s
     wait = t_out - t_in - link.delay_max_s
     mtu_s = MTU_FRAME_B * 8.0 / link.rate_min_bps
     if wait <= BUSY_SLACK_S:
         return False
-    return wait > load.bits(j, ready - mtu_s, t_out) / link.rate_min_bps + BUSY_SLACK_S
+    return wait > load.bits(i, j, ready - mtu_s, t_out) / link.rate_min_bps + BUSY_SLACK_S
 
 
 @dataclass
@@ -163,7 +175,7 @@ def _cost(c: _Chain, p: int, tr: float, links: dict[tuple[int, int, int], LinkBo
     link = links.get((c.window, c.node, p)) if p >= 0 and c.node >= 0 else None
     if not expected and c.expected and link is None:
         return None  # forwarding sends it elsewhere and no link joins the two switches
-    fits = link is None or (link.admits(dt) and not lost_on_link(link, load, p, c.t, tr))
+    fits = link is None or (link.admits(dt) and not lost_on_link(link, load, c.node, p, c.t, tr))
     loop = p in c.visited
     if loop and not (expected and fits):
         return None  # only the forwarding brings a frame back, over a step the link allows
