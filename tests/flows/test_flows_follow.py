@@ -287,3 +287,21 @@ def test_a_frame_that_comes_back_to_a_switch_is_a_loop_not_a_new_packet():
     # without the loop in the tables, the frame back at uav0 is a new transmission, not a loop
     f = follow(_table(rows), TL)
     assert not f.revisit.any() and f.n_packets == 2
+
+
+def test_fifo_orders_copies_on_one_link_not_across_links():
+    # uav1 -> bs0 at 0.2 Mbit/s, kept busy by another flow: a copy may wait there up to ~1 s. The
+    # first copy is lost on it; the retransmission, 0.9 s later in window 1, goes via uav2. Its
+    # arrival at bs0 is 5 ms after uav2, not a 0.9 s wait on the other link: FIFO says nothing
+    # about two links, and the shorter queue wait is the one to believe.
+    w0 = PLAN.windows[0]
+    slow = [lk.model_copy(update={"rate_mbps": 0.2}) if {lk.a, lk.b} == {"uav1", "bs0"} else lk for lk in w0.links]
+    plan = PLAN.model_copy(update={"windows": [w0.model_copy(update={"links": slow}), PLAN.windows[1]]})
+    gap = 1514 * 8 / 0.2e6
+    busy = [{"t": 4.04 + k * gap - dt, "at": at, "src": "uav1", "dst": "bs0", "id": 100 + k, "len": 1514}
+            for k in range(16) for at, dt in (("uav1", 0.005), ("bs0", 0.0))]
+    a = _send(4.1, ["uav0", "uav1", "bs0"], **SYNACK)[:2]
+    b = _send(5.0, ["uav0", "uav2", "bs0"], **SYNACK)
+    f = follow(_table(a + b + busy), Timeline.from_plan(plan, T0))
+    paths = sorted(f.path(p)[0] for p in range(f.n_packets) if f.path(p)[0][0] == "s-uav0")
+    assert paths == [["s-uav0", "s-uav1"], ["s-uav0", "s-uav2", "s-bs0"]]

@@ -6,9 +6,11 @@ duplicate ACKs, a flood's reused header). `match` strings them into chains, obse
 observation in time order, with what a link can and cannot do:
 
 * **FIFO.** A link is FIFO (the delay stage and the HTB rate stage both are), so copies leave a
-  link in the order they entered it: an observation goes to the *oldest* open chain that it can
-  be the next step of. (Picking the chain whose step is closest to the planned delay, as the
-  follower once did, swaps copies under queueing: the real step is planned delay + queue wait.)
+  link in the order they entered it: of the open chains on one link, an observation goes to the
+  *oldest* that it can be the next step of. (Picking the chain whose step is closest to the
+  planned delay, as the follower once did, swaps copies under queueing: the real step is planned
+  delay + queue wait.) Between chains on different links into the switch, which FIFO does not
+  order, the shorter queue wait wins.
 * **Bounds** (`LinkBounds`). A step is no shorter than the link's planned delay (less `EARLY_S`)
   and no longer than the planned delay plus a full queue drained at the planned rate (plus
   `LATE_S`); a jammer's override in the window widens both.
@@ -146,11 +148,16 @@ def match(seg: np.ndarray, t: np.ndarray, node: np.ndarray, window: np.ndarray, 
         if seg[r] != last_seg:
             last_seg, chains = seg[r], []
         p, tr = int(node[r]), float(t[r])
-        best, best_cost = None, None
+        # FIFO within each link (the oldest chain on it), then across links the shortest queue wait
+        per_link: dict[int, tuple[tuple[bool, bool, bool, float, int], float, _Chain]] = {}
         for c in chains:
             cost = _cost(c, p, tr, links, load, max_hop_s)
-            if cost is not None and (best_cost is None or cost < best_cost):
-                best, best_cost = c, cost
+            if cost is not None and (c.node not in per_link or cost[0] < per_link[c.node][0]):
+                per_link[c.node] = (*cost, c)
+        best, best_cost = None, None
+        for rank, wait, c in per_link.values():
+            if best_cost is None or (*rank[:3], wait) < best_cost:
+                best, best_cost = c, (*rank[:3], wait)
         if best is None:
             best = _Chain(next_id, p, tr, int(window[r]))
             next_id += 1
@@ -165,9 +172,10 @@ def match(seg: np.ndarray, t: np.ndarray, node: np.ndarray, window: np.ndarray, 
 
 
 def _cost(c: _Chain, p: int, tr: float, links: dict[tuple[int, int, int], LinkBounds], load: Load,
-          max_hop_s: float) -> tuple[bool, bool, bool, float, int] | None:
-    """How well an observation at p at time tr continues chain c (lower is better; None: it
-    cannot): (a loop, not where the forwarding sent it, outside what the link allows, oldest first)."""
+          max_hop_s: float) -> tuple[tuple[bool, bool, bool, float, int], float] | None:
+    """How well an observation at p at time tr continues chain c (None: it cannot): the rank
+    among chains on the same link (a loop, not where the forwarding sent it, outside what the
+    link allows, oldest first: FIFO), and the queue wait it implies (step - planned delay)."""
     dt = tr - c.t
     if dt < 0 or dt > max_hop_s or c.node == p:
         return None
@@ -179,4 +187,4 @@ def _cost(c: _Chain, p: int, tr: float, links: dict[tuple[int, int, int], LinkBo
     loop = p in c.visited
     if loop and not (expected and fits):
         return None  # only the forwarding brings a frame back, over a step the link allows
-    return (loop, not expected, not fits, c.t, c.id)
+    return (loop, not expected, not fits, c.t, c.id), abs(dt - (link.delay_max_s if link is not None else 0.0))
