@@ -6,12 +6,14 @@ in force on the port at the time (`inforce`): the delay error. Per link directio
 delay-error quantiles, loss split by cause (`losses`: the kernel's counters where the run logged
 them, else how full the model's queue was) with random loss against the planned loss,
 throughput in saturated bins (the model's queue never empty for the whole bin) against the
-planned rate. Per flow: how much the emulator moved inter-packet gaps end to end. A window that
-an attack re-shaped in its middle (a jammer's overrides: `inforce`) is audited per segment, each
-against the parameters in force in it (the jammed plan during the jammer's span, the unjammed
-outside it), with that segment's kernel counters. The pooled
-figures and the schedule (window change time, lateness from run.json) are checked against
-`Tolerances`; any failed check fails the run.
+planned rate, each frame spread over its serialisation time (`throughput`); crossings that
+brought a packet back to a switch it had crossed (loops, `flows.copies`). Per flow: how much
+the emulator moved inter-packet gaps end to end. A window that an attack re-shaped in its
+middle (a jammer's overrides: `inforce`) is audited per segment, each against the parameters in
+force in it (the jammed plan during the jammer's span, the unjammed outside it), with that
+segment's kernel counters. The pooled
+figures, the packets that looped and the schedule (window change time, lateness from run.json)
+are checked against `Tolerances`, one set for every swarm size; any failed check fails the run.
 
 Losses during a change of forwarding (a window change or an attack re-routing: from
 `TRANSITION_S` before the change began to `TRANSITION_S` after it ended) and losses on a link
