@@ -229,11 +229,12 @@ def test_gap_longer_than_a_hop_splits(max_hop_s):
 
 
 def _busy(t0, n, frm="uav0", length=1514):
-    """n back-to-back frames of another flow crossing `frm` -> uav1, seen at uav1 from t0 (s from
-    T0): they keep that port busy."""
+    """n frames of another flow that entered `frm` -> uav1 together before t0 - 5 ms and leave
+    back to back, seen at uav1 from t0 (s from T0): they keep that port busy."""
     gap = length * 8 / 24e6  # the links' planned 24 Mbit/s
-    return [{"t": t0 + k * gap - dt, "at": at, "src": frm, "dst": "uav1", "id": 100 + k, "len": length}
-            for k in range(n) for at, dt in ((frm, D_MS / 1000), ("uav1", 0.0))]
+    return [r for k in range(n) for r in (
+        {"t": t0 - D_MS / 1000 - 0.0005, "at": frm, "src": frm, "dst": "uav1", "id": 100 + k, "len": length},
+        {"t": t0 + k * gap, "at": "uav1", "src": frm, "dst": "uav1", "id": 100 + k, "len": length})]
 
 
 SYNACK = {"proto": 6, "sport": 80, "dport": 40000, "seq": 7, "flags": 0x12, "id": 0, "len": 66}
@@ -298,8 +299,8 @@ def test_fifo_orders_copies_on_one_link_not_across_links():
     slow = [lk.model_copy(update={"rate_mbps": 0.2}) if {lk.a, lk.b} == {"uav1", "bs0"} else lk for lk in w0.links]
     plan = PLAN.model_copy(update={"windows": [w0.model_copy(update={"links": slow}), PLAN.windows[1]]})
     gap = 1514 * 8 / 0.2e6
-    busy = [{"t": 4.04 + k * gap - dt, "at": at, "src": "uav1", "dst": "bs0", "id": 100 + k, "len": 1514}
-            for k in range(16) for at, dt in (("uav1", 0.005), ("bs0", 0.0))]
+    busy = [{"t": t, "at": at, "src": "uav1", "dst": "bs0", "id": 100 + k, "len": 1514}
+            for k in range(16) for at, t in (("uav1", 4.03), ("bs0", 4.04 + k * gap))]
     a = _send(4.1, ["uav0", "uav1", "bs0"], **SYNACK)[:2]
     b = _send(5.0, ["uav0", "uav2", "bs0"], **SYNACK)
     f = follow(_table(a + b + busy), Timeline.from_plan(plan, T0))

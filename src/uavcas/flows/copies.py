@@ -16,9 +16,9 @@ observation in time order, with what a link can and cannot do:
   `LATE_S`); a jammer's override in the window widens both.
 * **A copy lost on the link** must not take the next copy's observation: pairing the
   observation with an older copy means that copy waited in the queue, so the port was busy
-  sending all that time. When the frames the port delivered meanwhile (`Load`: an upper bound)
-  cannot fill the wait, less `BUSY_SLACK_S`, the older copy was lost and the observation goes
-  to a younger one (`lost_on_link`).
+  sending frames that entered before it all that time. When those frames (`Load`: an upper
+  bound) cannot fill the wait, less `BUSY_SLACK_S`, the older copy was lost and the observation
+  goes to a younger one (`lost_on_link`).
 * **Loops.** An observation at a switch that a chain already crossed continues that chain only
   when the forwarding in force sent the frame back there and the step fits the link: the
   frame looped (`revisit`). Otherwise it is a new transmission, and a chain never takes two
@@ -79,49 +79,59 @@ def link_bounds(plan: Plan) -> dict[tuple[int, int, int], LinkBounds]:
 
 
 class Load:
-    """The frame bits each port delivered, by time: how busy a port can have been.
+    """The frames each port delivered: how long a frame can have waited behind others.
 
     A frame counts for port i -> j when the follower's fast path saw it step from i to j (an
-    unambiguous packet); an ambiguous frame seen at j counts for every port into j (its step is
-    what `match` is working out), so the load is an upper bound on each port's."""
+    unambiguous packet: when it entered at i, when it left at j). A frame that entered after a
+    copy is behind it in the FIFO and cannot delay it; a frame that left before the copy was
+    ready did not either. An ambiguous frame seen at j (its step is what `match` is working out)
+    counts for every port into j whenever it left, so the load is an upper bound."""
 
-    def __init__(self, ts: np.ndarray, node: np.ndarray, via: np.ndarray, frame_len: np.ndarray,
-                 n_nodes: int) -> None:
-        """Rows seen at `node`'s switch, having come from `via` (-1: from no port, the first
-        observation; -2: ambiguous)."""
+    def __init__(self, t_out: np.ndarray, node: np.ndarray, via: np.ndarray, t_in: np.ndarray,
+                 frame_len: np.ndarray, n_nodes: int) -> None:
+        """Rows seen at `node`'s switch at `t_out`, having entered the link at `via`'s switch at
+        `t_in` (via -1: from no port, the first observation; -2: ambiguous, t_in unknown)."""
         self.n = n_nodes
         use = (node >= 0) & (via != -1)
         key = np.where(via[use] >= 0, via[use] * n_nodes + node[use], n_nodes * n_nodes + node[use])
-        order = np.lexsort((ts[use], key))
-        self._key = key[order]
-        self._t = ts[use][order]
+        # ports: by entry time (FIFO: the order they leave in); ambiguous frames: by exit time
+        t_in_u = np.where(via[use] >= 0, t_in[use], t_out[use])
+        order = np.lexsort((t_out[use], t_in_u, key))
+        self._key, self._in, self._out = key[order], t_in_u[order], t_out[use][order]
+        # exits in entry order, made non-decreasing per port (searchable; FIFO up to capture jitter)
+        base = float(self._out[0]) if self._out.shape[0] else 0.0
+        span = float(self._out[-1] - base) + 1.0 if self._out.shape[0] else 1.0
+        self._out_mono = np.maximum.accumulate(self._key * span + (self._out - base)) - self._key * span + base
         self._bits = np.concatenate([[0.0], np.cumsum(frame_len[use][order].astype(np.float64) * 8.0)])
 
-    def _sum(self, key: int, t_a: float, t_b: float) -> float:
-        lo = int(np.searchsorted(self._key, key, side="left"))
-        hi = int(np.searchsorted(self._key, key, side="right"))
-        a = lo + int(np.searchsorted(self._t[lo:hi], t_a, side="left"))
-        b = lo + int(np.searchsorted(self._t[lo:hi], t_b, side="left"))
-        return float(self._bits[b] - self._bits[a])
+    def _range(self, key: int) -> tuple[int, int]:
+        return int(np.searchsorted(self._key, key, side="left")), int(np.searchsorted(self._key, key, side="right"))
 
-    def bits(self, i: int, j: int, t_a: float, t_b: float) -> float:
-        """Bits port i -> j can have delivered to j in [t_a, t_b)."""
-        return self._sum(i * self.n + j, t_a, t_b) + self._sum(self.n * self.n + j, t_a, t_b)
+    def ahead(self, i: int, j: int, t_in: float, t_a: float, t_b: float) -> float:
+        """Bits that port i -> j can have sent in [t_a, t_b) ahead of a frame that entered at t_in."""
+        lo, hi = self._range(i * self.n + j)
+        k_in = lo + int(np.searchsorted(self._in[lo:hi], t_in, side="left"))
+        k_a = lo + int(np.searchsorted(self._out_mono[lo:k_in], t_a, side="left"))
+        port = float(self._bits[k_in] - self._bits[k_a])
+        lo, hi = self._range(self.n * self.n + j)
+        a = lo + int(np.searchsorted(self._out[lo:hi], t_a, side="left"))
+        b = lo + int(np.searchsorted(self._out[lo:hi], t_b, side="left"))
+        return port + float(self._bits[b] - self._bits[a])
 
 
 def lost_on_link(link: LinkBounds, load: Load, i: int, j: int, t_in: float, t_out: float) -> bool:
     """Whether a copy that entered link i -> j at t_in cannot be the frame seen at j at t_out: it
     would have waited longer than the port can have been busy, so it would have left earlier.
 
-    The port was busy sending the frames it delivered meanwhile (`Load`, an upper bound) and
-    paying the rate stage's debt from before the copy was ready: at most the cost of the frame
-    it sent last, which j saw within one MTU frame's time before."""
+    The port was busy sending the frames ahead of it (`Load.ahead`, an upper bound, at the
+    window's slowest rate) and paying the rate stage's debt from before the copy was ready: at
+    most the cost of the frame it sent last, which j saw within one MTU frame's time before."""
     ready = t_in + link.delay_min_s
     wait = t_out - t_in - link.delay_max_s
     mtu_s = MTU_FRAME_B * 8.0 / link.rate_min_bps
     if wait <= BUSY_SLACK_S:
         return False
-    return wait > load.bits(i, j, ready - mtu_s, t_out) / link.rate_min_bps + BUSY_SLACK_S
+    return wait > load.ahead(i, j, t_in, ready - mtu_s, t_out) / link.rate_min_bps + BUSY_SLACK_S
 
 
 @dataclass
@@ -174,8 +184,9 @@ def match(seg: np.ndarray, t: np.ndarray, node: np.ndarray, window: np.ndarray, 
 def _cost(c: _Chain, p: int, tr: float, links: dict[tuple[int, int, int], LinkBounds], load: Load,
           max_hop_s: float) -> tuple[tuple[bool, bool, bool, float, int], float] | None:
     """How well an observation at p at time tr continues chain c (None: it cannot): the rank
-    among chains on the same link (a loop, not where the forwarding sent it, outside what the
-    link allows, oldest first: FIFO), and the queue wait it implies (step - planned delay)."""
+    among chains on the same link (a loop, outside what the link allows, not where the
+    forwarding sent it, oldest first: FIFO), and the queue wait it implies (step - planned
+    delay). A step the link cannot make ranks below a forwarding the log did not foresee."""
     dt = tr - c.t
     if dt < 0 or dt > max_hop_s or c.node == p:
         return None
@@ -187,4 +198,4 @@ def _cost(c: _Chain, p: int, tr: float, links: dict[tuple[int, int, int], LinkBo
     loop = p in c.visited
     if loop and not (expected and fits):
         return None  # only the forwarding brings a frame back, over a step the link allows
-    return (loop, not expected, not fits, c.t, c.id), abs(dt - (link.delay_max_s if link is not None else 0.0))
+    return (loop, not fits, not expected, c.t, c.id), abs(dt - (link.delay_max_s if link is not None else 0.0))

@@ -251,9 +251,11 @@ def follow(table: PacketTable, timeline: Timeline, max_hop_s: float = MAX_HOP_S)
     slow = suspect[seg]
     if slow.any():
         rows = np.flatnonzero(slow)
-        # where each row came from: the previous row of its segment when the segment is one packet
+        # where and when each row entered its link: the previous row of its segment (one packet)
         via = np.where(new_seg, -1, np.concatenate([[-1], nd[:-1]])) if n else np.zeros(0, dtype=np.int32)
-        load = Load(t_s, nd, np.where(slow, -2, via), np.asarray(table["frame_len"])[order], len(timeline.nodes))
+        t_via = np.concatenate([[-np.inf], t_s[:-1]]) if n else np.zeros(0)
+        load = Load(t_s, nd, np.where(slow, -2, via), t_via, np.asarray(table["frame_len"])[order],
+                    len(timeline.nodes))
         now, nxt = timeline.hops(t_s[rows], nd[rows], ds[rows])
         chain[rows], revisit_sorted = match(seg[rows], t_s[rows], nd[rows], window[order][rows], now, nxt,
                                             timeline.links, load, max_hop_s, first_id=int(seg[-1]) + 1)
