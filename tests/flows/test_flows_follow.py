@@ -306,3 +306,27 @@ def test_fifo_orders_copies_on_one_link_not_across_links():
     f = follow(_table(a + b + busy), Timeline.from_plan(plan, T0))
     paths = sorted(f.path(p)[0] for p in range(f.n_packets) if f.path(p)[0][0] == "s-uav0")
     assert paths == [["s-uav0", "s-uav1"], ["s-uav0", "s-uav2", "s-bs0"]]
+
+
+def test_a_lost_copy_is_judged_at_the_rate_the_port_held():
+    # a jammer may slow uav0 -> uav1 to 0.2 Mbit/s in window 0 (the plan's override), but the run
+    # says the port held its 24 Mbit/s then: the one frame ahead of the first copy kept the port
+    # busy for 0.5 ms, not 60 ms, so that copy cannot have waited 2 ms: it was lost
+    from uavcas.twin.model import LinkOverride
+
+    jam = LinkOverride(attack_id="jamming-0", src="uav0", dst="uav1", start_s=0.0, stop_s=5.0, interference_dbm=-60.0,
+                       sinr_db=3.0, mcs=0, rate_mbps=0.2, delay_ms=D_MS, loss=0.0)
+    plan = PLAN.model_copy(update={"windows": [PLAN.windows[0].model_copy(update={"link_overrides": [jam]}),
+                                               PLAN.windows[1]]})
+    a = _send(1.0, ["uav0", "uav1", "bs0"], **SYNACK)[:1]
+    b = _send(1.002, ["uav0", "uav1", "bs0"], **SYNACK)
+    table = _table(a + b + _busy(1.0054, 1))
+    tl = Timeline.from_plan(plan, T0)
+    synack = np.asarray(table["frame_len"]) == SYNACK["len"]
+
+    def paths(f):
+        return sorted([round(float(f._ts[r]) - T0, 4) for r in np.flatnonzero(synack & (f.pid == p))]
+                      for p in np.unique(f.pid[synack]))
+
+    assert paths(follow(table, tl, rate_bps=lambda i, j, t: 24e6)) == [[1.0], [1.002, 1.007, 1.012]]
+    assert paths(follow(table, tl)) == [[1.0, 1.007, 1.012], [1.002]]  # judged at the plan's slowest rate

@@ -36,7 +36,7 @@ from uavcas.rundir import RunDir, RunInfo
 from uavcas.twin.model import Plan
 
 from . import fifo, losses, throughput
-from .inforce import PortShaping, planned_settings, port_shaping, shape_spans
+from .inforce import PortShaping, RatesInForce, planned_settings, port_shaping, shape_spans
 from .model import Check, Counters, Fidelity, GapDistortion, LinkWindow, Tolerances
 
 TRANSITION_S = 0.05  # margin around a forwarding change (held packets, queues draining)
@@ -110,13 +110,16 @@ def audit(run_dir: str | Path, tolerances: Tolerances | None = None, table: Pack
     plan, info = rd.read_plan(), rd.read_info()
     if tolerances is None:
         tolerances = Tolerances()
-    table, fol = follow_run(rd.root, tolerances.max_hop_s, table=table)
-    return _Audit(plan, info, rd, table, fol, run_timeline(rd, plan), tolerances).report()
+    timeline = run_timeline(rd, plan)
+    shaping = port_shaping(plan, timeline, shape_spans(rd.read_attacks()))
+    # identical copies are paired knowing the rate each port held (a jammer's included)
+    table, fol = follow_run(rd.root, tolerances.max_hop_s, table=table, rate_bps=RatesInForce(shaping))
+    return _Audit(plan, info, rd, table, fol, timeline, shaping, tolerances).report()
 
 
 class _Audit:
     def __init__(self, plan: Plan, info: RunInfo | None, rd: RunDir, table: PacketTable, fol: Followed,
-                 timeline: Timeline, tol: Tolerances) -> None:
+                 timeline: Timeline, shaping: dict[tuple[int, int], PortShaping], tol: Tolerances) -> None:
         self.plan, self.info, self.rd, self.table = plan, info, rd, table
         self.fol, self.tl, self.tol = fol, timeline, tol
         self.planned = _Planned.of(plan)
@@ -125,7 +128,7 @@ class _Audit:
         self.names = [x.name for x in plan.nodes]
         self.n = len(self.names)
         self.t0 = info.t0_unix if info is not None and info.t0_unix is not None else float(timeline.t_unix[0])
-        self.shaping = port_shaping(plan, timeline, shape_spans(rd.read_attacks()))
+        self.shaping = shaping
         self.setting = planned_settings(self.shaping)  # (window, segment, i, j) -> (delay, rate, loss)
         self.netem = info is not None and info.shaper_backend == "netem"
         self._crossings()

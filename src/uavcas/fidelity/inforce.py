@@ -55,6 +55,18 @@ class PortShaping:
 
 
 @dataclass(frozen=True)
+class RatesInForce:
+    """`flows.copies.RateFn` over a run's `port_shaping`: the rate (bit/s) port i -> j held at t."""
+
+    shaping: dict[tuple[int, int], PortShaping]
+
+    def __call__(self, i: int, j: int, t: float) -> float | None:
+        ps = self.shaping.get((i, j))
+        k = int(np.searchsorted(ps.t_s, t, side="right")) - 1 if ps is not None else -1
+        return float(ps.rate_mbps[k]) * 1e6 if k >= 0 else None
+
+
+@dataclass(frozen=True)
 class ShapeSpan:
     """An attack that re-shapes links while active: its logged [start, stop), and when its
     start's reshape began and its stop's ended (the logged times where the log has no such)."""
