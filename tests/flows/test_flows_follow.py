@@ -328,5 +328,5 @@ def test_a_lost_copy_is_judged_at_the_rate_the_port_held():
         return sorted([round(float(f._ts[r]) - T0, 4) for r in np.flatnonzero(synack & (f.pid == p))]
                       for p in np.unique(f.pid[synack]))
 
-    assert paths(follow(table, tl, rate_bps=lambda i, j, t: 24e6)) == [[1.0], [1.002, 1.007, 1.012]]
+    assert paths(follow(table, tl, capacity=lambda i, j, a, b: (b - a) * 24e6)) == [[1.0], [1.002, 1.007, 1.012]]
     assert paths(follow(table, tl)) == [[1.0, 1.007, 1.012], [1.002]]  # judged at the plan's slowest rate

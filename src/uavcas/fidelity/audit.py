@@ -36,7 +36,7 @@ from uavcas.rundir import RunDir, RunInfo
 from uavcas.twin.model import Plan
 
 from . import fifo, losses, throughput
-from .inforce import PortShaping, RatesInForce, planned_settings, port_shaping, shape_spans
+from .inforce import PortCapacity, PortShaping, planned_settings, port_shaping, shape_spans
 from .model import Check, Counters, Fidelity, GapDistortion, LinkWindow, Tolerances
 
 TRANSITION_S = 0.05  # margin around a forwarding change (held packets, queues draining)
@@ -112,8 +112,8 @@ def audit(run_dir: str | Path, tolerances: Tolerances | None = None, table: Pack
         tolerances = Tolerances()
     timeline = run_timeline(rd, plan)
     shaping = port_shaping(plan, timeline, shape_spans(rd.read_attacks()))
-    # identical copies are paired knowing the rate each port held (a jammer's included)
-    table, fol = follow_run(rd.root, tolerances.max_hop_s, table=table, rate_bps=RatesInForce(shaping))
+    # identical copies are paired knowing the rates each port held (a jammer's included)
+    table, fol = follow_run(rd.root, tolerances.max_hop_s, table=table, capacity=PortCapacity(shaping))
     return _Audit(plan, info, rd, table, fol, timeline, shaping, tolerances).report()
 
 

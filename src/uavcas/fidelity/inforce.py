@@ -55,15 +55,18 @@ class PortShaping:
 
 
 @dataclass(frozen=True)
-class RatesInForce:
-    """`flows.copies.RateFn` over a run's `port_shaping`: the rate (bit/s) port i -> j held at t."""
+class PortCapacity:
+    """`flows.copies.CapacityFn` over a run's `port_shaping`: the bits port i -> j could send in
+    [a, b) at the rates it held (each setting from its apply's start)."""
 
     shaping: dict[tuple[int, int], PortShaping]
 
-    def __call__(self, i: int, j: int, t: float) -> float | None:
+    def __call__(self, i: int, j: int, a: float, b: float) -> float | None:
         ps = self.shaping.get((i, j))
-        k = int(np.searchsorted(ps.t_s, t, side="right")) - 1 if ps is not None else -1
-        return float(ps.rate_mbps[k]) * 1e6 if k >= 0 else None
+        if ps is None or b <= a or a < ps.t_s[0]:
+            return None
+        edges = np.clip(np.append(ps.t_s, np.inf), a, b)
+        return float(np.sum(np.diff(edges) * ps.rate_mbps) * 1e6)
 
 
 @dataclass(frozen=True)

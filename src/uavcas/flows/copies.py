@@ -45,9 +45,9 @@ LATE_S = 0.005  # ... and this much longer than planned delay + a full queue (sc
 # tolerance: lateness the emulator may have) means the copy was lost, not late
 BUSY_SLACK_S = 0.0005
 
-# the rate (bit/s) in force on port i -> j at time t, where the caller knows it (the audit: the
-# shaping the run applied, a jammer's included); None: the plan's slowest for the window
-RateFn = Callable[[int, int, float], float | None]
+# the bits port i -> j could send in [a, b) at the rates it held, where the caller knows them
+# (the audit: the shaping the run applied, a jammer's included); None: the plan's slowest rate
+CapacityFn = Callable[[int, int, float, float], float | None]
 
 
 @dataclass(frozen=True)
@@ -125,22 +125,24 @@ class Load:
 
 
 def lost_on_link(link: LinkBounds, load: Load, i: int, j: int, t_in: float, t_out: float,
-                 rate_bps: RateFn | None = None) -> bool:
+                 capacity: CapacityFn | None = None) -> bool:
     """Whether a copy that entered link i -> j at t_in cannot be the frame seen at j at t_out: it
     would have waited longer than the port can have been busy, so it would have left earlier.
 
-    The port was busy sending the frames ahead of it (`Load.ahead`, an upper bound) at the rate
-    in force (the slower of its rates when the copy was ready and at t_out; without `rate_bps`,
-    the window's slowest) and paying the rate stage's debt from before the copy was ready: at
-    most the cost of the frame it sent last, which j saw within one MTU frame's time before."""
-    ready = t_in + link.delay_min_s
-    wait = t_out - t_in - link.delay_max_s
-    if wait <= BUSY_SLACK_S:
+    Waiting from when it was ready until t_out, the port would have had to be sending all that
+    time: the frames ahead of it (`Load.ahead`, an upper bound) and the rate stage's debt from
+    before it was ready (at most the cost of the frame sent last, which j saw within one MTU
+    frame's time before). When the port could have sent all that (`capacity`, the rates it
+    held; without it, the window's slowest) `BUSY_SLACK_S` before t_out, the copy was lost."""
+    ready = t_in + link.delay_max_s
+    if t_out - ready <= BUSY_SLACK_S:
         return False
-    rates = [r for r in ((rate_bps(i, j, ready), rate_bps(i, j, t_out)) if rate_bps else ()) if r]
-    rate = min(rates) if rates else link.rate_min_bps
-    mtu_s = MTU_FRAME_B * 8.0 / rate
-    return wait > load.ahead(i, j, t_in, ready - mtu_s, t_out) / rate + BUSY_SLACK_S
+    mtu_s = MTU_FRAME_B * 8.0 / link.rate_min_bps
+    ahead = load.ahead(i, j, t_in, t_in + link.delay_min_s - mtu_s, t_out)
+    cap = capacity(i, j, ready, t_out - BUSY_SLACK_S) if capacity is not None else None
+    if cap is None:
+        cap = (t_out - BUSY_SLACK_S - ready) * link.rate_min_bps
+    return cap > ahead
 
 
 @dataclass
@@ -155,7 +157,7 @@ class _Chain:
 
 def match(seg: np.ndarray, t: np.ndarray, node: np.ndarray, window: np.ndarray, now: np.ndarray, nxt: np.ndarray,
           links: dict[tuple[int, int, int], LinkBounds], load: Load, max_hop_s: float,
-          first_id: int, rate_bps: RateFn | None = None) -> tuple[np.ndarray, np.ndarray]:
+          first_id: int, capacity: CapacityFn | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Chain ids (from `first_id`) and revisit flags of rows of ambiguous segments (rows in time
     order within each segment); `now`, `nxt`: the next hops in force at each row (`Timeline.hops`)."""
     out = np.empty(seg.shape[0], dtype=np.int64)
@@ -170,7 +172,7 @@ def match(seg: np.ndarray, t: np.ndarray, node: np.ndarray, window: np.ndarray, 
         # FIFO within each link (the oldest chain on it), then across links the shortest queue wait
         per_link: dict[int, tuple[tuple[bool, bool, bool, float, int], float, _Chain]] = {}
         for c in chains:
-            cost = _cost(c, p, tr, links, load, max_hop_s, rate_bps)
+            cost = _cost(c, p, tr, links, load, max_hop_s, capacity)
             if cost is not None and (c.node not in per_link or cost[0] < per_link[c.node][0]):
                 per_link[c.node] = (*cost, c)
         best, best_cost = None, None
@@ -191,7 +193,7 @@ def match(seg: np.ndarray, t: np.ndarray, node: np.ndarray, window: np.ndarray, 
 
 
 def _cost(c: _Chain, p: int, tr: float, links: dict[tuple[int, int, int], LinkBounds], load: Load,
-          max_hop_s: float, rate_bps: RateFn | None) -> tuple[tuple[bool, bool, bool, float, int], float] | None:
+          max_hop_s: float, capacity: CapacityFn | None) -> tuple[tuple[bool, bool, bool, float, int], float] | None:
     """How well an observation at p at time tr continues chain c (None: it cannot): the rank
     among chains on the same link (a loop, outside what the link allows, not where the
     forwarding sent it, oldest first: FIFO), and the queue wait it implies (step - planned
@@ -203,7 +205,7 @@ def _cost(c: _Chain, p: int, tr: float, links: dict[tuple[int, int, int], LinkBo
     link = links.get((c.window, c.node, p)) if p >= 0 and c.node >= 0 else None
     if not expected and c.expected and link is None:
         return None  # forwarding sends it elsewhere and no link joins the two switches
-    fits = link is None or (link.admits(dt) and not lost_on_link(link, load, c.node, p, c.t, tr, rate_bps))
+    fits = link is None or (link.admits(dt) and not lost_on_link(link, load, c.node, p, c.t, tr, capacity))
     loop = p in c.visited
     if loop and not (expected and fits):
         return None  # only the forwarding brings a frame back, over a step the link allows

@@ -42,7 +42,7 @@ from uavcas.emulation.controller import compute
 from uavcas.rundir import ForwardingEpoch, RunDir, RunDirError
 from uavcas.twin.model import Plan
 
-from .copies import LinkBounds, Load, RateFn, link_bounds, match
+from .copies import CapacityFn, LinkBounds, Load, link_bounds, match
 from .packets import PacketTable, address_to_words, read_packets
 
 KEY_COLUMNS: tuple[str, ...] = (
@@ -211,9 +211,9 @@ class Followed:
 
 
 def follow(table: PacketTable, timeline: Timeline, max_hop_s: float = MAX_HOP_S,
-           rate_bps: RateFn | None = None) -> Followed:
+           capacity: CapacityFn | None = None) -> Followed:
     """Follow every packet of `table` (all capture points of one run); see the module docstring.
-    `rate_bps`: the rate in force on each port by time, where known (`copies.RateFn`)."""
+    `capacity`: what each port could send by time, where known (`copies.CapacityFn`)."""
     n = len(table)
     ts = np.asarray(table["ts_s"], dtype=np.float64)
     point = np.asarray(table["point"], dtype=np.int16)
@@ -260,7 +260,7 @@ def follow(table: PacketTable, timeline: Timeline, max_hop_s: float = MAX_HOP_S,
                     len(timeline.nodes))
         now, nxt = timeline.hops(t_s[rows], nd[rows], ds[rows])
         chain[rows], revisit_sorted = match(seg[rows], t_s[rows], nd[rows], window[order][rows], now, nxt,
-                                            timeline.links, load, max_hop_s, int(seg[-1]) + 1, rate_bps)
+                                            timeline.links, load, max_hop_s, int(seg[-1]) + 1, capacity)
         revisit[order[rows]] = revisit_sorted
     return _assemble(order, chain, revisit, ts, point, node, dst, window, table.points, point_node, timeline)
 
@@ -318,11 +318,11 @@ def run_timeline(rd: "RunDir", plan: "Plan") -> Timeline:
 
 
 def follow_run(run_dir: str | Path, max_hop_s: float = MAX_HOP_S, table: PacketTable | None = None,
-               allow_truncated: bool = True, rate_bps: RateFn | None = None) -> tuple[PacketTable, Followed]:
+               allow_truncated: bool = True, capacity: CapacityFn | None = None) -> tuple[PacketTable, Followed]:
     """Read a run directory's captures (unless `table` is given) and follow its packets along
-    the forwarding the run held (`run_timeline`); `rate_bps` as `follow`'s."""
+    the forwarding the run held (`run_timeline`); `capacity` as `follow`'s."""
     rd = RunDir(Path(run_dir))
     plan = rd.read_plan()
     if table is None:
         table = read_packets(rd.pcaps(), allow_truncated=allow_truncated)
-    return table, follow(table, run_timeline(rd, plan), max_hop_s, rate_bps)
+    return table, follow(table, run_timeline(rd, plan), max_hop_s, capacity)
