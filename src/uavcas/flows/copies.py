@@ -16,16 +16,19 @@ observation in time order, with what a link can and cannot do:
   `LATE_S`); a jammer's override in the window widens both.
 * **A copy lost on the link** must not take the next copy's observation: pairing the
   observation with an older copy means that copy waited in the queue, so the port was busy
-  sending frames that entered before it all that time. When those frames (`Load`: an upper
-  bound) cannot fill the wait, less `BUSY_SLACK_S`, the older copy was lost and the observation
-  goes to a younger one (`lost_on_link`).
+  sending frames that entered before it all that time. When the port could have sent those
+  frames (`Load`: an upper bound) `BUSY_SLACK_S` before the observation, at the rates it held
+  (the caller's `CapacityFn`: the audit knows them) or else at the window's slowest, the older
+  copy was lost and the observation goes to a younger one (`lost_on_link`).
 * **Loops.** An observation at a switch that a chain already crossed continues that chain only
   when the forwarding in force sent the frame back there and the step fits the link: the
   frame looped (`revisit`). Otherwise it is a new transmission, and a chain never takes two
   observations at one point in a row.
 
-Chains that are neither expected nor joined by a link to the observation's switch are skipped;
-where no chain fits, the observation starts a new one.
+Among the chains on one link, one whose step the link allows ranks above one the forwarding
+log sent there (an unforeseen forwarding is likelier than an impossible step). Chains that are
+neither expected nor joined by a link to the observation's switch are skipped; where no chain
+fits, the observation starts a new one.
 """
 
 from __future__ import annotations
