@@ -10,6 +10,7 @@ import pytest
 from helpers.fidsynth import T0, Traffic, build, plan, run_info
 from uavcas.emulation.shaping import queue_limit_pkts
 from uavcas.fidelity import Tolerances, audit, read_fidelity, write_fidelity
+from uavcas.fidelity.model import SCHEMA_VERSION
 from uavcas.rundir import RunDir, WindowApply
 
 
@@ -45,6 +46,23 @@ def test_saturated_link_throughput_is_measured_against_the_plan(tmp_path):
     f = audit(build(tmp_path, plan(), tr).root)
     assert f.saturated_bins >= 2 and f.throughput_ratio_p50 == pytest.approx(1.0, abs=0.01)
     assert [c.ok for c in f.checks if c.name == "throughput_rel"] == [True]
+
+
+def test_a_slow_saturated_link_at_its_planned_rate_reads_a_ratio_of_one(tmp_path):
+    # 0.27 Mbit/s: a 1514-byte frame takes 44.9 ms, a 200 ms bin holds 4 or 5 whole ones (0.91 or
+    # 1.14 of the rate counted whole); spread over their serialisation times they fill it exactly.
+    # A frame every 40 ms offers 1.12 times the rate: the queue never empties, never overflows.
+    tr = Traffic()
+    for k in range(110):
+        tr.add(0.1 + 0.04 * k, 1514, 6000)
+    f = audit(build(tmp_path, plan(rate_mbps=0.27), tr).root)
+    assert f.saturated_bins >= 15 and f.throughput_ratio_p50 == pytest.approx(1.0, abs=0.02)
+    assert f.delay_error_max_ms < 0.002 and f.lost == 0 and f.verdict == "pass"
+    # an emulator that held the link at 90 % of the planned rate reads 0.9 and fails the check
+    rd = build(tmp_path / "slow", plan(rate_mbps=0.27 * 0.9), tr)
+    rd.plan_json.write_text(plan(rate_mbps=0.27).to_json())
+    slow = audit(rd.root)
+    assert slow.throughput_ratio_p50 == pytest.approx(0.9, abs=0.02) and "throughput_rel" in slow.failed
 
 
 def test_late_releases_show_as_delay_error_and_fail_a_tight_tolerance(tmp_path):
@@ -163,11 +181,17 @@ def test_write_fidelity_writes_the_file_and_the_run_json_summary(tmp_path):
     assert read_fidelity(tmp_path / "nowhere") is None
 
 
-def test_tolerances_by_swarm_size():
-    assert Tolerances.for_swarm(20).delay_error_p99_ms == 0.5
-    assert Tolerances.for_swarm(50).delay_error_p99_ms == 1.0
-    assert Tolerances.for_swarm(100).delay_error_p99_ms == 2.0
-    assert Tolerances.for_swarm(100, delay_error_p99_ms=0.7).delay_error_p99_ms == 0.7
+def test_one_set_of_tolerances_for_every_swarm_size(tmp_path):
+    """A 100-UAV plan is held to the same limits as a 20-UAV one (p99 0.5 ms)."""
+    p = plan()
+    more = [p.nodes[0].model_copy(update={"name": f"uav{k}", "index": k + 1, "ip": f"10.20.2.{k}",
+                                          "mac": f"02:00:00:00:02:{k:02x}"}) for k in range(2, 100)]
+    big = p.model_copy(update={"nodes": p.nodes + more})
+    assert sum(n.kind == "uav" for n in big.nodes) == 100
+    late = build(tmp_path, big, _steady(), error=lambda h, k: 0.0008 if k % 20 == 0 else 0.0)
+    f = audit(late.root)
+    assert f.tolerances == Tolerances() and f.tolerances.delay_error_p99_ms == 0.5
+    assert f.delay_error_p99_ms == pytest.approx(0.8, abs=0.002) and f.failed == ["delay_error_p99_ms"]
 
 
 def test_audit_cli_re_audits_a_run_in_place(tmp_path):
@@ -182,7 +206,7 @@ def test_audit_cli_re_audits_a_run_in_place(tmp_path):
     r = CliRunner().invoke(app, ["audit", str(rd.root), "--links", "2"])
     assert r.exit_code == 1, r.output  # the 30 % loss against 10 % planned fails, as before the stale file
     f = read_fidelity(rd.root)
-    assert f.schema_version == 2 and f.failed == ["loss_sigma"] and f.lost_random == 120
+    assert f.schema_version == SCHEMA_VERSION and f.failed == ["loss_sigma"] and f.lost_random == 120
     assert RunDir(rd.root).read_info().fidelity.failed == ["loss_sigma"]
     assert sorted(p.name for p in rd.root.iterdir() if p.is_file()) == ["fidelity.json", "forwarding.jsonl",
                                                                         "plan.json", "run.json"]
@@ -220,3 +244,46 @@ def test_a_mid_window_reshape_is_audited_against_the_parameters_in_force(tmp_pat
     # the same run judged without the reshape (no attack log): the losses break the plan's 0
     rd.attacks_jsonl.unlink()
     assert audit(rd.root).verdict == "fail"
+
+
+def test_byte_identical_copies_in_a_queue_are_paired_in_order(tmp_path):
+    # 20 ms of other frames queue on uav0 -> uav1, then five byte-identical frames (IP id 0, one
+    # flow, 1 ms each at the rate) enter 2 ms apart and leave back to back behind them. Each
+    # copy's step is 2 ms planned + its queue wait: pairing by the step closest to 2 ms swaps
+    # them (main read 4 ms late and 3 ms early here).
+    tr = Traffic()
+    for k in range(20):
+        tr.add(1.0, 1000, 6000)
+    for k in range(5):
+        tr.add(1.0005 + 0.002 * k, 1000, 7000, ip_id=0)
+    f = audit(build(tmp_path, plan(), tr).root)
+    assert f.packets == 25 and f.n == 50 and f.lost == 0 and f.loops == 0
+    assert f.delay_error_max_ms < 0.002 and f.delay_error_p1_ms > -0.002 and f.verdict == "pass"
+
+
+def _looped(tmp_path):
+    """A steady flow, and one more frame that loops uav0 -> uav1 -> uav0 -> uav1 -> bs0 at 2 s while
+    uav1's table sends bs0's traffic back to uav0 (2 ms per hop, the planned delay)."""
+    from helpers.fidsynth import IPS, udp_frame
+
+    frame = udp_frame(IPS["uav0"], IPS["bs0"], 4000, 9000, 777, 200)
+    t = [T0 + 2.0 + 0.002 * k for k in range(5)]
+    extra = {"uav0": [(t[0], frame), (t[2], frame)], "uav1": [(t[1], frame), (t[3], frame)], "bs0": [(t[4], frame)]}
+    rd = build(tmp_path, plan(), _steady(), extra=extra)
+    normal = rd.read_forwarding()
+    loop = {**normal[0].next_hop, "uav1": {**normal[0].next_hop["uav1"], "bs0": "uav0"}}
+    epochs = [normal[0], normal[0].model_copy(update={"t_begin_unix": t[0] + 0.001, "t_unix": t[0] + 0.001,
+                                                      "next_hop": loop}),
+              normal[0].model_copy(update={"t_begin_unix": t[2] + 0.001, "t_unix": t[2] + 0.001}), *normal[1:]]
+    rd.forwarding_jsonl.write_text("".join(e.model_dump_json() + "\n" for e in epochs))
+    return rd
+
+
+def test_a_looping_frame_fails_the_audit(tmp_path):
+    f = audit(_looped(tmp_path).root)
+    assert f.loops == 1 and f.failed == ["loops"] and f.verdict == "fail"
+    assert [c.value for c in f.checks if c.name == "loops"] == [1]
+    looped = {(x.src, x.dst): x.loops for x in f.links if x.loops}
+    assert looped == {("uav1", "uav0"): 1, ("uav0", "uav1"): 1}  # back to uav0, then to uav1 again
+    assert f.packets == 401 and f.lost == 0 and f.delay_error_max_ms < 0.002  # its hops are still timed
+    assert audit(_looped(tmp_path / "ok").root, Tolerances(loops=1)).verdict == "pass"

@@ -226,3 +226,107 @@ def test_gap_longer_than_a_hop_splits(max_hop_s):
     rows = _send(1.0, ["uav0", "uav1", "bs0"])[:1] + [{"t": 1.0 + 1.0, "at": "uav1", "src": "uav0", "dst": "bs0"}]
     f = follow(_table(rows), TL, max_hop_s=max_hop_s)
     assert f.n_packets == (2 if max_hop_s < 1.0 else 1)
+
+
+def _busy(t0, n, frm="uav0", length=1514):
+    """n frames of another flow that entered `frm` -> uav1 together before t0 - 5 ms and leave
+    back to back, seen at uav1 from t0 (s from T0): they keep that port busy."""
+    gap = length * 8 / 24e6  # the links' planned 24 Mbit/s
+    return [r for k in range(n) for r in (
+        {"t": t0 - D_MS / 1000 - 0.0005, "at": frm, "src": frm, "dst": "uav1", "id": 100 + k, "len": length},
+        {"t": t0 + k * gap, "at": "uav1", "src": frm, "dst": "uav1", "id": 100 + k, "len": length})]
+
+
+SYNACK = {"proto": 6, "sport": 80, "dport": 40000, "seq": 7, "flags": 0x12, "id": 0, "len": 66}
+
+
+def test_identical_copies_leave_a_queued_link_in_the_order_they_entered():
+    # A SYN-ACK (IP id 0) and its retransmission, byte for byte, 2 ms apart on uav0, queued
+    # behind 2 ms of other frames at uav1: the first copy leaves at 7 ms, the second right behind
+    # it. The step closest to the planned 5 ms is the second copy's: FIFO order is the evidence.
+    a, b = _send(1.0, ["uav0", "uav1", "bs0"], **SYNACK), _send(1.002, ["uav0", "uav1", "bs0"], **SYNACK)
+    a[1]["t"], a[2]["t"] = 1.007, 1.012
+    b[1]["t"], b[2]["t"] = 1.00703, 1.01203
+    f = follow(_table(a + b + _busy(1.005, 4)), TL)
+    synack = [p for p in range(f.n_packets) if len(f.path(p)[0]) == 3]
+    assert len(synack) == 2
+    got = sorted([round(float(t) - T0, 5) for t in f.path(p)[1]] for p in synack)
+    assert got == [[1.0, 1.007, 1.012], [1.002, 1.00703, 1.01203]]
+    assert not f.revisit.any()
+
+
+def test_a_copy_lost_on_the_link_does_not_take_the_next_copys_observation():
+    # the first copy is lost on uav0 -> uav1; nothing kept that port busy (uav1 was busy with
+    # bs0's frames: another port), so the frame seen at uav1 at 7 ms (5 ms after the second copy)
+    # is the second copy's, not the first's 2 ms late
+    a = _send(1.0, ["uav0", "uav1", "bs0"], **SYNACK)[:1]
+    b = _send(1.002, ["uav0", "uav1", "bs0"], **SYNACK)
+    f = follow(_table(a + b + _busy(1.005, 4, frm="bs0")), TL)
+    synack = [p for p in range(f.n_packets) if f.path(p)[0][0] == "s-uav0"]
+    assert len(synack) == 2 and f.delivered[synack].tolist() == [False, True]
+    assert f.n_packets == 6
+    assert np.allclose(np.diff(f.path(synack[1])[1]), D_MS / 1000, atol=1e-6)
+    assert [(POINTS[x], POINTS[y]) for x, y in zip(f.losses.from_point, f.losses.to_point)] == [("s-uav0", "s-uav1")]
+
+
+def test_a_frame_that_comes_back_to_a_switch_is_a_loop_not_a_new_packet():
+    # while uav1's table is being changed it sends bs0's traffic back to uav0, which sends it
+    # to uav1 again: one packet seen at uav0, uav1, uav0, uav1, bs0
+    loop = {**TL_NH[0], "uav1": {**TL_NH[0]["uav1"], "bs0": "uav0"}}
+    tl = Timeline.from_epochs(PLAN, [ForwardingEpoch(t_begin_unix=T0, t_unix=T0, window=0, next_hop=TL_NH[0]),
+                                     ForwardingEpoch(t_begin_unix=T0 + 1.001, t_unix=T0 + 1.001, window=0,
+                                                     next_hop=loop),
+                                     ForwardingEpoch(t_begin_unix=T0 + 1.012, t_unix=T0 + 1.012, window=0,
+                                                     next_hop=TL_NH[0])])
+    rows = [{"t": 1.0 + 0.005 * k, "at": n, "src": "uav0", "dst": "bs0", "id": 3}
+            for k, n in enumerate(["uav0", "uav1", "uav0", "uav1", "bs0"])]
+    f = follow(_table(rows), tl)
+    assert f.n_packets == 1 and f.delivered.tolist() == [True] and len(f.losses) == 0
+    assert f.path(0)[0] == ["s-uav0", "s-uav1", "s-uav0", "s-uav1", "s-bs0"]
+    assert f.revisit[np.argsort(f.hop)].tolist() == [False, False, True, True, False]
+    assert f.crossings().revisit.tolist() == [False, True, True, False]
+    # without the loop in the tables, the frame back at uav0 is a new transmission, not a loop
+    f = follow(_table(rows), TL)
+    assert not f.revisit.any() and f.n_packets == 2
+
+
+def test_fifo_orders_copies_on_one_link_not_across_links():
+    # uav1 -> bs0 at 0.2 Mbit/s, kept busy by another flow: a copy may wait there up to ~1 s. The
+    # first copy is lost on it; the retransmission, 0.9 s later in window 1, goes via uav2. Its
+    # arrival at bs0 is 5 ms after uav2, not a 0.9 s wait on the other link: FIFO says nothing
+    # about two links, and the shorter queue wait is the one to believe.
+    w0 = PLAN.windows[0]
+    slow = [lk.model_copy(update={"rate_mbps": 0.2}) if {lk.a, lk.b} == {"uav1", "bs0"} else lk for lk in w0.links]
+    plan = PLAN.model_copy(update={"windows": [w0.model_copy(update={"links": slow}), PLAN.windows[1]]})
+    gap = 1514 * 8 / 0.2e6
+    busy = [{"t": t, "at": at, "src": "uav1", "dst": "bs0", "id": 100 + k, "len": 1514}
+            for k in range(16) for at, t in (("uav1", 4.03), ("bs0", 4.04 + k * gap))]
+    a = _send(4.1, ["uav0", "uav1", "bs0"], **SYNACK)[:2]
+    b = _send(5.0, ["uav0", "uav2", "bs0"], **SYNACK)
+    f = follow(_table(a + b + busy), Timeline.from_plan(plan, T0))
+    paths = sorted(f.path(p)[0] for p in range(f.n_packets) if f.path(p)[0][0] == "s-uav0")
+    assert paths == [["s-uav0", "s-uav1"], ["s-uav0", "s-uav2", "s-bs0"]]
+
+
+def test_a_lost_copy_is_judged_at_the_rate_the_port_held():
+    # a jammer may slow uav0 -> uav1 to 0.2 Mbit/s in window 0 (the plan's override), but the run
+    # says the port held its 24 Mbit/s then: the one frame ahead of the first copy kept the port
+    # busy for 0.5 ms, not 60 ms, so that copy cannot have waited 2 ms: it was lost
+    from uavcas.twin.model import LinkOverride
+
+    jam = LinkOverride(attack_id="jamming-0", src="uav0", dst="uav1", start_s=0.0, stop_s=5.0, interference_dbm=-60.0,
+                       sinr_db=3.0, mcs=0, rate_mbps=0.2, delay_ms=D_MS, loss=0.0)
+    plan = PLAN.model_copy(update={"windows": [PLAN.windows[0].model_copy(update={"link_overrides": [jam]}),
+                                               PLAN.windows[1]]})
+    a = _send(1.0, ["uav0", "uav1", "bs0"], **SYNACK)[:1]
+    b = _send(1.002, ["uav0", "uav1", "bs0"], **SYNACK)
+    table = _table(a + b + _busy(1.0054, 1))
+    tl = Timeline.from_plan(plan, T0)
+    synack = np.asarray(table["frame_len"]) == SYNACK["len"]
+
+    def paths(f):
+        return sorted([round(float(f._ts[r]) - T0, 4) for r in np.flatnonzero(synack & (f.pid == p))]
+                      for p in np.unique(f.pid[synack]))
+
+    assert paths(follow(table, tl, capacity=lambda i, j, a, b: (b - a) * 24e6)) == [[1.0], [1.002, 1.007, 1.012]]
+    assert paths(follow(table, tl)) == [[1.0, 1.007, 1.012], [1.002]]  # judged at the plan's slowest rate

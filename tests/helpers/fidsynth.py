@@ -74,16 +74,19 @@ def write_pcap(path: Path, frames: list[tuple[float, bytes]]) -> None:
 
 @dataclass
 class Traffic:
-    """Packets sent at uav0's switch: time (s from T0), frame length, flow source port."""
+    """Packets sent at uav0's switch: time (s from T0), frame length, flow source port, IP id
+    (None: the packet's index, so that every packet differs)."""
 
     t_s: list[float] = field(default_factory=list)
     length: list[int] = field(default_factory=list)
     sport: list[int] = field(default_factory=list)
+    ip_id: list[int | None] = field(default_factory=list)
 
-    def add(self, t_s: float, length: int = 1000, sport: int = 5000) -> None:
+    def add(self, t_s: float, length: int = 1000, sport: int = 5000, ip_id: int | None = None) -> None:
         self.t_s.append(t_s)
         self.length.append(length)
         self.sport.append(sport)
+        self.ip_id.append(ip_id)
 
 
 # error(hop, packet index) -> seconds added to the model's arrival; drop(hop, index) -> lost there
@@ -92,8 +95,10 @@ DropFn = Callable[[int, int], bool]
 
 
 def build(root: Path, p: Plan, traffic: Traffic, error: ErrorFn = lambda h, k: 0.0,
-          drop: DropFn = lambda h, k: False, info: RunInfo | None = None) -> RunDir:
-    """Emulate `traffic` over PATH with the FIFO model + `error`, dropping what `drop` says."""
+          drop: DropFn = lambda h, k: False, info: RunInfo | None = None,
+          extra: dict[str, list[tuple[float, bytes]]] | None = None) -> RunDir:
+    """Emulate `traffic` over PATH with the FIFO model + `error`, dropping what `drop` says;
+    `extra`: more frames per node's capture (Unix s, bytes), written as given."""
     rd = RunDir(root)
     rd.pcap_dir.mkdir(parents=True, exist_ok=True)
     rd.plan_json.write_text(p.to_json())
@@ -126,7 +131,8 @@ def build(root: Path, p: Plan, traffic: Traffic, error: ErrorFn = lambda h, k: 0
         t[got] = start + np.array([error(h, int(k)) for k in got])
         seen[b] = (got, t[got].copy())
     for node, (rows, times) in seen.items():
-        frames = [(float(tt), udp_frame(IPS["uav0"], IPS["bs0"], traffic.sport[k], 9000, k % 65536,
+        frames = [(float(tt), udp_frame(IPS["uav0"], IPS["bs0"], traffic.sport[k], 9000,
+                                        k % 65536 if traffic.ip_id[k] is None else traffic.ip_id[k],
                                         traffic.length[k])) for k, tt in zip(rows, times)]
-        write_pcap(rd.pcap_dir / f"s-{node}.pcap", frames)
+        write_pcap(rd.pcap_dir / f"s-{node}.pcap", frames + (extra or {}).get(node, []))
     return rd

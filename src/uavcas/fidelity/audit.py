@@ -6,12 +6,14 @@ in force on the port at the time (`inforce`): the delay error. Per link directio
 delay-error quantiles, loss split by cause (`losses`: the kernel's counters where the run logged
 them, else how full the model's queue was) with random loss against the planned loss,
 throughput in saturated bins (the model's queue never empty for the whole bin) against the
-planned rate. Per flow: how much the emulator moved inter-packet gaps end to end. A window that
-an attack re-shaped in its middle (a jammer's overrides: `inforce`) is audited per segment, each
-against the parameters in force in it (the jammed plan during the jammer's span, the unjammed
-outside it), with that segment's kernel counters. The pooled
-figures and the schedule (window change time, lateness from run.json) are checked against
-`Tolerances`; any failed check fails the run.
+planned rate, each frame spread over its serialisation time (`throughput`); crossings that
+brought a packet back to a switch it had crossed (loops, `flows.copies`). Per flow: how much
+the emulator moved inter-packet gaps end to end. A window that an attack re-shaped in its
+middle (a jammer's overrides: `inforce`) is audited per segment, each against the parameters in
+force in it (the jammed plan during the jammer's span, the unjammed outside it), with that
+segment's kernel counters. The pooled
+figures, the packets that looped and the schedule (window change time, lateness from run.json)
+are checked against `Tolerances`, one set for every swarm size; any failed check fails the run.
 
 Losses during a change of forwarding (a window change or an attack re-routing: from
 `TRANSITION_S` before the change began to `TRANSITION_S` after it ended) and losses on a link
@@ -33,8 +35,8 @@ from uavcas.flows.packets import PacketTable
 from uavcas.rundir import RunDir, RunInfo
 from uavcas.twin.model import Plan
 
-from . import fifo, losses
-from .inforce import PortShaping, planned_settings, port_shaping, shape_spans
+from . import fifo, losses, throughput
+from .inforce import PortCapacity, PortShaping, planned_settings, port_shaping, shape_spans
 from .model import Check, Counters, Fidelity, GapDistortion, LinkWindow, Tolerances
 
 TRANSITION_S = 0.05  # margin around a forwarding change (held packets, queues draining)
@@ -102,19 +104,22 @@ def delay_errors(err_ms: np.ndarray) -> dict:
 def audit(run_dir: str | Path, tolerances: Tolerances | None = None, table: PacketTable | None = None) -> Fidelity:
     """Audit one run directory (see the module docstring); nothing is written.
 
-    `tolerances`: default `Tolerances.for_swarm` of the plan's number of UAVs.
+    `tolerances`: default `Tolerances()`, the same for every swarm size.
     """
     rd = RunDir(Path(run_dir))
     plan, info = rd.read_plan(), rd.read_info()
     if tolerances is None:
-        tolerances = Tolerances.for_swarm(sum(n.kind == "uav" for n in plan.nodes))
-    table, fol = follow_run(rd.root, tolerances.max_hop_s, table=table)
-    return _Audit(plan, info, rd, table, fol, run_timeline(rd, plan), tolerances).report()
+        tolerances = Tolerances()
+    timeline = run_timeline(rd, plan)
+    shaping = port_shaping(plan, timeline, shape_spans(rd.read_attacks()))
+    # identical copies are paired knowing the rates each port held (a jammer's included)
+    table, fol = follow_run(rd.root, tolerances.max_hop_s, table=table, capacity=PortCapacity(shaping))
+    return _Audit(plan, info, rd, table, fol, timeline, shaping, tolerances).report()
 
 
 class _Audit:
     def __init__(self, plan: Plan, info: RunInfo | None, rd: RunDir, table: PacketTable, fol: Followed,
-                 timeline: Timeline, tol: Tolerances) -> None:
+                 timeline: Timeline, shaping: dict[tuple[int, int], PortShaping], tol: Tolerances) -> None:
         self.plan, self.info, self.rd, self.table = plan, info, rd, table
         self.fol, self.tl, self.tol = fol, timeline, tol
         self.planned = _Planned.of(plan)
@@ -123,7 +128,7 @@ class _Audit:
         self.names = [x.name for x in plan.nodes]
         self.n = len(self.names)
         self.t0 = info.t0_unix if info is not None and info.t0_unix is not None else float(timeline.t_unix[0])
-        self.shaping = port_shaping(plan, timeline, shape_spans(rd.read_attacks()))
+        self.shaping = shaping
         self.setting = planned_settings(self.shaping)  # (window, segment, i, j) -> (delay, rate, loss)
         self.netem = info is not None and info.shaper_backend == "netem"
         self._crossings()
@@ -213,32 +218,12 @@ class _Audit:
 
     # aggregates --------------------------------------------------------------------------------
     def _saturation(self, port: _Port) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Saturated bins of one direction: (bin start times, measured/planned rate, setting as
-        window * SEGMENTS + segment)."""
-        busy = fifo.busy_intervals(port.ready, port.start)
-        bs = self.tol.saturated_bin_s
-        e = np.zeros(0)
-        if busy.shape[0] == 0:
-            return e, e, e.astype(np.int64)
-        k0 = np.ceil((busy[:, 0] - self.t0) / bs).astype(np.int64)
-        k1 = np.floor((busy[:, 1] - self.t0) / bs).astype(np.int64)
-        bins = np.concatenate([np.arange(a, b) for a, b in zip(k0, k1) if b > a] or [np.zeros(0, np.int64)])
-        if bins.shape[0] == 0:
-            return e, e, e.astype(np.int64)
+        """Saturated bins of one direction (`throughput`): (bin start times, measured/planned
+        rate, setting as window * SEGMENTS + segment)."""
         rows = port.rows
-        kb = np.floor((self.c.t_to[rows] - self.t0) / bs).astype(np.int64)
-        sel = np.isin(kb, bins)
-        bits = {}
-        for k, L in zip(kb[sel].tolist(), self.c_len[rows][sel].tolist()):
-            bits[k] = bits.get(k, 0.0) + L * 8.0
-        t_bin = self.t0 + bins * bs
-        # bins under one setting of the port (the rate it was serving at)
-        s_a, s_b = port.shaping.at(t_bin), port.shaping.at(t_bin + bs)
-        keep = (s_a == s_b) & (s_a >= 0)
-        got = np.array([bits.get(k, 0.0) for k in bins.tolist()]) / bs / 1e6
-        s = s_a[keep]
-        return (t_bin[keep], got[keep] / port.shaping.rate_mbps[s],
-                port.shaping.window[s] * SEGMENTS + port.shaping.segment[s])
+        t_bin, ratio, s = throughput.saturated_ratios(port.ready, port.start, self.c.t_to[rows], self.c_len[rows],
+                                                      port.shaping, self.t0, self.tol.saturated_bin_s)
+        return t_bin, ratio, port.shaping.window[s] * SEGMENTS + port.shaping.segment[s]
 
     def _gaps(self) -> GapDistortion:
         c, ok = self.c, ~np.isnan(self.err_ms)
@@ -310,7 +295,8 @@ class _Audit:
                 verdict="pass" if ok else "fail", src=self.names[i], dst=self.names[j], window=w, segment=sg, **de,
                 planned_delay_ms=delay, planned_rate_mbps=rate, planned_loss=p,
                 measured_delay_p50_ms=_q(meas, 50), model_delay_p50_ms=_q(model, 50),
-                queue_over_limit=int(self.c_over[rows].sum()), lost=int(mine.shape[0]),
+                queue_over_limit=int(self.c_over[rows].sum()), loops=int(self.c.revisit[rows].sum()),
+                lost=int(mine.shape[0]),
                 lost_tail=int(count[losses.TAIL]), lost_random=int(count[losses.RANDOM]),
                 lost_transition=int(count[losses.TRANSITION]), lost_unexplained=int(count[losses.UNEXPLAINED]),
                 loss_source=stage.source, loss_offered=stage.offered, loss_drops=stage.dropped,
@@ -345,6 +331,7 @@ class _Audit:
         rnd_obs = sum(st.dropped for st in self.stages)
         exp = sum(st.expected for st in self.stages)
         sigma = _sigma_pooled(rnd_obs, exp, sum(st.variance for st in self.stages))
+        looped = int(np.unique(self.c.pid[self.c.revisit]).shape[0])
         change = [a.timings_s.get("total_s", 0.0) * 1000 for a in self.info.window_applies] if self.info else []
         late = [e.late_ms for e in self.info.schedule] if self.info else []
         checks = [
@@ -360,6 +347,7 @@ class _Audit:
                   ok=sigma is None or abs(sigma) <= tol.loss_sigma),
             Check(name="throughput_rel", value=_q(ratios, 50), limit=tol.throughput_rel,
                   ok=ratios.shape[0] == 0 or abs(float(np.median(ratios)) - 1) <= tol.throughput_rel),
+            Check(name="loops", value=looped, limit=tol.loops, ok=looped <= tol.loops),
             Check(name="window_change_ms", value=round(max(change), 3) if change else None, limit=tol.window_change_ms,
                   ok=not change or max(change) <= tol.window_change_ms),
             Check(name="lateness_ms", value=round(max(late), 3) if late else None, limit=tol.lateness_ms,
@@ -370,8 +358,9 @@ class _Audit:
         return Fidelity(
             verdict="fail" if failed else "pass", failed=failed, **pooled, packets=self.fol.n_packets,
             crossings_unmodelled=int(np.isnan(self.err_ms).sum()), queue_over_limit=int(self.c_over.sum()),
-            lost=len(self.fol.losses), lost_tail=int(count[losses.TAIL]), lost_random=int(count[losses.RANDOM]),
-            lost_transition=int(count[losses.TRANSITION]), lost_unexplained=int(count[losses.UNEXPLAINED]),
+            loops=looped, lost=len(self.fol.losses), lost_tail=int(count[losses.TAIL]),
+            lost_random=int(count[losses.RANDOM]), lost_transition=int(count[losses.TRANSITION]),
+            lost_unexplained=int(count[losses.UNEXPLAINED]),
             loss_links_counted=sum(st.source == "counters" for st in self.stages),
             loss_offered=sum(st.offered for st in self.stages), loss_random_observed=rnd_obs,
             loss_random_expected=round(exp, 3), loss_sigma=sigma, throughput_ratio_p50=_q(ratios, 50),

@@ -54,6 +54,21 @@ class PortShaping:
 
 
 @dataclass(frozen=True)
+class PortCapacity:
+    """`flows.copies.CapacityFn` over a run's `port_shaping`: the bits port i -> j could send in
+    [a, b) at the rates it held (each setting from its apply's start)."""
+
+    shaping: dict[tuple[int, int], PortShaping]
+
+    def __call__(self, i: int, j: int, a: float, b: float) -> float | None:
+        ps = self.shaping.get((i, j))
+        if ps is None or b <= a or a < ps.t_s[0]:
+            return None
+        edges = np.clip(np.append(ps.t_s, np.inf), a, b)
+        return float(np.sum(np.diff(edges) * ps.rate_mbps) * 1e6)
+
+
+@dataclass(frozen=True)
 class ShapeSpan:
     """An attack that re-shapes links while active: its logged [start, stop), and when its
     start's reshape began and its stop's ended (the logged times where the log has no such)."""

@@ -6,14 +6,16 @@ times in the packet table. `follow(table, timeline)` tells those observations ap
 * **Identity.** Observations are candidates for the same packet only when everything a switch
   cannot change is equal: addresses, protocol, ports, IP id, TCP sequence number and flags, TTL
   (bridges do not decrement it) and frame length (`KEY_COLUMNS`).
-* **Chains.** Candidates are ordered by time and strung into chains, one per transmission: a
-  chain visits a point at most once (forwarding is loop-free), each step lasts at most
-  `max_hop_s` and goes where the forwarding in force sent the packet. Candidates that meet all
-  three in one sequence (nearly all packets) are chained at once, vectorised; the rest (two
-  identical-looking packets in flight together, e.g. unconnected UDP with DF and IP id 0) go
-  through a greedy matcher that attaches each observation to the open chain it fits best:
-  expected there by the forwarding, step closest to the link's planned delay, oldest first.
-  Two observations at one point are never merged into one packet.
+* **Chains.** Candidates are ordered by time and strung into chains, one per transmission: each
+  step lasts at most `max_hop_s` and goes where the forwarding in force sent the packet, and
+  points are distinct. Candidates that meet all three in one sequence (nearly all packets) are
+  chained at once, vectorised; the rest (identical copies in flight together: SYN-ACKs and
+  unconnected UDP with IP id 0, duplicate ACKs) go through `copies.match`: FIFO order on each
+  link, steps within what the link allows, a copy lost on the link kept from taking the next
+  one's observation. Two observations at one point are never merged into one packet.
+* **Loops.** A frame that comes back to a switch it already crossed, sent there by the
+  forwarding in force (a loop while tables change), continues its chain: that observation is a
+  `revisit`, which the audit counts as a fidelity failure, not a new packet.
 * **Loss.** A packet whose last observation is not its destination's switch left that switch
   towards the next hop of the forwarding in force then and never arrived: it is lost on that
   hop (`Losses`; `to_point` -1 when the switch had no way to the destination at all).
@@ -21,10 +23,11 @@ times in the packet table. `follow(table, timeline)` tells those observations ap
 The forwarding comes from a `Timeline`: the tables the run installed (`forwarding.jsonl`,
 exact, attacks included) or, for runs made before they were logged, the plan's windows
 (`Timeline.from_plan`: each window's routes for the whole window; a wormhole detour travels on alias
-MACs outside these tables, so its steps are chained by the planned link delays).
+MACs outside these tables, so its steps are chained by the planned links).
 
 Output per packet-table row: `pid` (int64, equal across a transmission's observations, numbered
-in order of first observation) and `hop` (0 at its first switch). Pure numpy; no root.
+in order of first observation), `hop` (0 at its first switch) and `revisit` (the packet had
+already crossed this switch). Pure numpy; no root.
 """
 
 from __future__ import annotations
@@ -39,6 +42,7 @@ from uavcas.emulation.controller import compute
 from uavcas.rundir import ForwardingEpoch, RunDir, RunDirError
 from uavcas.twin.model import Plan
 
+from .copies import CapacityFn, LinkBounds, Load, link_bounds, match
 from .packets import PacketTable, address_to_words, read_packets
 
 KEY_COLUMNS: tuple[str, ...] = (
@@ -62,7 +66,7 @@ class Timeline:
     """
 
     def __init__(self, nodes: Sequence[str], ips: Sequence[str], epochs: Sequence["ForwardingEpoch"],
-                 link_delay_ms: dict[tuple[int, int, int], float] | None = None) -> None:
+                 links: dict[tuple[int, int, int], "LinkBounds"] | None = None) -> None:
         if not epochs:
             raise ValueError("a forwarding timeline needs at least one epoch")
         self.nodes = tuple(nodes)
@@ -80,11 +84,11 @@ class Timeline:
         words = [address_to_words(ip) for ip in ips]
         self._ip_hi = np.array([w[0] for w in words], dtype=np.uint64)
         self._ip_lo = np.array([w[1] for w in words], dtype=np.uint64)
-        self.link_delay_ms = link_delay_ms or {}  # (window, i, j) -> planned delay of link i-j
+        self.links = links or {}  # (window, i, j) -> what the plan allows a step i -> j
 
     @classmethod
     def from_epochs(cls, plan: "Plan", epochs: Sequence["ForwardingEpoch"]) -> "Timeline":
-        return cls([n.name for n in plan.nodes], [n.ip for n in plan.nodes], epochs, _link_delays(plan))
+        return cls([n.name for n in plan.nodes], [n.ip for n in plan.nodes], epochs, link_bounds(plan))
 
     @classmethod
     def from_plan(cls, plan: "Plan", t0_unix: float,
@@ -134,19 +138,6 @@ class Timeline:
         nxt = np.where(ok & switching, self.next_hop[e2, ni, di], now)
         return now, nxt
 
-    def planned_delay_s(self, window: int, i: int, j: int) -> float | None:
-        d = self.link_delay_ms.get((window, min(i, j), max(i, j)))
-        return None if d is None else d / 1000.0
-
-
-def _link_delays(plan: "Plan") -> dict[tuple[int, int, int], float]:
-    idx = {n.name: n.index for n in plan.nodes}
-    out = {}
-    for w in plan.windows:
-        for lk in w.links:
-            i, j = idx[lk.a], idx[lk.b]
-            out[(w.index, min(i, j), max(i, j))] = lk.delay_ms
-    return out
 
 
 @dataclass(frozen=True)
@@ -175,6 +166,7 @@ class Crossings:
     t_from: np.ndarray  # float64, Unix seconds
     t_to: np.ndarray
     window: np.ndarray  # int32, window in force at the from point
+    revisit: np.ndarray  # bool: it brought the packet back to a switch it had crossed (a loop)
 
     def __len__(self) -> int:
         return int(self.pid.shape[0])
@@ -186,6 +178,7 @@ class Followed:
 
     pid: np.ndarray  # per row, int64
     hop: np.ndarray  # per row, int16
+    revisit: np.ndarray  # per row, bool: its packet had crossed this switch before (a loop)
     order: np.ndarray  # rows sorted by (pid, hop)
     offsets: np.ndarray  # pid p's rows are order[offsets[p]:offsets[p + 1]]
     points: tuple[str, ...]
@@ -210,15 +203,17 @@ class Followed:
         if o.shape[0] < 2:
             e = np.zeros(0, dtype=np.int64)
             return Crossings(e, e, e, e.astype(np.int16), e.astype(np.int16), e.astype(float), e.astype(float),
-                             e.astype(np.int32))
+                             e.astype(np.int32), e.astype(bool))
         same = self.pid[o[1:]] == self.pid[o[:-1]]
         a, b = o[:-1][same], o[1:][same]
         return Crossings(self.pid[a], a, b, self._point[a], self._point[b], self._ts[a], self._ts[b],
-                         self._window[a])
+                         self._window[a], self.revisit[b])
 
 
-def follow(table: PacketTable, timeline: Timeline, max_hop_s: float = MAX_HOP_S) -> Followed:
-    """Follow every packet of `table` (all capture points of one run); see the module docstring."""
+def follow(table: PacketTable, timeline: Timeline, max_hop_s: float = MAX_HOP_S,
+           capacity: CapacityFn | None = None) -> Followed:
+    """Follow every packet of `table` (all capture points of one run); see the module docstring.
+    `capacity`: what each port could send by time, where known (`copies.CapacityFn`)."""
     n = len(table)
     ts = np.asarray(table["ts_s"], dtype=np.float64)
     point = np.asarray(table["point"], dtype=np.int16)
@@ -254,50 +249,23 @@ def follow(table: PacketTable, timeline: Timeline, max_hop_s: float = MAX_HOP_S)
         suspect[seg[1:][off_path]] = True
 
     chain = seg.copy()
+    revisit = np.zeros(n, dtype=bool)
     slow = suspect[seg]
     if slow.any():
         rows = np.flatnonzero(slow)
-        chain[rows] = _match(seg[rows], t_s[rows], nd[rows], ds[rows], window[order][rows], timeline,
-                             max_hop_s, first_id=int(seg[-1]) + 1)
-    return _assemble(order, chain, ts, point, node, dst, window, table.points, point_node, timeline)
+        # where and when each row entered its link: the previous row of its segment (one packet)
+        via = np.where(new_seg, -1, np.concatenate([[-1], nd[:-1]])) if n else np.zeros(0, dtype=np.int32)
+        t_via = np.concatenate([[-np.inf], t_s[:-1]]) if n else np.zeros(0)
+        load = Load(t_s, nd, np.where(slow, -2, via), t_via, np.asarray(table["frame_len"])[order],
+                    len(timeline.nodes))
+        now, nxt = timeline.hops(t_s[rows], nd[rows], ds[rows])
+        chain[rows], revisit_sorted = match(seg[rows], t_s[rows], nd[rows], window[order][rows], now, nxt,
+                                            timeline.links, load, max_hop_s, int(seg[-1]) + 1, capacity)
+        revisit[order[rows]] = revisit_sorted
+    return _assemble(order, chain, revisit, ts, point, node, dst, window, table.points, point_node, timeline)
 
 
-def _match(seg: np.ndarray, t: np.ndarray, node: np.ndarray, dst: np.ndarray, window: np.ndarray,
-           timeline: Timeline, max_hop_s: float, first_id: int) -> np.ndarray:
-    """Greedy chaining of ambiguous segments (rows in time order within each segment)."""
-    out = np.empty(seg.shape[0], dtype=np.int64)
-    now, nxt = timeline.hops(t, node, dst)
-    next_id = first_id
-    last_seg = -1
-    chains: list[list] = []  # [id, last node, last time, window, visited nodes, expected next nodes]
-    for r in range(seg.shape[0]):
-        if seg[r] != last_seg:
-            last_seg, chains = seg[r], []
-        p, tr = int(node[r]), float(t[r])
-        best, best_cost = None, None
-        for c in chains:
-            dt = tr - c[2]
-            if dt < 0 or dt > max_hop_s or p in c[4] or c[1] == p:
-                continue
-            expected = p in c[5]
-            plan_d = timeline.planned_delay_s(c[3], c[1], p) if p >= 0 and c[1] >= 0 else None
-            if not expected and c[5] and plan_d is None:
-                continue  # forwarding sends it elsewhere and no link joins the two switches
-            cost = (0 if expected else 1, abs(dt - (plan_d or 0.0)), c[2])
-            if best_cost is None or cost < best_cost:
-                best, best_cost = c, cost
-        if best is None:
-            best = [next_id, p, tr, int(window[r]), set(), set()]
-            next_id += 1
-            chains.append(best)
-        best[1], best[2], best[3] = p, tr, int(window[r])
-        best[4].add(p)
-        best[5] = {int(h) for h in (now[r], nxt[r]) if h >= 0}
-        out[r] = best[0]
-    return out
-
-
-def _assemble(order, chain, ts, point, node, dst, window, points, point_node, timeline) -> Followed:
+def _assemble(order, chain, revisit, ts, point, node, dst, window, points, point_node, timeline) -> Followed:
     n = ts.shape[0]
     chain_row = np.empty(n, dtype=np.int64)
     chain_row[order] = chain
@@ -331,7 +299,7 @@ def _assemble(order, chain, ts, point, node, dst, window, points, point_node, ti
     lr = last[lost]
     to_point = np.where(now[lost] >= 0, node_point[np.maximum(now[lost], 0)], -1).astype(np.int16)
     losses = Losses(lost_pid.astype(np.int64), point[lr], to_point, window[lr].astype(np.int32), ts[lr])
-    return Followed(pid, hop, order_ph, offsets, tuple(points), dst_node, delivered, losses, ts, point,
+    return Followed(pid, hop, revisit, order_ph, offsets, tuple(points), dst_node, delivered, losses, ts, point,
                     window.astype(np.int32))
 
 
@@ -350,11 +318,11 @@ def run_timeline(rd: "RunDir", plan: "Plan") -> Timeline:
 
 
 def follow_run(run_dir: str | Path, max_hop_s: float = MAX_HOP_S, table: PacketTable | None = None,
-               allow_truncated: bool = True) -> tuple[PacketTable, Followed]:
+               allow_truncated: bool = True, capacity: CapacityFn | None = None) -> tuple[PacketTable, Followed]:
     """Read a run directory's captures (unless `table` is given) and follow its packets along
-    the forwarding the run held (`run_timeline`)."""
+    the forwarding the run held (`run_timeline`); `capacity` as `follow`'s."""
     rd = RunDir(Path(run_dir))
     plan = rd.read_plan()
     if table is None:
         table = read_packets(rd.pcaps(), allow_truncated=allow_truncated)
-    return table, follow(table, run_timeline(rd, plan), max_hop_s)
+    return table, follow(table, run_timeline(rd, plan), max_hop_s, capacity)

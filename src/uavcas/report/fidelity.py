@@ -30,7 +30,7 @@ COLUMNS: dict[str, str] = {
     "delay error p50 / p90 / p99 (ms)": "per hop crossing (seen at switch i, then at the next switch j), the measured "
                                         "hop delay minus the model's: the planned propagation delay plus a FIFO queue "
                                         "served at the planned rate. Positive: the emulator was late. Limits: |p50| "
-                                        "0.1 ms, p90 0.2 ms, p99 0.5 ms up to 25 UAVs (1 ms up to 60, 2 ms beyond).",
+                                        "0.1 ms, p90 0.2 ms, p99 0.5 ms, for every swarm size.",
     "lost (packets)": "packets that left a switch towards the next one and never reached it.",
     "queue tail": "of the lost, dropped at the tail of the shaped link's queue because it was full (the port's "
                   "kernel queue-drop counter where the run logged it, else the model's queue at its limit): "
@@ -44,8 +44,9 @@ COLUMNS: dict[str, str] = {
                    "detour, no next switch. Expected in attack runs.",
     "random loss sigma": "the loss rules' drops against the planned loss x frames offered, in binomial standard "
                          "deviations (limit 4).",
-    "rate ratio": "measured / planned rate on saturated links (the model's queue never empty for 200 ms bins), "
-                  "median over bins (limit 1 +- 0.05); blank without a saturated bin.",
+    "rate ratio": "measured / planned rate on saturated links (the model's queue never empty for 200 ms bins, "
+                  "each frame spread over its serialisation time), median over bins (limit 1 +- 0.05); blank "
+                  "without a saturated bin.",
     "window change max (ms)": "longest time a window change took to apply (limit 250 ms).",
     "lateness max (ms)": "latest a scheduled event (window change, attack start or stop) ran (limit 100 ms).",
 }
