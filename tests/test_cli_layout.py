@@ -102,7 +102,6 @@ def test_no_file_writer_in_the_cli():
         assert not found, f"{path.name} writes files itself ({found}): move the writer into the library"
 
 
-
 def test_a_command_whose_dependency_is_missing_fails_in_one_line():
     code = ("import sys\nsys.modules['mlcroissant'] = None  # import mlcroissant -> ImportError\n"
             "from uavcas.cli import main\nsys.argv = ['uavcas', 'publish', '-h']\nmain()")

@@ -75,7 +75,6 @@ def stratified_sample(labels, n: int, seed: int = 0) -> np.ndarray:
 def tsne_embedding(df: pd.DataFrame, n_samples: int = 2000, seed: int = 0) -> pd.DataFrame:
     """2-D t-SNE of the dataset standard's features (signed log, standardised) on a seeded subsample stratified
     by class (`stratified_sample`)."""
-
     sub = df.iloc[stratified_sample(df["label"].astype(str).to_numpy(), n_samples, seed)]
     if len(sub) < 5:
         raise ValueError(f"t-SNE needs at least 5 flows, got {len(sub)}")

@@ -62,7 +62,6 @@ def drop_on(fabric_ns: str, table: str, ports: list[str], victim_ip: str) -> Non
 
 def drop_off(fabric_ns: str, table: str) -> int:
     """Delete the table; returns how many frames it dropped (both rules)."""
-
     dropped = 0
     r = kernel.run(["ip", "netns", "exec", fabric_ns, "nft", "-j", "list", "table", "bridge", table], check=False)
     if r.returncode == 0:
@@ -76,7 +75,6 @@ def drop_off(fabric_ns: str, table: str) -> int:
 
 def switch_ports(index: int) -> list[str]:
     """The victim switch's host port and (by wildcard) every link port it has or will get."""
-
     return [Naming.host_port(index), Naming.link_port(index, 0).rsplit("-", 1)[0] + "-*"]
 
 

@@ -50,7 +50,6 @@ class WorkerResult(BaseModel):
 
 def realize_request(req: WorkerRequest) -> WorkerResult:
     """Plan, check and realise one scenario into `req.out_dir` (in this process; needs root)."""
-
     p = plan(req.config, seed=req.seed, windows=req.windows, window_s=req.window_s, profile=req.profile,
              episodes=req.episodes)
     out = Path(req.out_dir)

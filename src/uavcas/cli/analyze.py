@@ -49,8 +49,6 @@ def diversity_cmd(
 ) -> None:
     """Hellinger and JSD (base 2, bounded) of each class's IATs vs Benign, with CIs and a
     baseline drawn at the class's sample size."""
-
-
     check_output(out, "dir")
     paths = [dataset, *reference]
     frames = [_load(p, view) for p in paths]
@@ -86,7 +84,6 @@ def axes_cmd(
 ) -> None:
     """Internal diversity per configuration axis on benign flows (extreme values), with a
     size-matched baseline; axes confounded with others in this dataset are flagged."""
-
     check_output(out, "dir")
     df = _load(dataset, view)
     try:
@@ -115,7 +112,6 @@ def separability_cmd(
     view: View | None = typer.Option(None, "--view", help=VIEW_HELP),
 ) -> None:
     """Per-class mean/std of IAT, packet rate, packet size, duration; t-SNE and distribution figures."""
-
     check_output(out, "dir")
     df = _load(dataset, view)
     try:

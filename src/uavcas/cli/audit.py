@@ -42,7 +42,6 @@ def audit_cmd(
     links: int = typer.Option(8, "--links", min=0, help="Show this many worst link directions."),
 ) -> None:
     """Audit a run's timing, loss and rate fidelity against its plan; write fidelity.json."""
-
     rd = RunDir(run_dir)
     if not rd.root.is_dir():
         raise fail(f"{run_dir}: not a directory")

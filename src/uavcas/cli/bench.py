@@ -100,8 +100,6 @@ def ids_cmd(
 ) -> None:
     """Train and evaluate the baselines; writes results/summary/splits/confusion CSVs, figures,
     results.md per protocol and leaderboard.csv/md."""
-
-
     check_output(out, "dir")
     protocols = _parse_list(protocol, PROTOCOLS, "--protocol")
     if scaler not in SCALERS:
@@ -150,7 +148,6 @@ def leaderboard_cmd(
     out: Path = typer.Option(..., "--out", help="Output directory for leaderboard.csv and leaderboard.md."),
 ) -> None:
     """One leaderboard (mean ± std over seeds) from several `bench ids` outputs."""
-
     check_output(out, "dir")
     try:
         allr, files = collect_results(results)

@@ -29,7 +29,6 @@ def calibrate_cmd(
                                  help="AFAR team -> mission, e.g. '301=spiral,328=grid' (default: the paper's)."),
 ) -> None:
     """Calibrate the digital twin against real AERPAW measurements (paper sec. 4)."""
-
     if not data.is_dir():
         raise fail(f"--data {data}: not a folder")
     check_output(out, "dir")

@@ -51,7 +51,6 @@ def predict_cmd(
     noise_dbm: float = typer.Option(-95.0, "--noise-dbm", help="Noise floor (dBm)."),
 ) -> None:
     """Evaluate a path-loss model and the link chain on your own geometry."""
-
     check_output(out, "file")
     try:
         prof = load_profile(profile)
@@ -72,8 +71,6 @@ def predict_cmd(
 @app.command("models")
 def models_cmd() -> None:
     """The registered path-loss models: name, standard and version, LOS state, calibration fit."""
-
-
     t = Table(title="path-loss models (uavcas.channel.pathloss)", title_justify="left")
     for col in ("name", "model", "standard", "LOS state", "calibration fit"):
         t.add_column(col, overflow="fold")

@@ -16,7 +16,6 @@ def clean(
     force: bool = typer.Option(False, "--force", help="Also clean a run that is still alive."),
 ) -> None:
     """Remove what crashed emulation runs left: processes, namespaces (with their links and rules), cgroups."""
-
     if os.geteuid() != 0:
         raise fail("clean needs root")
     prefix_or_fail(prefix)

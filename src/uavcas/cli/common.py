@@ -126,7 +126,6 @@ def check_output(path: Path, kind: Literal["file", "dir"], option: str = "--out"
     rules). A file's folder must exist: uavcas creates no folder the user did not name (`plan --out
     /no/such/dir/plan.json` is refused). An output directory is named as one: it is created, like
     `mkdir -p`, with any missing parents, once the command has work to write."""
-
     try:
         (check_target if kind == "file" else check_out_dir)(path)
     except UnsafeOutput as e:
@@ -139,7 +138,6 @@ def check_output(path: Path, kind: Literal["file", "dir"], option: str = "--out"
 
 def dataset_errors() -> tuple[type[Exception], ...]:
     """What reading captures, runs and datasets raises on bad input: each is a one-line error."""
-
     return (CaptureError, DatasetError, LabelError, CsvFormatError, ExternalFormatError, ValueError, OSError)
 
 
@@ -158,7 +156,6 @@ def path_fail(path: Path, error: Exception) -> "typer.Exit":
 
 def plan_or_fail(config: str, seed: int, windows: int, window_s: float, profile: str | None, episodes: int = 1):
     """The plan of a scenario, or a one-line error naming the bad field / profile (exit 2)."""
-
     try:
         p = make_plan(config, seed=seed, windows=windows, window_s=window_s, profile=profile, episodes=episodes)
         if p.config != config:

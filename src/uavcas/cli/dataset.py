@@ -26,7 +26,6 @@ def synth_cmd(
 ) -> None:
     """Synthetic flows with a known structure (floods separable, Wormhole identical to Benign),
     built by the real flow and feature code; for trying `analyze` and `bench` without root."""
-
     check_output(out, "dir")
     if out.exists() and (not out.is_dir() or any(out.iterdir())):
         raise fail(f"--out {out}: exists and is not an empty directory")

@@ -31,7 +31,6 @@ def doctor(
                                                          help="auto (KVM if it boots, else TCG), kvm or tcg."),
 ) -> None:
     """Report kernel features, the chosen shaper and tools; measure a two-hop shaped path."""
-
     if json_out is not None:
         check_output(json_out, "file", "--json")
     prefix_or_fail(prefix)

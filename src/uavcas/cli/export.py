@@ -34,7 +34,6 @@ def export_cmd(
     """Export a dataset: in the authors' released layout (one stat and one ts CSV, one row per host
     pair: 5-tuple flows are merged into host pairs from their packet sequences), or as one plain
     CSV row per flow for CICIDS2017-style tooling (--format csv)."""
-
     if fmt == "csv" and (embed_config or include_flags):
         raise fail(f"{'--embed-config' if embed_config else '--include-flags'}: applies to --format uavcas-csv only")
     check_output(out, "file" if fmt == "csv" else "dir")

@@ -65,7 +65,6 @@ def flows_cmd(
                                            "(default 60)."),
 ) -> None:
     """Flows of one capture (streamed, bounded memory) or of several capture points (de-duplicated)."""
-
     if fmt == "parquet" and out is None:
         raise fail("--format parquet needs --out FILE")
     if out is not None:

@@ -23,7 +23,6 @@ def import_cmd(
     out: Path = typer.Option(..., "--out", help="New dataset directory to create."),
 ) -> None:
     """Import the authors' CSV layout (theirs as released, or ours) into a dataset directory."""
-
     check_output(out, "dir")
     try:
         card, imp = import_layout(src, out)

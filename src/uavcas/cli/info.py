@@ -23,7 +23,6 @@ def info_cmd(
                                                          "and meaning (tab-separated) instead."),
 ) -> None:
     """Class counts, feature standard, views, fidelity and the runs of a dataset (or its columns)."""
-
     try:
         card = read_card(dataset_dir)
     except dataset_errors() as exc:
@@ -61,8 +60,6 @@ def info_cmd(
 
 def _print_columns(dataset_dir: Path, card: dict) -> None:
     """Every column of flows.parquet, from the data dictionary: name, dtype, unit, meaning (TSV)."""
-
-
     path = Path(dataset_dir) / "flows.parquet"
     if not path.is_file():
         raise fail(f"{dataset_dir}: no flows.parquet beside dataset.json")

@@ -29,7 +29,6 @@ def mavlink_cmd(
     time, addresses, header, fields (JSON and position columns in the message's units), CRC check,
     a position report's offset from the plan's track (claimed minus true, metres east/north/up: a
     spoofed GPS's drift) and the packet's effect and family from the ground truth."""
-
     if out is not None and out.suffix.lower() not in TABLE_SUFFIXES:
         raise fail(f"--out: {out} must end in {' or '.join(TABLE_SUFFIXES)}")
     if out is not None:

@@ -18,7 +18,6 @@ def report_cmd(
                              help="Directory for index.html, the one self-contained file written (figures inlined)."),
 ) -> None:
     """Write a self-contained HTML report of a dataset: summary, runs, topology, fidelity, distributions, card."""
-
     check_output(out, "dir")
     try:
         index = write_report(dataset, out)

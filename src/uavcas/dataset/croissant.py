@@ -59,7 +59,6 @@ class DatasetInfo:
 
 def _data_type(t: pa.DataType):
     """(Croissant data type, is_array) of an Arrow type."""
-
     if pa.types.is_list(t) or pa.types.is_large_list(t):
         return _data_type(t.value_type)[0], True
     exact = {pa.int8(): mlc.DataType.INT8, pa.int16(): mlc.DataType.INT16, pa.int32(): mlc.DataType.INT32,
@@ -86,7 +85,6 @@ def metadata_json(info: DatasetInfo, files: list[FileEntry], schema: pa.Schema, 
                   episodes: bool) -> dict:
     """The Croissant JSON-LD of the published directory; raises CroissantError if mlcroissant
     finds an error while building it."""
-
     ctx = mlc.Context(conforms_to=CROISSANT_VERSION)
     shards = [f for f in files if f.path.startswith(f"{SHARDS}/")]
     distribution: list = [mlc.FileObject(ctx=ctx, id=f.path, name=f.path, content_url=f.path,
@@ -121,7 +119,6 @@ def metadata_json(info: DatasetInfo, files: list[FileEntry], schema: pa.Schema, 
 def validate(path: Path) -> list[str]:
     """Read the Croissant file at `path` back with mlcroissant (as a user's loader will): its
     warnings, sorted; CroissantError on an error."""
-
     try:
         ds = mlc.Dataset(jsonld=path)
     except mlc.ValidationError as e:

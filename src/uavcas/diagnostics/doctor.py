@@ -148,8 +148,6 @@ def run_doctor(prefix: str | None = None, measure: bool = True, backend: str | N
 def main(argv: list[str] | None = None) -> None:
     """`python -m uavcas.diagnostics.doctor --json FILE`: the measurement alone, as JSON (what the
     VM guest runs: the CLI would import every sub-command on a slow emulated CPU)."""
-
-
     ap = argparse.ArgumentParser(description=main.__doc__.splitlines()[0])
     ap.add_argument("--json", type=Path, required=True)
     ap.add_argument("--profile", choices=sorted(PROFILES), default=NATIVE.name)

@@ -147,7 +147,6 @@ def realize(plan: "Plan", out_dir: str | Path, options: RunOptions = RunOptions(
 
 def _audit(st: _State) -> None:
     """The run's fidelity audit (default tolerances for its swarm); a failure to audit is recorded."""
-
     try:
         write_fidelity(st.out)
     except Exception as e:  # the run itself succeeded: keep it, and say the audit could not be made

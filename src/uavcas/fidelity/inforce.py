@@ -46,7 +46,6 @@ class PortShaping:
     def queue_limit_pkts(self, k: np.ndarray, netem: bool = False) -> np.ndarray:
         """The queue limit of settings k, as the shaper sized it from the rate (`emulation.shaping`):
         the pfifo's, or with netem, netem's own (it also holds the frames in their delay)."""
-
         if netem:
             return np.array([netem_limit_pkts(float(r), float(d)) for r, d in zip(self.rate_mbps[k], self.delay_ms[k])],
                             dtype=np.int64)

@@ -139,7 +139,6 @@ class Timeline:
         return now, nxt
 
 
-
 @dataclass(frozen=True)
 class Losses:
     """Packets that left a switch and never reached the next one (one entry per lost packet)."""

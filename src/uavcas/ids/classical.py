@@ -89,7 +89,6 @@ class LightGBMClassifier(EarlyStoppingClassifier):
     def _boost(self, X, yi, X_val, yv, init_score=None, val_init_score=None):
         """One LightGBM model, early-stopped on (X_val, yv) when given; boosting starts from
         `init_score` (raw scores, and `val_init_score` on the validation rows) when given."""
-
         params = self._lgbm_params()
         model = lgb.LGBMClassifier(**params)
         kw = {} if init_score is None else {"init_score": init_score}

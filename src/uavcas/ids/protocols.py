@@ -307,7 +307,6 @@ def _fit_one(res: ProtocolResult, task: Task, sp: Split, name: str, seed: int, c
 def _importance(est, tf, task: Task, rows: np.ndarray, seed: int, model: str, cfg: BenchConfig,
                 features: list[str]) -> list[Importance]:
     """Drop in macro-F1 (declared classes) when one feature's test values are shuffled."""
-
     if len(rows) > cfg.importance_rows:
         rows = np.sort(seeding.generator(seed).choice(rows, cfg.importance_rows, replace=False))
     def scorer(model, x, y) -> float:  # a plain callable: make_scorer assumes pos_label=1 for two classes

@@ -60,7 +60,6 @@ def confusion_long(res: ProtocolResult) -> pd.DataFrame:
 
 def confusion_figure(labels: list[str], cm: np.ndarray, title: str, path: Path) -> Path:
     """Counts in each cell, colour = share of the true class's flows."""
-
     n = len(labels)
     size = max(4.0, 0.45 * n + 2)
     fig, ax = plt.subplots(figsize=(size + 1, size))

@@ -101,7 +101,6 @@ def parse_counters(nft_json: str) -> dict[str, int]:
 def quiet_after_s(hops: Sequence[tuple[float, float]]) -> float:
     """Longest time a packet can spend on a path of (delay_ms, rate_mbps) hops: each hop's delay
     plus a full queue drained at its rate (the queues are sized by `shaping.queue_limit_pkts`)."""
-
     return QUIET_SLACK_S + sum(d / 1000 + queue_limit_pkts(r) * 1514 * 8 / (r * 1e6) for d, r in hops)
 
 

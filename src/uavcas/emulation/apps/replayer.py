@@ -101,7 +101,6 @@ def new_seq(orig: int, k: int, mode: str, rng: np.random.Generator) -> int:
 
 def mutate(frame: bytes, k: int, mode: str, ttl_dec: int, rng: np.random.Generator) -> tuple[bytes, int | None]:
     """The injected frame: TTL - ttl_dec, TCP seq per mode, checksums recomputed (scapy)."""
-
     pkt = Ether(frame)
     ip = pkt[IP]
     ip.ttl = max(1, ip.ttl - ttl_dec)

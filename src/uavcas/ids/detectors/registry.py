@@ -59,7 +59,6 @@ def make_model(name: str, random_state: int = 0, epochs: int = 50, n_threads: in
                device: str = "auto") -> BaseEstimator:
     """`baseline(name)` with the benchmark's common knobs mapped to each detector's own parameter
     (`device` reaches the torch models only: the others run on the CPU)."""
-
     spec = detector(name)
     params: dict[str, object] = {}
     if spec.seed_param:

@@ -66,7 +66,6 @@ def timestamp_now() -> int:
 def new_signing_state(spec: SigningSpec):
     """A pymavlink `MAVLinkSigning` holding the key: signs what its MAVLink object sends and
     rejects unsigned or wrongly signed frames it parses (shareable between parsers)."""
-
     state = common.MAVLinkSigning()
     state.secret_key = spec.key
     state.link_id = spec.link_id
