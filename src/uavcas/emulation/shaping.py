@@ -36,6 +36,7 @@ from .counters import NFT_TABLE, PortCounters, read_link_drops, read_nft_counter
 
 LOSS_SCALE = 1_000_000  # loss resolution: 1e-6
 QUEUE_MS = 50.0  # pfifo sized to ~50 ms at the link rate: no bufferbloat, room for TCP
+MTU_FRAME_B = 1514  # the largest Ethernet frame the fabric carries (1500 B MTU): queues and HTB quanta in its units
 DEFAULT_RATE_MBPS = 1000.0
 
 
@@ -92,7 +93,13 @@ def shaping_jsonl(records: Iterable[ShapingRecord]) -> str:
 
 
 def queue_limit_pkts(rate_mbps: float) -> int:
-    return max(16, min(2000, math.ceil(rate_mbps * 1e6 * QUEUE_MS / 1000 / (1514 * 8))))
+    return max(16, min(2000, math.ceil(rate_mbps * 1e6 * QUEUE_MS / 1000 / (MTU_FRAME_B * 8))))
+
+
+def full_queue_s(rate_mbps: float) -> float:
+    """How long a full queue (`queue_limit_pkts` MTU frames) takes to drain at `rate_mbps`: the
+    longest a frame can wait in a port's queue."""
+    return queue_limit_pkts(rate_mbps) * MTU_FRAME_B * 8 / (rate_mbps * 1e6)
 
 
 def rate_bit(rate_mbps: float) -> int:
@@ -102,12 +109,12 @@ def rate_bit(rate_mbps: float) -> int:
 def htb_init_lines(port: str, rate_mbps: float = DEFAULT_RATE_MBPS) -> list[str]:
     r = rate_bit(rate_mbps)
     return [f"qdisc add dev {port} root handle 1: htb default 1",
-            f"class add dev {port} parent 1: classid 1:1 htb rate {r}bit ceil {r}bit quantum 1514"]
+            f"class add dev {port} parent 1: classid 1:1 htb rate {r}bit ceil {r}bit quantum {MTU_FRAME_B}"]
 
 
 def htb_change_line(port: str, rate_mbps: float) -> str:
     r = rate_bit(rate_mbps)
-    return f"class change dev {port} parent 1: classid 1:1 htb rate {r}bit ceil {r}bit quantum 1514"
+    return f"class change dev {port} parent 1: classid 1:1 htb rate {r}bit ceil {r}bit quantum {MTU_FRAME_B}"
 
 
 def pfifo_line(verb: str, port: str, rate_mbps: float) -> str:
@@ -116,7 +123,7 @@ def pfifo_line(verb: str, port: str, rate_mbps: float) -> str:
 
 def netem_limit_pkts(rate_mbps: float, delay_ms: float) -> int:
     """netem's limit also holds the packets "on the wire" during the delay: add rate x delay."""
-    return queue_limit_pkts(rate_mbps) + math.ceil(rate_mbps * 1e6 * delay_ms / 1000 / (1514 * 8))
+    return queue_limit_pkts(rate_mbps) + math.ceil(rate_mbps * 1e6 * delay_ms / 1000 / (MTU_FRAME_B * 8))
 
 
 def netem_line(verb: str, port: str, delay_ms: float, loss: float, rate_mbps: float) -> str:

@@ -30,8 +30,8 @@ from pathlib import Path
 
 import numpy as np
 
-from uavcas.flows.follow import Followed, Timeline, follow_run, node_of_point, run_timeline
-from uavcas.flows.packets import PacketTable
+from uavcas.flows.follow import Followed, Timeline, follow, node_of_point, run_timeline
+from uavcas.flows.packets import PacketTable, read_packets
 from uavcas.rundir import RunDir, RunInfo
 from uavcas.twin.model import Plan
 
@@ -112,8 +112,10 @@ def audit(run_dir: str | Path, tolerances: Tolerances | None = None, table: Pack
         tolerances = Tolerances()
     timeline = run_timeline(rd, plan)
     shaping = port_shaping(plan, timeline, shape_spans(rd.read_attacks()))
+    if table is None:
+        table = read_packets(rd.pcaps(), allow_truncated=True)
     # identical copies are paired knowing the rates each port held (a jammer's included)
-    table, fol = follow_run(rd.root, tolerances.max_hop_s, table=table, capacity=PortCapacity(shaping))
+    fol = follow(table, timeline, tolerances.max_hop_s, PortCapacity(shaping))
     return _Audit(plan, info, rd, table, fol, timeline, shaping, tolerances).report()
 
 

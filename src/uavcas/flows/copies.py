@@ -38,10 +38,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from uavcas.emulation.shaping import queue_limit_pkts
+from uavcas.emulation.shaping import MTU_FRAME_B, full_queue_s
 from uavcas.twin.model import Plan
 
-MTU_FRAME_B = 1514  # the largest frame a queue holds: its limit in packets, in time (emulation.shaping)
 EARLY_S = 0.001  # a step may be this much shorter than the planned delay (pcap stamps, timer slack)
 LATE_S = 0.005  # ... and this much longer than planned delay + a full queue (scheduling lateness)
 # a queue wait that the port's traffic cannot account for by more than this (the p99 delay-error
@@ -64,8 +63,8 @@ class LinkBounds:
 
     @property
     def wait_max_s(self) -> float:
-        """A full queue (`queue_limit_pkts` MTU frames) drained at the slowest rate."""
-        return queue_limit_pkts(self.rate_min_bps / 1e6) * MTU_FRAME_B * 8.0 / self.rate_min_bps
+        """A full queue drained at the slowest rate."""
+        return full_queue_s(self.rate_min_bps / 1e6)
 
     def admits(self, step_s: float) -> bool:
         return self.delay_min_s - EARLY_S <= step_s <= self.delay_max_s + self.wait_max_s + LATE_S

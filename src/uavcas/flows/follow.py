@@ -317,11 +317,11 @@ def run_timeline(rd: "RunDir", plan: "Plan") -> Timeline:
 
 
 def follow_run(run_dir: str | Path, max_hop_s: float = MAX_HOP_S, table: PacketTable | None = None,
-               allow_truncated: bool = True, capacity: CapacityFn | None = None) -> tuple[PacketTable, Followed]:
+               allow_truncated: bool = True) -> tuple[PacketTable, Followed]:
     """Read a run directory's captures (unless `table` is given) and follow its packets along
-    the forwarding the run held (`run_timeline`); `capacity` as `follow`'s."""
+    the forwarding the run held (`run_timeline`)."""
     rd = RunDir(Path(run_dir))
     plan = rd.read_plan()
     if table is None:
         table = read_packets(rd.pcaps(), allow_truncated=allow_truncated)
-    return table, follow(table, run_timeline(rd, plan), max_hop_s, capacity)
+    return table, follow(table, run_timeline(rd, plan), max_hop_s)

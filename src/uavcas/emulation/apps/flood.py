@@ -41,7 +41,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-from uavcas.emulation.shaping import queue_limit_pkts
+from uavcas.emulation.shaping import full_queue_s
 
 from .procs import Proc, spawn, wait_for
 
@@ -100,8 +100,8 @@ def parse_counters(nft_json: str) -> dict[str, int]:
 
 def quiet_after_s(hops: Sequence[tuple[float, float]]) -> float:
     """Longest time a packet can spend on a path of (delay_ms, rate_mbps) hops: each hop's delay
-    plus a full queue drained at its rate (the queues are sized by `shaping.queue_limit_pkts`)."""
-    return QUIET_SLACK_S + sum(d / 1000 + queue_limit_pkts(r) * 1514 * 8 / (r * 1e6) for d, r in hops)
+    plus a full queue drained at its rate (`shaping.full_queue_s`)."""
+    return QUIET_SLACK_S + sum(d / 1000 + full_queue_s(r) for d, r in hops)
 
 
 @dataclass
