@@ -10,18 +10,14 @@ failed try stays beside the run (`OUT.try1`) for reading, and its figures go to 
 
 from __future__ import annotations
 
-import json
 import subprocess
 import sys
 import warnings
 from pathlib import Path
 
+from uavcas.rundir import RunDir
+
 TRIES = 2
-
-
-def verdict(run_dir: Path) -> dict | None:
-    """run.json's fidelity summary (None: the run was not audited)."""
-    return json.loads((run_dir / "run.json").read_text()).get("fidelity")
 
 
 def run_audited(args: list[str], out: Path, timeout_s: float, tries: int = TRIES) -> Path:
@@ -31,11 +27,11 @@ def run_audited(args: list[str], out: Path, timeout_s: float, tries: int = TRIES
         r = subprocess.run([sys.executable, "-m", "uavcas.cli", "run", *args, "--out", str(out)], capture_output=True,
                            text=True, timeout=timeout_s)
         assert r.returncode == 0, f"{' '.join(args)}: {(r.stdout + r.stderr)[-2000:]}"
-        fid = verdict(out)
-        if k == tries or fid is None or fid.get("verdict") == "pass":
+        fid = RunDir(out).read_info().fidelity
+        if k == tries or fid is None or fid.verdict == "pass":
             return out
-        warnings.warn(f"{' '.join(args)}: try {k} failed its audit ({fid.get('failed')}; per-hop delay error "
-                      f"p50/p90/p99 {fid.get('delay_error_p50_ms')}/{fid.get('delay_error_p90_ms')}/"
-                      f"{fid.get('delay_error_p99_ms')} ms), run again", stacklevel=2)
+        warnings.warn(f"{' '.join(args)}: try {k} failed its audit ({fid.failed}; per-hop delay error "
+                      f"p50/p90/p99 {fid.delay_error_p50_ms}/{fid.delay_error_p90_ms}/{fid.delay_error_p99_ms} ms), "
+                      "run again", stacklevel=2)
         out.rename(out.with_name(f"{out.name}.try{k}"))
     return out

@@ -16,6 +16,8 @@ from pathlib import Path
 
 import dpkt
 
+from uavcas.rundir import RunDir
+
 
 @dataclass
 class Pkt:
@@ -158,13 +160,11 @@ def wait_started(out_dir: Path, timeout_s: float = 120.0) -> float:
     Set-up (namespaces, the delay stage, MAVLink endpoints) takes from 2 s idle to over 10 s on a
     loaded 2-core box, so a test that must interrupt a run *after* traffic started waits for this,
     not for a fixed sleep."""
+    rd = RunDir(out_dir)
     deadline = time.monotonic() + timeout_s
     while time.monotonic() < deadline:
-        try:
-            t0 = json.loads((out_dir / ".uavcas-run").read_text()).get("t0_unix")
-        except (FileNotFoundError, ValueError):
-            t0 = None
-        if t0 is not None:
-            return float(t0)
+        owner = rd.read_owner()  # written atomically: absent or whole
+        if owner is not None and owner.t0_unix is not None:
+            return owner.t0_unix
         time.sleep(0.1)
     raise AssertionError(f"{out_dir}: the run never reached t = 0")
