@@ -13,7 +13,7 @@ from uavcas.dataset.read import FORMATS, load_any
 from uavcas.ids.detectors import KIND_NEEDS, KINDS, baselines, detector, detectors, names
 from uavcas.ids.protocols import PROTOCOLS, SCALERS, BenchConfig, execute, prepare
 from uavcas.ids.results import ResultsError, collect_results, results_frame, write_leaderboard, write_results
-from uavcas.ids.torch_estimator import DL_MISSING
+from uavcas.ids.torch_estimator import DL_MISSING, import_torch
 from uavcas.vocabulary import TORCH_DEVICES
 
 from .common import View, check_output, dataset_argument, err_console, fail, one_of, path_fail
@@ -110,7 +110,7 @@ def ids_cmd(
         chosen = _parse_list(models, names(), "--models")
     if any(detector(m).needs_torch for m in chosen):
         try:
-            import torch  # noqa: F401  (deferred: the optional `dl` extra, checked when a deep detector is chosen)
+            import_torch()  # the optional `dl` extra, checked when a deep detector is chosen
         except ImportError:
             raise fail(DL_MISSING) from None
     feats = None
