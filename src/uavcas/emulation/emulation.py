@@ -218,8 +218,7 @@ class Emulation:
             down = []
         n_up, n_down = len(active - self._active), len(self._active - active)
         self.forwarding = self.plan_forwarding(links, self._routes, self._wormholes)
-        want = self.fabric.desired_fdb(self.forwarding)
-        fdb = self.fabric.fdb_lines(want)
+        want, fdb = self.fabric.plan_update(self.forwarding)
         t2 = time.perf_counter()
         stopping = self._stopping_detours()
         if stopping:

@@ -22,6 +22,7 @@ PREFIX_RE = re.compile(r"^[a-z][a-z0-9]{1,11}$")
 NODE_RE = re.compile(r"^[a-z][a-z0-9_]{0,30}$")
 RUN_ROOT = Path(os.environ.get("UAVCAS_RUN_ROOT", "/run/uavcas"))
 FABRIC_SUFFIX = "fab"
+LINK_PORT_RE = re.compile(r"l(\d+)-(\d+)")
 
 
 def new_prefix() -> str:
@@ -69,6 +70,12 @@ class Naming:
     def link_port(i: int, j: int) -> str:
         """Port on switch i towards switch j. Its egress carries (and shapes) direction i -> j."""
         return _ifname(f"l{i}-{j}")
+
+    @staticmethod
+    def link_peer(port: str) -> int | None:
+        """The switch a link port leads to (`link_port(i, j)` -> j); None for any other port."""
+        m = LINK_PORT_RE.fullmatch(port)
+        return int(m.group(2)) if m else None
 
     HOST_IF = "eth0"
 

@@ -289,8 +289,8 @@ class _Background:
 
 
 def _prepare_next(st: _State, opt: RunOptions, upcoming: list[_Event]) -> None:
-    """Between events: raise the next window's new links and compute its forwarding, so that the
-    change itself neither waits for them nor drops frames on links not yet operational.
+    """Between events: raise the next window's new links and compute its forwarding and FDB batch,
+    so that the change itself neither waits for them nor drops frames on links not yet operational.
 
     Links that left the plan stay up, with no forwarding entry pointing at them (no frame
     reaches them): taking a port down costs ~30 ms under load (an RCU grace period each), which
@@ -303,7 +303,8 @@ def _prepare_next(st: _State, opt: RunOptions, upcoming: list[_Event]) -> None:
     until = st.t0 + upcoming[0].t_s - PREPARE_MARGIN_S  # never delay the next event
     t = time.time()
     with urgent(CONTROL_RT_PRIORITY if opt.urgent else 0):
-        st.emu.plan_forwarding(w.links, [r.hops for r in w.routes], st.executor.wormholes_for(w))
+        fwd = st.emu.plan_forwarding(w.links, [r.hops for r in w.routes], st.executor.wormholes_for(w))
+        st.emu.fabric.plan_update(fwd)
         raised, ready = st.emu.prepare_links(w.links, wait_s=max(0.0, until - time.time()))
     if not ready and upcoming[0] is nxt:
         st.wind_down_errors.append(f"window {nxt.obj}: links not operational when it began")
