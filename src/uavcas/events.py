@@ -67,6 +67,10 @@ class AttackStop(_Record):
     shaping_until_unix: float | None = None  # jamming: when the unjammed shaping was back
     commands_sent: int | None = None  # mavlink_inject: forged commands that left the attackers
     commands_acked: int | None = None  # mavlink_inject: COMMAND_ACKs the attackers received
+    # floods and mavlink_inject: t_unix is when the last packet left an attacker; this is when it
+    # can have crossed the network (a bound: each hop's delay plus a full queue), so that every
+    # observation of the attack's packets lies inside [start, crossed_unix)
+    crossed_unix: float | None = None
 
 
 class AttackRate(_Record):

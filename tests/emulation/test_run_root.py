@@ -163,6 +163,7 @@ def test_ddos_from_two_attackers_at_the_nominal_rate(tmp_path):
     art = realize(p, tmp_path / "r")
     assert art.exit_status == 0, art.exit_reason
     start, stop, rec = rc.windows(art.out_dir)["ddos-0"]
+    until = rc.crossed(art.out_dir)["ddos-0"]  # the last SYN left at stop; it may cross until then
     victim = rc.read_pcap(art.out_dir / "pcap" / "s-uav0.pcap")
     rates = {r["attacker"]: r for r in rc.attack_log(art.out_dir) if r["event"] == "rate"}
     assert sorted(rates) == ["uav1", "uav2"] and all(r["restarts"] == 0 for r in rates.values())
@@ -176,7 +177,9 @@ def test_ddos_from_two_attackers_at_the_nominal_rate(tmp_path):
         span = own[-1].t - own[0].t
         assert 900 <= (len(own) - 1) / span <= 1100, (name, (len(own) - 1) / span)
         for point, pk in pcaps.items():  # every SYN inside the logged window, at every switch
-            assert rc.flood_check(pk, ip, v_ip, start, stop).outside == 0, (name, point)
+            assert rc.flood_check(pk, ip, v_ip, start, stop, until=until).outside == 0, (name, point)
+        sending = rc.flood_check(pcaps[f"s-{name}"], ip, v_ip, start, stop)  # the logged window is the sending
+        assert 980 <= sending.pps <= 1020 and sending.inside >= len(own) - 1, (name, sending)
         fc = rc.flood_check(victim, ip, v_ip, start, stop)
         assert 900 <= fc.pps <= 1100, (ip, fc.pps)
     assert art.run_info.capture_drops == 0
@@ -194,7 +197,8 @@ def test_collaborative_blackhole_plus_dos_in_one_run(tmp_path):
     (bs, be, _), (ds, de, drec) = w["blackhole-0"], w["dos-1"]
     bs0 = rc.read_pcap(art.out_dir / "pcap" / "s-bs0.pcap")
     victim_ip = drec["victim_ips"][0]
-    fc = rc.flood_check(rc.read_pcap(art.out_dir / "pcap" / "s-uav1.pcap"), drec["attacker_ips"][0], victim_ip, ds, de)
+    fc = rc.flood_check(rc.read_pcap(art.out_dir / "pcap" / "s-uav1.pcap"), drec["attacker_ips"][0], victim_ip, ds, de,
+                        until=rc.crossed(art.out_dir)["dos-1"])
     assert fc.outside == 0 and 850 <= fc.pps <= 1150
     from_victim = [x.t for x in bs0 if x.src == victim_ip]
     # blackholed at the victim's switch (stop is logged just after the table is gone: a few ms)
@@ -222,7 +226,7 @@ def test_done_when_dos_run_via_cli(tmp_path):
     start, stop, rec = rc.windows(out)["dos-0"]
     attacker = rec["attackers"][0]
     pk = rc.read_pcap(out / "pcap" / f"s-{attacker}.pcap")
-    fc = rc.flood_check(pk, rec["attacker_ips"][0], rec["victim_ips"][0], start, stop)
+    fc = rc.flood_check(pk, rec["attacker_ips"][0], rec["victim_ips"][0], start, stop, until=rc.crossed(out)["dos-0"])
     assert fc.outside == 0 and 900 <= fc.pps <= 1100, fc.pps
     assert min(fc.per_second[1:-1]) >= 800  # steady, not bursty
     for k, u in enumerate(u for u in ips if u.startswith("uav")):

@@ -4,6 +4,7 @@ detours, channel losses; the purity threshold, the views and the paper option.""
 from __future__ import annotations
 
 import json
+import shutil
 
 import pytest
 
@@ -40,6 +41,29 @@ def test_flood_flows_are_dos_only_inside_window(synth_run_dir):
     assert outside.src_port.nunique() == 2 and len(outside) == 2
     assert (outside.label == "Benign").all() and (outside.label_source == "none").all()
     assert not df[(df.src_ip == IPS["bs0"])].label_dos.any()
+
+
+def test_a_flood_stop_with_syns_still_crossing_keeps_them_flood(synth_run_dir, tmp_path):
+    """A flood's stop is when its gates closed; `crossed_unix` is when its last SYN can have crossed
+    the network (issue 28, item 5). SYNs captured in between left before the stop: still flood."""
+    run = tmp_path / "run"
+    shutil.copytree(synth_run_dir, run)
+    log = run / "attacks.jsonl"
+    records = [json.loads(x) for x in log.read_text().splitlines()]
+    t_closed = T0 + DOS_WINDOW[0] + 0.1 + 0.19 * (N_FLOOD // 2) - 0.05  # half the SYNs captured after it
+
+    def with_stop(crossed):
+        for r in records:
+            if r["event"] == "stop" and r["attack_id"] == "dos-0":
+                r["t_unix"], r["crossed_unix"] = t_closed, crossed
+        log.write_text("".join(json.dumps(r) + "\n" for r in records))
+        df = _labelled(run)
+        return df[(df.src_ip == IPS["uav1"]) & (df.dst_ip == IPS["uav0"]) & (df.label == "DoS")]
+
+    assert len(with_stop(T0 + DOS_WINDOW[1])) == N_FLOOD
+    assert len(with_stop(None)) == N_FLOOD // 2  # without it, the crossing half would be Benign
+    window = read_attack_log(log).of_family("dos")[0]
+    assert window.stop_unix == t_closed and window.observed_until_unix == t_closed
 
 
 def test_replay_blackhole_and_channel_loss(synth_run_dir):
@@ -137,8 +161,6 @@ def test_plan_fallback_and_errors(tmp_path):
 
 
 def test_wormhole_detour_and_ddos(synth_run_dir, tmp_path):
-    import shutil
-
     run = tmp_path / "run"
     shutil.copytree(synth_run_dir, run)
     recs = [r.model_copy(update={"family": "ddos"}) if r.family == "dos" else r for r in RunDir(run).read_attacks()]

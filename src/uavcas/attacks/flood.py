@@ -6,10 +6,12 @@
 - executor: one `emulation.apps.flood.Flood` per attacker: one hping3 (-S to the victim's
   HTTP port) for the whole attack, started before t0 behind a closed gate and paced from
   outside at the nominal rate (see that module); the start is logged when the gates are open
-  and before the first SYN, the stop once hping3 is stopped and its last SYN can have crossed
-  the network; at stop one `rate` record per attacker with the SYNs that left it;
+  and before the first SYN, the stop when the gates closed (no SYN leaves after it), with
+  `crossed_unix`, when its last SYN can have crossed the network; at stop one `rate` record per
+  attacker with the SYNs that left it. [start, stop) is thus when the attack sent: its rate over
+  the logged window is its sending rate (issue 28, item 5);
 - truth (effect `flood`, label source "flood-packets"): a TCP packet with SYN set and ACK clear
-  from an attacker IP to a victim IP captured inside [start, stop) of the attack (packet-exact:
+  from an attacker IP to a victim IP captured inside [start, crossed) of the attack (packet-exact:
   the same host pair outside the window, or the victim's answering SYN-ACKs, are not flood);
 - provoked (effect `provoked` with this family): what exists only because of a flood SYN,
   matched to that SYN packet to packet (`attacks.answers`), within ANSWER_WITHIN_S after it and
@@ -127,14 +129,14 @@ class _Flood(AttackFamily):
             # no SYN left an attacker after t_closed; the last ones may still be crossing the network
             quiet = max((quiet_after_s(path_hops(ex, x, v)) for x in attack.attackers for v in attack.victims),
                         default=0.0)
-            t = max(ex.now(), t_closed + quiet)
             for r in results:
                 ex.log(AttackRate(attack_id=attack.attack_id, family=attack.family, attacker=r.attacker,
                                   measured_pps=round(r.measured_pps, 2), nominal_pps=r.nominal_pps,
                                   hping_interval_us=r.interval_us, syn_count=r.syn_count,
                                   seconds=round(r.seconds, 4), restarts=0, intervals_us=[r.interval_us],
-                                  victim_ip=r.victim_ip, t_unix=t))
-            return {"t_unix": t, "syn_count": sum(r.syn_count for r in results)}
+                                  victim_ip=r.victim_ip, t_unix=t_closed))
+            return {"t_unix": t_closed, "crossed_unix": t_closed + quiet,
+                    "syn_count": sum(r.syn_count for r in results)}
 
         return finish
 

@@ -17,15 +17,15 @@
   port to the autopilot's fixed port (`apps.mavlink.specs.UAV_PORT`). The start is logged
   before the go file is written (no frame leaves before it); `halt` signals the injector, whose
   handler exits at once (after the frame being sent, if any); the stop is logged, off the
-  schedule's thread, once it has exited and its last frame can have crossed the network (the
-  flood's `quiet_after_s` over the attacker -> victim path), with the frames sent and the
-  COMMAND_ACKs received. The victim's autopilot
+  schedule's thread, at the time it had exited, with `crossed_unix` when its last frame can have
+  crossed the network (the flood's `quiet_after_s` over the attacker -> victim path), the frames
+  sent and the COMMAND_ACKs received. The victim's autopilot
   (`apps.mavlink.commands`) accepts and acknowledges RTL / LAND (its HEARTBEAT's custom_mode
   becomes 6 / 9) and DO_CHANGE_SPEED, unless the run signs MAVLink (`--mavlink-signing`,
   `apps.mavlink.signing`): then it drops the unsigned frames unanswered;
 - truth (effect `mavlink_inject`, label source "mavlink-injections"): a UDP packet from an
-  attacker's IP to a victim's IP and the autopilot's MAVLink port, captured inside [start, stop)
-  of the attack (every observation of its transmission). Benign MAVLink flows between a UAV and
+  attacker's IP to a victim's IP and the autopilot's MAVLink port, captured inside
+  [start, crossed) of the attack (every observation of its transmission). Benign MAVLink flows between a UAV and
   its BS only: no benign UAV sends to another UAV's MAVLink port, so the header facts and the
   logged window single out the forged frames, whether the victim accepts them or not;
 - provoked (effect `provoked` with this family): what exists only because of a forged frame,
@@ -185,7 +185,7 @@ class MavlinkInject(AttackFamily):
             # no frame left an attacker after t_closed; the last ones may still be crossing the network
             quiet = max((quiet_after_s(path_hops(ex, x, v)) for x in attack.attackers for v in attack.victims),
                         default=0.0)
-            return {"t_unix": max(ex.now(), t_closed + quiet), "commands_sent": sum(c[0] for c in counts),
+            return {"t_unix": t_closed, "crossed_unix": t_closed + quiet, "commands_sent": sum(c[0] for c in counts),
                     "commands_acked": sum(c[1] for c in counts)}
 
         return finish

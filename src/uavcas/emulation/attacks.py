@@ -11,7 +11,8 @@ Times: a `start` record's t_unix is taken just *before* the action and a `stop` 
 may return its own `t_unix` instead: a family whose effect is a rule in force (the blackhole's
 drop table) the moment the rule was installed and the moment just before it was removed, so
 [start, stop) is exactly when the rule held; a flood a later start (when its first packet could
-go) and a later stop (when its last packet can have crossed the network).
+go) and an earlier stop (when its last packet left), with `crossed_unix` on the stop record for
+when that packet can have crossed the network: its packets are observed inside [start, crossed).
 
 A stop has a time-critical half (the family's `halt`: the attack acts no more when it returns)
 and a rest (waiting for tools, counters, clean-up, the `stop` record), run in a worker thread:

@@ -28,8 +28,14 @@ class AttackWindow:
     attacker_ips: tuple[str, ...]
     victim_ips: tuple[str, ...]
     start_unix: float
-    stop_unix: float  # exclusive
+    stop_unix: float  # exclusive: the attack acts no more from here
     from_plan: bool = False
+    crossed_unix: float | None = None  # when its last packet can have crossed the network (AttackStop)
+
+    @property
+    def observed_until_unix(self) -> float:
+        """The end of the span holding every observation of the attack's packets (exclusive)."""
+        return self.stop_unix if self.crossed_unix is None else max(self.stop_unix, self.crossed_unix)
 
 
 @dataclass(frozen=True)
@@ -60,7 +66,7 @@ class AttackLog:
 def read_attack_log(path: Path, plan: Plan | None = None, t0_unix: float | None = None) -> AttackLog:
     """Parse attacks.jsonl (may be absent for a benign run) and fill gaps from the plan."""
     starts: dict[str, AttackStart] = {}
-    stops: dict[str, float] = {}
+    stops: dict[str, AttackStop] = {}
     injections: list[Injection] = []
     try:
         records = read_attack_records(path) if path.exists() else []
@@ -70,7 +76,7 @@ def read_attack_log(path: Path, plan: Plan | None = None, t0_unix: float | None 
         if isinstance(rec, AttackStart):
             starts[rec.attack_id] = rec
         elif isinstance(rec, AttackStop):
-            stops[rec.attack_id] = rec.t_unix
+            stops[rec.attack_id] = rec
         elif isinstance(rec, Inject):
             injections.append(
                 Injection(attack_id=rec.attack_id, t_unix=rec.t_unix, src_ip=rec.src_ip, dst_ip=rec.dst_ip,
@@ -88,7 +94,8 @@ def read_attack_log(path: Path, plan: Plan | None = None, t0_unix: float | None 
                 attacker_ips=attackers,
                 victim_ips=victims,
                 start_unix=rec.t_unix,
-                stop_unix=stops.get(aid, math.inf),
+                stop_unix=stops[aid].t_unix if aid in stops else math.inf,
+                crossed_unix=stops[aid].crossed_unix if aid in stops else None,
             )
         )
     if plan is not None:

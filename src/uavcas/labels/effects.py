@@ -84,10 +84,10 @@ class TruthContext:
 
     def attacker_to_victim(self, windows, rows: np.ndarray) -> np.ndarray:
         """The rows of `rows` sent from an attacker to a victim of an attack window and captured
-        inside its [start, stop)."""
+        inside [start, observed_until) (a packet that left before the stop may still be crossing)."""
         hit = np.zeros(self.n, dtype=bool)
         for w in windows:
-            hit |= rows & self.during(w.start_unix, w.stop_unix) & self.packets_from(w.attacker_ips) \
+            hit |= rows & self.during(w.start_unix, w.observed_until_unix) & self.packets_from(w.attacker_ips) \
                 & self.packets_to(w.victim_ips)
         return hit
 

@@ -66,6 +66,13 @@ def windows(run: Path) -> dict[str, tuple[float, float, dict]]:
     return {k: (v["t_unix"], stops.get(k, float("inf")), v) for k, v in starts.items()}
 
 
+def crossed(run: Path) -> dict[str, float]:
+    """attack_id -> the end of the span holding every observation of its packets: the stop's
+    `crossed_unix` (floods, mavlink_inject: their stop is when the last packet left), else the stop."""
+    stops = [r for r in attack_log(run) if r["event"] == "stop"]
+    return {r["attack_id"]: r.get("crossed_unix") or r["t_unix"] for r in stops}
+
+
 def is_syn(p: Pkt) -> bool:
     return p.proto == 6 and (p.flags & dpkt.tcp.TH_SYN) and not (p.flags & dpkt.tcp.TH_ACK)
 
@@ -83,11 +90,14 @@ class FloodCheck:
 
 
 def flood_check(pkts: list[Pkt], attacker_ip: str, victim_ip: str, start: float, stop: float,
-                port: int = 80) -> FloodCheck:
+                port: int = 80, until: float | None = None) -> FloodCheck:
+    """SYNs inside the sending window [start, stop) (their rate) and outside [start, until) (by
+    default `until` = stop; a flood's `crossed` when its SYNs may still cross after the stop)."""
     syns = [p.t for p in pkts if is_syn(p) and p.src == attacker_ip and p.dst == victim_ip and p.dport == port]
     inside = [t for t in syns if start <= t < stop]
+    end = stop if until is None else max(stop, until)
     per_s = Counter(int(t - start) for t in inside)
-    return FloodCheck(len(inside), len(syns) - len(inside), stop - start,
+    return FloodCheck(len(inside), sum(not start <= t < end for t in syns), stop - start,
                       [per_s[k] for k in range(int(stop - start) + 1)])
 
 

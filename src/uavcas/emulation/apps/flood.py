@@ -20,9 +20,9 @@ restart reused source ports (one "flow" spanning separate bursts). Instead:
 * `close_all` stops the pacers, closes the gates (a SYN still pending in hping3 is gated) and
   signals hping3; `collect_all` then waits for hping3 and reads the exact count of SYNs that
   left `eth0` (nft counter on postrouting), off the schedule's thread. The
-  attack's stop time is when the last of them can have crossed the network: the gate's
-  closing plus, on the attacker -> victim path, each hop's planned delay and the sojourn of a
-  full queue (`quiet_after_s`).
+  attack's stop time is the gate's closing; the time by which the last SYN can have crossed the
+  network (logged as `crossed_unix`) adds, on the attacker -> victim path, each hop's planned
+  delay and the sojourn of a full queue (`quiet_after_s`).
 """
 
 from __future__ import annotations
