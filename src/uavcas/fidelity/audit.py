@@ -37,6 +37,7 @@ from uavcas.twin.model import Plan
 
 from . import fifo, losses, throughput
 from .inforce import PortCapacity, PortShaping, planned_settings, port_shaping, shape_spans
+from .loops import rerouted_in_flight
 from .model import Check, Counters, Fidelity, GapDistortion, LinkWindow, Tolerances
 
 TRANSITION_S = 0.05  # margin around a forwarding change (held packets, queues draining)
@@ -135,6 +136,15 @@ class _Audit:
         self.netem = info is not None and info.shaper_backend == "netem"
         self._crossings()
         self._losses()
+        self._revisits()
+
+    def _revisits(self) -> None:
+        """Packets back at a switch they had crossed: loops (faults) or re-routed in flight (`loops`)."""
+        pids = np.unique(self.c.pid[self.c.revisit])
+        fine = rerouted_in_flight(self.fol, np.asarray(self.table["point"]), np.asarray(self.table["ts_s"]),
+                                  self.point_node, self.tl, pids)
+        self.looped_pids, self.rerouted_pids = pids[~fine], pids[fine]
+        self.c_loop = self.c.revisit & np.isin(self.c.pid, self.looped_pids)  # per crossing
 
     def _has(self, w: np.ndarray, i: np.ndarray, j: np.ndarray) -> np.ndarray:
         W = self.planned.delay_ms.shape[0]
@@ -297,7 +307,8 @@ class _Audit:
                 verdict="pass" if ok else "fail", src=self.names[i], dst=self.names[j], window=w, segment=sg, **de,
                 planned_delay_ms=delay, planned_rate_mbps=rate, planned_loss=p,
                 measured_delay_p50_ms=_q(meas, 50), model_delay_p50_ms=_q(model, 50),
-                queue_over_limit=int(self.c_over[rows].sum()), loops=int(self.c.revisit[rows].sum()),
+                queue_over_limit=int(self.c_over[rows].sum()), loops=int(self.c_loop[rows].sum()),
+                rerouted=int((self.c.revisit[rows] & ~self.c_loop[rows]).sum()),
                 lost=int(mine.shape[0]),
                 lost_tail=int(count[losses.TAIL]), lost_random=int(count[losses.RANDOM]),
                 lost_transition=int(count[losses.TRANSITION]), lost_unexplained=int(count[losses.UNEXPLAINED]),
@@ -333,7 +344,7 @@ class _Audit:
         rnd_obs = sum(st.dropped for st in self.stages)
         exp = sum(st.expected for st in self.stages)
         sigma = _sigma_pooled(rnd_obs, exp, sum(st.variance for st in self.stages))
-        looped = int(np.unique(self.c.pid[self.c.revisit]).shape[0])
+        looped = int(self.looped_pids.shape[0])
         change = [a.timings_s.get("total_s", 0.0) * 1000 for a in self.info.window_applies] if self.info else []
         late = [e.late_ms for e in self.info.schedule] if self.info else []
         checks = [
@@ -360,7 +371,8 @@ class _Audit:
         return Fidelity(
             verdict="fail" if failed else "pass", failed=failed, **pooled, packets=self.fol.n_packets,
             crossings_unmodelled=int(np.isnan(self.err_ms).sum()), queue_over_limit=int(self.c_over.sum()),
-            loops=looped, lost=len(self.fol.losses), lost_tail=int(count[losses.TAIL]),
+            loops=looped, rerouted=int(self.rerouted_pids.shape[0]), lost=len(self.fol.losses),
+            lost_tail=int(count[losses.TAIL]),
             lost_random=int(count[losses.RANDOM]), lost_transition=int(count[losses.TRANSITION]),
             lost_unexplained=int(count[losses.UNEXPLAINED]),
             loss_links_counted=sum(st.source == "counters" for st in self.stages),

@@ -5,7 +5,9 @@ emulator was late); the model is `uavcas.fidelity.fifo`. Quantiles are of the si
 Lost packets are split by `uavcas.fidelity.losses`. Schema 2 added the loss stage's own figures
 (`loss_source`, `loss_offered`, `loss_drops`), `lost_random`, `lost_unexplained` and
 `queue_over_limit`; schema 3 added `loops` (run and link-window) and the `loops` tolerance and
-check. They default to None (the tolerance to 0) when an older file is read.
+check; schema 4 `rerouted` (packets back at a switch after a window change, each hop by the
+table in force: no loop, `fidelity.loops`), which schema 3 counted as loops. They default to
+None (the tolerance to 0) when an older file is read.
 """
 
 from __future__ import annotations
@@ -16,7 +18,7 @@ from pydantic import BaseModel, ConfigDict, Field
 
 from uavcas.rundir import FidelitySummary
 
-SCHEMA_VERSION = 3
+SCHEMA_VERSION = 4
 Verdict = Literal["pass", "fail"]
 
 
@@ -36,7 +38,7 @@ class Tolerances(_Strict):
     throughput_rel: float = Field(0.05, description="|measured/planned - 1| on saturated links (median of bins)")
     window_change_ms: float = Field(250.0, description="longest window change (apply) of the run")
     lateness_ms: float = Field(100.0, description="latest scheduled event of the run")
-    loops: float = Field(0.0, description="packets that came back to a switch they had crossed (forwarding loops)")
+    loops: float = Field(0.0, description="packets that looped (`fidelity.loops`: not re-routed in flight)")
     max_hop_s: float = Field(1.0, description="longest plausible hop (the packet follower)")
     saturated_bin_s: float = Field(0.2, description="bin width for throughput on saturated links")
     burst_bytes: float = Field(1600.0, description="token-bucket depth of the rate stage (HTB burst)")
@@ -84,7 +86,8 @@ class LinkWindow(DelayErrors):
     # crossings that entered a model queue already at its limit: the real queue took them, so
     # it was not full, and the model carried a backlog the port did not have (0 when it is right)
     queue_over_limit: int | None = None
-    loops: int | None = None  # crossings that brought a packet back to a switch it had crossed (dst)
+    loops: int | None = None  # crossings that brought a looping packet back to a switch it had crossed (dst)
+    rerouted: int | None = None  # such crossings of packets re-routed in flight (`fidelity.loops`): no fault
     lost: int  # left src, never reached dst
     lost_tail: int  # of those: dropped at the tail of the queue
     lost_random: int | None = None  # dropped by the random-loss rule
@@ -127,7 +130,8 @@ class Fidelity(DelayErrors):
     packets: int  # transmissions followed
     crossings_unmodelled: int  # hop crossings of a port whose shaping was not known then
     queue_over_limit: int | None = None  # crossings that found the model's queue full (LinkWindow)
-    loops: int | None = None  # packets that came back to a switch they had crossed (`flows.follow`)
+    loops: int | None = None  # packets that looped: back at a switch not explained by a table change (`fidelity.loops`)
+    rerouted: int | None = None  # packets back at a switch, re-routed in flight by a window change (no fault)
     lost: int
     lost_tail: int
     lost_random: int | None = None
