@@ -284,6 +284,12 @@ class Emulation:
             fwd = self._fwd_memo[key] = compute(self.names, list(key[0]), key[1], key[2], key[3])
         return fwd
 
+    def plan_change(self, links: Sequence["Link"], routes: Iterable[Sequence[str]] = (),
+                    wormholes: Iterable["Detour | Sequence[str]"] = ()) -> None:
+        """Compute ahead, in idle time, the forwarding and the FDB batch `apply_links` will need
+        for these links from the current FDB (`Fabric.plan_update`): the change only replays it."""
+        self.fabric.plan_update(self.plan_forwarding(links, routes, wormholes))
+
     def shapes(self, links: Sequence["Link"], overrides: Sequence["LinkOverride"] = ()) -> list[Shape]:
         """Both directions of every link with its parameters, except the directions (src, dst)
         of `overrides`, which take the override's rate, delay and loss (a jammed link)."""

@@ -210,7 +210,9 @@ def _play(st: _State, opt: RunOptions, notify: Callable[[Progress], None]) -> No
     st.timings["apps_s"] = time.time() - t
     with urgent(CONTROL_RT_PRIORITY if opt.urgent else 0):
         t_links = time.time()
-        _, ready = emu.prepare_links(plan.windows[0].links, wait_s=LINKS_READY_S)
+        w0 = plan.windows[0]  # its forwarding and FDB batch planned first, as for every later window
+        emu.plan_change(w0.links, [r.hops for r in w0.routes], st.executor.wormholes_for(w0))
+        _, ready = emu.prepare_links(w0.links, wait_s=LINKS_READY_S)
         st.timings["links_ready_s"] = time.time() - t_links
         if not ready:
             st.wind_down_errors.append(f"window 0: links not operational after {LINKS_READY_S:g} s")
@@ -303,8 +305,7 @@ def _prepare_next(st: _State, opt: RunOptions, upcoming: list[_Event]) -> None:
     until = st.t0 + upcoming[0].t_s - PREPARE_MARGIN_S  # never delay the next event
     t = time.time()
     with urgent(CONTROL_RT_PRIORITY if opt.urgent else 0):
-        fwd = st.emu.plan_forwarding(w.links, [r.hops for r in w.routes], st.executor.wormholes_for(w))
-        st.emu.fabric.plan_update(fwd)
+        st.emu.plan_change(w.links, [r.hops for r in w.routes], st.executor.wormholes_for(w))
         raised, ready = st.emu.prepare_links(w.links, wait_s=max(0.0, until - time.time()))
     if not ready and upcoming[0] is nxt:
         st.wind_down_errors.append(f"window {nxt.obj}: links not operational when it began")
