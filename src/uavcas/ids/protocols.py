@@ -34,6 +34,7 @@ from .base import fit_model
 from .detectors import baselines, detector, make_model
 from .features import context_columns, context_matrix, feature_matrix, resolve_features
 from .metrics import STEALTH, auroc, class_scores, confusion, pr_auc, scores
+from .prior import prior_ratio, reweight
 from .splits import DegenerateSplitError, Split, cap_rows, check_declared, grouped_split, runs_per_class
 from .torch_estimator import default_threads
 
@@ -42,6 +43,8 @@ SCALERS = {"standard": StandardScaler, "minmax": MinMaxScaler, "robust": RobustS
 DEFAULT_SEEDS = (0, 1, 2, 3, 4)
 ATTACK = "Attack"
 DOS = "DoS"
+PRIOR_NOTE = ("--train-cap: scores at the uncapped training split's class prior (each model's posteriors "
+              "reweighted by Bayes' rule, `uavcas.ids.prior`)")
 _DOS = re.compile(r"^dos($|[ _\-])", re.IGNORECASE)  # DoS, 'DoS Hulk', 'DoS-UDP_Flood'; not 'DoS+Replay'
 
 
@@ -136,6 +139,7 @@ class Task:
     fixed: dict[str, np.ndarray] = field(default_factory=dict)  # label of extra test runs -> rows
     x_ctx: np.ndarray | None = None  # the context columns (`features.context_columns`), for the context models
     ctx_names: tuple[str, ...] = ()  # their names: flows' ctx_*, or the episode summaries of them
+    natural_prior: bool = False  # scored at the uncapped training prior (`ids.prior`) under --train-cap
 
     def split(self, seed: int) -> Split:
         p = self.pool
@@ -206,7 +210,8 @@ def prepare_binary(df: pd.DataFrame, x: np.ndarray, notes: list[str], cfg: Bench
     y = np.where(df["label"] == schema.BENIGN, schema.BENIGN, DOS).astype(object)
     if not (keep & (y == DOS)).any() or not (keep & (y == schema.BENIGN)).any():
         raise ValueError("binary protocol needs Benign and DoS flows")
-    return Task(x, y, _groups(df, notes), _strata(df), np.flatnonzero(keep), [schema.BENIGN, DOS], _score_binary)
+    return Task(x, y, _groups(df, notes), _strata(df), np.flatnonzero(keep), [schema.BENIGN, DOS], _score_binary,
+                natural_prior=True)
 
 
 def prepare_multiclass(df: pd.DataFrame, x: np.ndarray, notes: list[str], cfg: BenchConfig) -> Task:
@@ -225,7 +230,7 @@ def prepare_ood(df: pd.DataFrame, x: np.ndarray, notes: list[str], cfg: BenchCon
     names = comp.map(schema.class_name).to_numpy()
     fixed = {c: np.flatnonzero(~single & (names == c)) for c in class_order(names[~single])}
     return Task(x, y, _groups(df, notes), _strata(df), np.flatnonzero(single), [schema.BENIGN, ATTACK],
-                _score_ood, fixed)
+                _score_ood, fixed, natural_prior=True)
 
 
 def prepare_cross(df: pd.DataFrame, x: np.ndarray, notes: list[str], cfg: BenchConfig) -> Task:
@@ -275,7 +280,10 @@ def _inputs(task: Task, name: str, features: list[str]) -> tuple[np.ndarray, lis
     return np.hstack([task.x, task.x_ctx]), features + list(task.ctx_names)
 
 
-def _fit_one(res: ProtocolResult, task: Task, sp: Split, name: str, seed: int, cfg: BenchConfig) -> None:
+def _fit_one(res: ProtocolResult, task: Task, sp: Split, name: str, seed: int, cfg: BenchConfig,
+             prior_from: np.ndarray | None = None) -> None:
+    """Fit one model on `sp.train` and score it; with `prior_from` (the uncapped training rows),
+    its posteriors are moved to their class prior before scoring (`ids.prior`)."""
     t0 = time.perf_counter()
     x, names = _inputs(task, name, res.features)
     scaler = SCALERS[cfg.scaler]().fit(x[sp.train])
@@ -291,7 +299,12 @@ def _fit_one(res: ProtocolResult, task: Task, sp: Split, name: str, seed: int, c
     with threadpool_limits(limits=cfg.n_threads or default_threads()):
         fit_model(est, tf(sp.train), task.y[sp.train], tf(sp.val) if len(sp.val) else None,
                   task.y[sp.val] if len(sp.val) else None)
-        rows, main, pred = task.score(task, sp, lambda r: (est.predict_proba(tf(r)), est.classes_))
+        ratio = None if prior_from is None else prior_ratio(task.y[prior_from], task.y[sp.train], est.classes_)
+
+        def predict(r):
+            proba = est.predict_proba(tf(r))
+            return (proba if ratio is None else reweight(proba, ratio)), est.classes_
+        rows, main, pred = task.score(task, sp, predict)
         seconds = time.perf_counter() - t0
         res.add(seed, model, rows)
         res.confusion[(seed, model)] = confusion(task.y[main], pred, task.declared)
@@ -382,13 +395,17 @@ def execute(prep: Prepared, cfg: BenchConfig) -> ProtocolResult:
     res = ProtocolResult(prep.protocol, task.declared, prep.features, notes=list(prep.notes))
     for seed, sp in prep.splits.items():
         res.splits += _split_rows(task, seed, sp)
+        uncapped = sp.train
         if cfg.train_cap:
             sp = Split(cap_rows(sp.train, task.y, task.groups, cfg.train_cap, seed),
                        cap_rows(sp.val, task.y, task.groups, cfg.train_cap, seed + 1), sp.test, sp.groups)
         res.sizes[seed] = {"train": len(sp.train), "val": len(sp.val), "test": len(sp.test),
                            **{k: len(v) for k, v in task.fixed.items()}}
+        prior_from = uncapped if cfg.train_cap and task.natural_prior else None
+        if prior_from is not None and PRIOR_NOTE not in res.notes:
+            res.notes.append(PRIOR_NOTE)
         for name in cfg.models:
-            _fit_one(res, task, sp, name, seed, cfg)
+            _fit_one(res, task, sp, name, seed, cfg, prior_from)
     return res
 
 
