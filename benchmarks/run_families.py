@@ -69,6 +69,7 @@ def measured_delay(run: Path, max_size: int = 100) -> dict:
 def evidence(run: Path, family: str) -> dict:
     log = rc.attack_log(run)
     w = rc.windows(run)
+    until = rc.crossed(run)
     out: dict = {}
     for aid, (start, stop, rec) in w.items():
         out["window_s"] = round(stop - start, 3)
@@ -76,7 +77,7 @@ def evidence(run: Path, family: str) -> dict:
             pk = rc.read_pcap(run / "pcap" / f"s-{rec['victims'][0]}.pcap")
             out["syn"] = {}
             for ip in rec["attacker_ips"]:
-                fc = rc.flood_check(pk, ip, rec["victim_ips"][0], start, stop)
+                fc = rc.flood_check(pk, ip, rec["victim_ips"][0], start, stop, until=until.get(aid))
                 out["syn"][ip] = {"inside": fc.inside, "outside": fc.outside, "pps": round(fc.pps, 1)}
             out["logged_rates"] = [r["measured_pps"] for r in log if r["event"] == "rate"]
         if family == "blackhole":
