@@ -167,6 +167,9 @@ def test_schedule_checks_come_from_run_json(tmp_path):
     rd = build(tmp_path, plan(), _steady(n=50), info=run_info(window_applies=[slow]))
     f = audit(rd.root)
     assert f.window_change_max_ms == pytest.approx(400.0) and f.failed == ["window_change_ms"]
+    tight = WindowApply(**{**slow.model_dump(), "timings_s": {"total_s": 0.101}})  # just over 100 ms: fails
+    assert audit(build(tmp_path / "t", plan(), _steady(n=50), info=run_info(window_applies=[tight])).root).failed == [
+        "window_change_ms"]
 
 
 def test_write_fidelity_writes_the_file_and_the_run_json_summary(tmp_path):

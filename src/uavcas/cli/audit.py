@@ -37,7 +37,7 @@ def audit_cmd(
                                  help="Limit on the p99 per-hop delay error (default 0.5)."),
     loss_sigma: float = typer.Option(None, "--loss-sigma", help="Random loss: standard deviations allowed (4)."),
     throughput_rel: float = typer.Option(None, "--throughput-rel", help="Saturated links: |rate/planned - 1| (0.05)."),
-    window_change_ms: float = typer.Option(None, "--window-change-ms", help="Longest window change (250)."),
+    window_change_ms: float = typer.Option(None, "--window-change-ms", help="Longest window change (100)."),
     lateness_ms: float = typer.Option(None, "--lateness-ms", help="Latest scheduled event (100)."),
     links: int = typer.Option(8, "--links", min=0, help="Show this many worst link directions."),
 ) -> None:
