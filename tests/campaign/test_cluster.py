@@ -6,7 +6,7 @@ import pytest
 
 from helpers.campaign_runs import cli, free_port, write_manifest
 
-pytestmark = [pytest.mark.slow]  # the client tries to connect for its 30 s
+pytestmark = [pytest.mark.slow]  # the client tries to connect for its 20 s
 
 
 def test_an_unreachable_scheduler_is_one_line(tmp_path):

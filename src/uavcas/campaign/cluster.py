@@ -34,7 +34,10 @@ from .task import Extraction, RunOutcome, execute_entry
 
 RESOURCE = "emulator"
 WORKER_FLAGS = "--nthreads 1 --resources emulator=1"
-EMULATOR_WAIT_S = 30.0  # how long a cluster may lack any worker offering RESOURCE
+# how long the scheduler may be out of reach, or lack any emulator worker: with the CLI's start-up,
+# a refusal within 30 s
+EMULATOR_WAIT_S = 20.0
+CONNECT_S = 20.0
 POLL_S = 0.5  # how often the queue is looked at (progress, finished runs, workers)
 
 
@@ -93,7 +96,7 @@ def run_dask(
     profile: str | None,
     retries: int,
     on_retry: Callable[[RunOutcome, int], None] | None = None,
-    connect_timeout_s: float = 30.0,
+    connect_timeout_s: float = CONNECT_S,
     extraction: Extraction = Extraction(),
     fidelity: str = "flag",
     mavlink_signing: bool = False,
