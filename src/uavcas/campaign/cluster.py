@@ -65,8 +65,9 @@ def _emulators(workers: dict[str, dict]) -> list[str]:
 
 def refusal(address: str, n_workers: int, waited_s: float) -> str:
     """The one line naming the flag a worker needs."""
+    which = f"{n_workers} worker(s) without it" if n_workers else "no worker connected"
     return (f"no worker of the Dask scheduler at {address} offers the {RESOURCE} resource after {waited_s:.0f} s "
-            f"({n_workers} worker(s) without it): start one worker per emulation host, as root, with "
+            f"({which}): start one worker per emulation host, as root, with "
             f"`dask worker {address} {WORKER_FLAGS}`")
 
 
