@@ -1,10 +1,9 @@
-"""Where runs execute: a local pool of N concurrent runs, or a dask.distributed cluster.
+"""Where runs execute on this host: a local pool of N concurrent runs (a dask.distributed
+cluster: `campaign.cluster`).
 
 Both yield `RunOutcome`s as runs finish and retry failures by one rule (`retry.Retries`). The
 local pool uses threads because each run is a child process (`campaign.worker`) plus an
-extraction; the threads only wait. On Dask, each run asks for the
-worker resource `emulator=1`, so a worker started with `--resources emulator=1` emulates one
-scenario at a time, and the outcome (shard bytes and the small run files) returns to the client.
+extraction; the threads only wait.
 """
 
 from __future__ import annotations
@@ -55,50 +54,3 @@ def run_local(
                     continue
                 yield out
 
-
-def run_dask(
-    entries: list[ManifestEntry],
-    address: str,
-    profile: str | None,
-    retries: int,
-    on_retry: Callable[[RunOutcome, int], None] | None = None,
-    connect_timeout_s: float = 30.0,
-    extraction: Extraction = Extraction(),
-    fidelity: str = "flag",
-    mavlink_signing: bool = False,
-) -> Iterator[RunOutcome]:
-    """Submit every entry to the scheduler at `address` (tcp://HOST:8786); yield as they finish."""
-    # on use: dask's distributed is heavy and only a campaign on a scheduler needs it
-    from distributed import Client, as_completed
-
-    with Client(address, timeout=connect_timeout_s) as client:
-        tries = Retries(retries, on_retry)
-        by_index = {e.index: e for e in entries}
-
-        def submit(e: ManifestEntry):
-            n = tries.started(e.index)
-            return client.submit(
-                execute_entry,
-                e.to_dict(),
-                None,
-                profile,
-                return_files=True,
-                extraction=extraction,
-                fidelity=fidelity,
-                mavlink_signing=mavlink_signing,
-                resources={"emulator": 1},
-                pure=False,
-                key=f"uavcas-run-{e.index}-try{n}",
-            )
-
-        futures = as_completed([submit(e) for e in entries])
-        for fut in futures:
-            try:
-                out: RunOutcome = fut.result()
-            except Exception as exc:  # the worker died or the task could not run at all
-                idx = int(str(fut.key).split("-")[2])
-                out = RunOutcome(index=idx, ok=False, host="?", wall_s=0.0, error=f"dask: {exc}")
-            if tries.again(out):
-                futures.add(submit(by_index[out.index]))
-                continue
-            yield out

@@ -16,7 +16,7 @@ from uavcas.dataset.store import rebuild
 from uavcas.scenario import ManifestEntry
 from uavcas.vocabulary import FIDELITY_POLICIES
 
-from .executor import run_dask, run_local
+from .executor import run_local
 from .layout import CampaignDir, CampaignError
 from .task import Extraction, RunOutcome
 
@@ -98,17 +98,27 @@ def run_campaign(
         with Progress(*columns, console=console, transient=False) as progress:
             task = progress.add_task("runs", total=len(entries), completed=len(result.skipped), status="")
 
+            queue = ""  # on Dask: how many runs are queued and running, refreshed while they wait
+
             def status() -> str:
-                return f"done {len(result.done) + len(result.skipped)} failed {len(result.failed)}"
+                return f"{queue}done {len(result.done) + len(result.skipped)} failed {len(result.failed)}"
+
+            def on_queue(text: str) -> None:
+                nonlocal queue
+                queue = f"{text} "
+                progress.update(task, status=status())
 
             progress.update(task, status=status())
-            outcomes = (
-                run_dask(todo, scheduler, profile, retries, on_retry, extraction=extraction, fidelity=fidelity,
-                         mavlink_signing=mavlink_signing)
-                if scheduler
-                else run_local(todo, cdir, jobs, profile, retries, on_retry, extraction=extraction, fidelity=fidelity,
-                               mavlink_signing=mavlink_signing)
-            )
+            if scheduler:
+                # on use: dask's distributed is heavy and only a campaign on a scheduler needs it
+                from .cluster import run_dask
+
+                outcomes = run_dask(todo, scheduler, profile, retries, on_retry, extraction=extraction,
+                                    fidelity=fidelity, mavlink_signing=mavlink_signing, on_status=on_queue,
+                                    on_note=lambda line: console.print(line, highlight=False))
+            else:
+                outcomes = run_local(todo, cdir, jobs, profile, retries, on_retry, extraction=extraction,
+                                     fidelity=fidelity, mavlink_signing=mavlink_signing)
             for out in outcomes:
                 if out.ok:
                     _commit(cdir, out)

@@ -9,6 +9,8 @@ result is a plain value (bytes and dicts), so it crosses a Dask connection uncha
 from __future__ import annotations
 
 import io
+import logging
+import os
 import shutil
 import socket
 import tempfile
@@ -19,6 +21,7 @@ from pathlib import Path
 import pyarrow.parquet as pq
 
 from uavcas.dataset.parquet import to_table
+from uavcas.emulation.cleanup import reclaim_dead
 from uavcas.extract import EXTRACT_VIEWS, extract
 from uavcas.flows import TERMINATIONS
 from uavcas.flows.assemble import DEFAULT_TERMINATION, HOST_VIEWS
@@ -28,6 +31,9 @@ from uavcas.scenario import ManifestEntry
 from .worker import WorkerRequest, realize_in_child
 
 RUN_SLACK_S = 120.0  # set-up, tear-down and extraction on top of the scenario's own duration
+
+# A Dask worker shows these with DASK_LOGGING__UAVCAS=info: one "starting" line per try of a run
+log = logging.getLogger(__name__)
 
 
 @dataclass(frozen=True)
@@ -87,17 +93,25 @@ def execute_entry(
     return_files: bool = False,
     fidelity: str = "flag",
     mavlink_signing: bool = False,
+    detach: bool = False,
 ) -> RunOutcome:
     """Run one manifest entry into `run_dir` (a temporary directory when None) and extract it.
 
     `fidelity`: what a run whose fidelity audit failed becomes: "flag" (kept, its verdict in the
     dataset card) or "retry" (tried again like a failed run; the last try is kept, flagged).
+    `detach`: the run's child in its own session (a Dask worker: `worker.realize_in_child`).
+    Namespaces of runs on this host whose process died without teardown are removed first.
     """
 
     if isinstance(entry, dict):
         entry = ManifestEntry(**entry)
     t0 = time.monotonic()
     host = socket.gethostname()
+    log.info("run %d starting on %s (pid %d): %s seed %d", entry.index, host, os.getpid(), entry.config, entry.seed)
+    if os.geteuid() == 0:
+        for rep in reclaim_dead():
+            log.warning("run %d: removed what dead run %s left: %d namespace(s)%s", entry.index, rep.prefix,
+                        len(rep.namespaces), f" ({rep.error})" if rep.error else "")
     own_tmp = run_dir is None
     base = Path(run_dir) if run_dir else Path(tempfile.mkdtemp(prefix=f"uavcas-run{entry.index}-"))
     if base.exists() and not own_tmp:
@@ -106,7 +120,7 @@ def execute_entry(
     req = WorkerRequest(config=entry.config, seed=entry.seed, windows=entry.windows, window_s=entry.window_s,
                         episodes=entry.episodes, out_dir=str(base), profile=profile, mavlink_signing=mavlink_signing)
     try:
-        res = realize_in_child(req, limit_s=entry.windows * entry.window_s + RUN_SLACK_S)
+        res = realize_in_child(req, limit_s=entry.windows * entry.window_s + RUN_SLACK_S, detach=detach)
         if not res.ok:
             out.error = res.error
             return out

@@ -6,10 +6,17 @@ because Dask workers run as daemonic processes, which multiprocessing forbids to
 and because a crash or a signal in the emulation must not take the campaign down: the child's
 own runner tears its namespaces down on SIGTERM, and a child that dies without a result still
 yields a failed `WorkerResult` naming its exit status.
+
+The child never outlives the thread that started it holding namespaces: it asks the kernel for
+SIGTERM when that thread's process dies (`PR_SET_PDEATHSIG`), and on a Dask worker it runs in its
+own session (`detach`), so that killing the worker's whole process group (SIGKILL, which no
+teardown survives) leaves it that SIGTERM, and its runner tears its namespaces down.
 """
 
 from __future__ import annotations
 
+import ctypes
+import ctypes.util
 import os
 import signal
 import subprocess
@@ -25,6 +32,8 @@ from uavcas.emulation.runner import RunOptions, realize
 from uavcas.twin.plan import plan
 
 TERM_GRACE_S = 30.0  # after SIGTERM, the child's teardown gets this long before SIGKILL
+PARENT_ENV = "UAVCAS_WORKER_PARENT"  # the PID the child is to die with (see `_die_with_parent`)
+PR_SET_PDEATHSIG = 1  # <linux/prctl.h>
 
 
 class WorkerRequest(BaseModel):
@@ -74,14 +83,19 @@ def _tail(text: str, n: int = 400) -> str:
     return (lines[-1] if lines else "")[-n:]
 
 
-def realize_in_child(req: WorkerRequest, limit_s: float) -> WorkerResult:
-    """`realize_request` in a child interpreter, at most `limit_s` seconds (then SIGTERM, SIGKILL)."""
+def realize_in_child(req: WorkerRequest, limit_s: float, detach: bool = False) -> WorkerResult:
+    """`realize_request` in a child interpreter, at most `limit_s` seconds (then SIGTERM, SIGKILL).
+
+    `detach`: the child gets its own session (a Dask worker's run: see the module's docstring). A
+    local campaign keeps it in the terminal's process group, where Ctrl-C reaches it directly.
+    """
     with tempfile.TemporaryDirectory(prefix="uavcas-worker-") as tmp:
         req_path, res_path = Path(tmp) / "request.json", Path(tmp) / "result.json"
         req_path.write_text(req.model_dump_json())
-        env = {**os.environ, "PYTHONUNBUFFERED": "1"}
+        env = {**os.environ, "PYTHONUNBUFFERED": "1", PARENT_ENV: str(os.getpid())}
         proc = subprocess.Popen([sys.executable, "-m", "uavcas.campaign.worker", str(req_path), str(res_path)],
-                                stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, env=env)
+                                stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, env=env,
+                                start_new_session=detach)
         try:
             _, err = proc.communicate(timeout=limit_s)
         except subprocess.TimeoutExpired:
@@ -101,8 +115,22 @@ def realize_in_child(req: WorkerRequest, limit_s: float) -> WorkerResult:
             return WorkerResult(ok=False, exit_status=1, error=f"worker result unreadable: {_one_line(e)}")
 
 
+def _die_with_parent() -> None:
+    """SIGTERM to this process when its parent dies (set here, not in a `preexec_fn`, which is
+    unsafe in the parent's threads); a parent already gone by now is noticed and obeyed at once."""
+    parent = os.environ.get(PARENT_ENV)
+    if parent is None:  # run by hand: no parent to die with
+        return
+    libc = ctypes.CDLL(ctypes.util.find_library("c"), use_errno=True)
+    if libc.prctl(PR_SET_PDEATHSIG, signal.SIGTERM, 0, 0, 0) != 0:
+        raise OSError(ctypes.get_errno(), "prctl(PR_SET_PDEATHSIG)")
+    if os.getppid() != int(parent):
+        raise SystemExit(128 + signal.SIGTERM)
+
+
 def main(argv: list[str] | None = None) -> int:
     req_path, res_path = (argv if argv is not None else sys.argv[1:])[:2]
+    _die_with_parent()
     try:
         res = realize_request(WorkerRequest.model_validate_json(Path(req_path).read_text()))
     except BaseException as e:  # SystemExit from a signal included: the result says why

@@ -185,6 +185,22 @@ def clean(prefix: str | None = None, force: bool = False) -> list[CleanReport]:
     return reports
 
 
+def reclaim_dead() -> list[CleanReport]:
+    """Clean every registered run whose owner is dead: its run.json's PID gone and its lock free.
+
+    What a run killed with no teardown at all (SIGKILL) left; a campaign's next run on the host
+    calls this first. A run being set up (no run.json yet: written only once the lock is held) or
+    still alive is never touched, so concurrent runs on one host are safe.
+    """
+    reports = []
+    for p in registered_prefixes():
+        rec = _record(p)
+        if rec is None or _exists(rec.pid) or is_live(p):
+            continue
+        reports.extend(clean(p))
+    return reports
+
+
 def _clean_one(rep: CleanReport) -> None:
     rec = _record(rep.prefix)
     naming = Naming(rep.prefix)
