@@ -263,3 +263,30 @@ def test_a_lost_copy_is_judged_at_the_rate_the_port_held():
 
     assert paths(follow(table, tl, capacity=lambda i, j, a, b: (b - a) * 24e6)) == [[1.0], [1.002, 1.007, 1.012]]
     assert paths(follow(table, tl)) == [[1.0, 1.007, 1.012], [1.002]]  # judged at the plan's slowest rate
+
+
+def test_two_stamps_out_of_forwarding_order_are_one_packet_in_forwarding_order():
+    # the frame reached uav1 0.3 ms before uav0's capture stamped it (a TCP frame: no switch stamps
+    # it on receipt); swapped within `copies.EARLY_S`, it is one packet crossing both hops
+    seg = {"proto": 6, "sport": 40000, "dport": 80, "seq": 1000, "flags": 0x10, "len": 1514, "id": 4}
+    rows = _send(1.0, ["uav0", "uav1", "bs0"], **seg)
+    rows[0]["t"] = rows[1]["t"] + 0.0003
+    f = follow(_table(rows), TL)
+    assert f.n_packets == 1 and f.delivered.all() and len(f.losses) == 0
+    pts, times = f.path(0)
+    assert pts == ["s-uav0", "s-uav1", "s-bs0"]
+    c = f.crossings()
+    assert [(POINTS[a], POINTS[b]) for a, b in zip(c.from_point, c.to_point)] == [("s-uav0", "s-uav1"),
+                                                                                 ("s-uav1", "s-bs0")]
+    assert c.t_to[0] - c.t_from[0] == pytest.approx(-0.0003, abs=1e-6)
+    # an order that is a forwarding step is never swapped, however close the stamps
+    ok = _send(2.0, ["uav0", "uav1", "bs0"], d_s=0.0001, **{**seg, "id": 5})
+    assert follow(_table(ok), TL).path(0)[0] == ["s-uav0", "s-uav1", "s-bs0"]
+
+
+def test_stamps_further_out_of_order_than_early_s_are_not_reordered():
+    seg = {"proto": 6, "sport": 40000, "dport": 80, "seq": 1000, "flags": 0x10, "len": 1514, "id": 4}
+    rows = _send(1.0, ["uav0", "uav1", "bs0"], **seg)
+    rows[0]["t"] = rows[1]["t"] + 0.003
+    f = follow(_table(rows), TL)
+    assert f.n_packets == 2 and len(f.losses) == 1

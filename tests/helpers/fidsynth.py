@@ -89,16 +89,18 @@ class Traffic:
         self.ip_id.append(ip_id)
 
 
-# error(hop, packet index) -> seconds added to the model's arrival; drop(hop, index) -> lost there
+# error(hop, packet index) -> seconds added to the model's arrival; drop(hop, index) -> lost there;
+# stamp(position on PATH, packet index) -> seconds added to that capture's stamp alone
 ErrorFn = Callable[[int, int], float]
 DropFn = Callable[[int, int], bool]
 
 
 def build(root: Path, p: Plan, traffic: Traffic, error: ErrorFn = lambda h, k: 0.0,
           drop: DropFn = lambda h, k: False, info: RunInfo | None = None,
-          extra: dict[str, list[tuple[float, bytes]]] | None = None) -> RunDir:
+          extra: dict[str, list[tuple[float, bytes]]] | None = None, stamp: ErrorFn = lambda h, k: 0.0) -> RunDir:
     """Emulate `traffic` over PATH with the FIFO model + `error`, dropping what `drop` says;
-    `extra`: more frames per node's capture (Unix s, bytes), written as given."""
+    `extra`: more frames per node's capture (Unix s, bytes), written as given; `stamp`: a capture
+    stamp off from when the frame was there (the emulation goes on from the true time)."""
     rd = RunDir(root)
     rd.pcap_dir.mkdir(parents=True, exist_ok=True)
     rd.plan_json.write_text(p.to_json())
@@ -131,6 +133,7 @@ def build(root: Path, p: Plan, traffic: Traffic, error: ErrorFn = lambda h, k: 0
         t[got] = start + np.array([error(h, int(k)) for k in got])
         seen[b] = (got, t[got].copy())
     for node, (rows, times) in seen.items():
+        times = times + np.array([stamp(PATH.index(node), int(k)) for k in rows])
         frames = [(float(tt), udp_frame(IPS["uav0"], IPS["bs0"], traffic.sport[k], 9000,
                                         k % 65536 if traffic.ip_id[k] is None else traffic.ip_id[k],
                                         traffic.length[k])) for k, tt in zip(rows, times)]

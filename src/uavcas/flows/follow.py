@@ -13,6 +13,14 @@ times in the packet table. `follow(table, timeline)` tells those observations ap
   unconnected UDP with IP id 0, duplicate ACKs) go through `copies.match`: FIFO order on each
   link, steps within what the link allows, a copy lost on the link kept from taking the next
   one's observation. Two observations at one point are never merged into one packet.
+* **Stamps out of order.** Two switches can stamp one TCP frame out of order: the kernel keeps
+  TCP's departure time (a monotonic-clock `skb->tstamp`) across the whole fabric, so no switch
+  stamps the frame on receipt and its capture takes the time it got there, up to 0.15 ms late
+  here, more than a 0.1 ms hop. Adjacent observations of one packet whose time order is not a
+  forwarding step while the reverse is, within `copies.EARLY_S` of each other, are put in
+  forwarding order (`_forwarding_order`); left in time order, the packet split in two and the
+  link it crossed lost a frame that its queue did serve, making every later frame of that busy
+  period one frame's serialisation late in the audit.
 * **Loops.** A frame that comes back to a switch it already crossed, sent there by the
   forwarding in force (a loop while tables change), continues its chain: that observation is a
   `revisit`, which the audit counts as a fidelity failure, not a new packet.
@@ -42,7 +50,7 @@ from uavcas.emulation.controller import compute
 from uavcas.rundir import ForwardingEpoch, RunDir, RunDirError
 from uavcas.twin.model import Plan
 
-from .copies import CapacityFn, LinkBounds, Load, link_bounds, match
+from .copies import EARLY_S, CapacityFn, LinkBounds, Load, link_bounds, match
 from .packets import PacketTable, address_to_words, read_packets
 
 KEY_COLUMNS: tuple[str, ...] = (
@@ -230,6 +238,7 @@ def follow(table: PacketTable, timeline: Timeline, max_hop_s: float = MAX_HOP_S,
         for k in keys:
             ks = k[order]
             new_group[1:] |= ks[1:] != ks[:-1]
+    order, t_order = _forwarding_order(order, new_group, ts, node, dst, timeline)
     t_s, nd, ds = ts[order], node[order], dst[order]
     gap = np.diff(t_s, prepend=-np.inf)
     new_seg = new_group | (gap > max_hop_s)
@@ -261,19 +270,49 @@ def follow(table: PacketTable, timeline: Timeline, max_hop_s: float = MAX_HOP_S,
         chain[rows], revisit_sorted = match(seg[rows], t_s[rows], nd[rows], window[order][rows], now, nxt,
                                             timeline.links, load, max_hop_s, int(seg[-1]) + 1, capacity)
         revisit[order[rows]] = revisit_sorted
-    return _assemble(order, chain, revisit, ts, point, node, dst, window, table.points, point_node, timeline)
+    return _assemble(order, chain, revisit, ts, t_order, point, node, dst, window, table.points, point_node,
+                     timeline)
 
 
-def _assemble(order, chain, revisit, ts, point, node, dst, window, points, point_node, timeline) -> Followed:
+def _forwarding_order(order: np.ndarray, new_group: np.ndarray, ts: np.ndarray, node: np.ndarray,
+                      dst: np.ndarray, timeline: Timeline) -> tuple[np.ndarray, np.ndarray]:
+    """`order` (rows by identity, then time) with each adjacent pair of one packet's observations
+    that is stamped out of forwarding order swapped (module docstring), and the times to order
+    rows by from here on (`ts` with the two stamps of each swapped pair exchanged)."""
+    t_order = ts.copy()
+    if order.shape[0] < 2:
+        return order, t_order
+    a, b = order[:-1], order[1:]
+    near = ~new_group[1:] & (ts[b] - ts[a] <= EARLY_S) & (node[a] >= 0) & (node[b] >= 0) & (dst[a] >= 0)
+    k = np.flatnonzero(near)
+    if k.shape[0] == 0:
+        return order, t_order
+    ra, rb = a[k], b[k]
+    now_a, nxt_a = timeline.hops(ts[ra], node[ra], dst[ra])
+    now_b, nxt_b = timeline.hops(ts[rb], node[rb], dst[rb])
+    forward = (now_a == node[rb]) | (nxt_a == node[rb])
+    backward = (now_b == node[ra]) | (nxt_b == node[ra])
+    k = k[backward & ~forward]
+    k = k[np.concatenate([[True], np.diff(k) > 1])] if k.shape[0] else k  # pairs must not overlap
+    order = order.copy()
+    ra, rb = order[k].copy(), order[k + 1].copy()
+    order[k], order[k + 1] = rb, ra
+    t_order[ra], t_order[rb] = ts[rb], ts[ra]
+    return order, t_order
+
+
+def _assemble(order, chain, revisit, ts, t_order, point, node, dst, window, points, point_node,
+              timeline) -> Followed:
     n = ts.shape[0]
     chain_row = np.empty(n, dtype=np.int64)
     chain_row[order] = chain
-    # number packets by first observation (time, then row): stable across identical inputs
-    by_time = np.lexsort((np.arange(n), ts, chain_row)) if n else np.zeros(0, dtype=np.int64)
+    # number packets by first observation (time, then row): stable across identical inputs; an
+    # out-of-order pair counts in forwarding order (`t_order`)
+    by_time = np.lexsort((np.arange(n), t_order, chain_row)) if n else np.zeros(0, dtype=np.int64)
     c_sorted = chain_row[by_time]
     starts = np.flatnonzero(np.diff(c_sorted, prepend=-1) != 0) if n else np.zeros(0, dtype=np.int64)
     first_rows = by_time[starts]
-    rank = np.argsort(np.lexsort((first_rows, ts[first_rows])), kind="stable")
+    rank = np.argsort(np.lexsort((first_rows, t_order[first_rows])), kind="stable")
     pid_of_chain_pos = rank  # chain (in sorted order) -> pid
     seg_index = np.cumsum(np.diff(c_sorted, prepend=-1) != 0) - 1 if n else np.zeros(0, dtype=np.int64)
     pid = np.empty(n, dtype=np.int64)
