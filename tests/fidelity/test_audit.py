@@ -308,3 +308,29 @@ def test_a_frame_stamped_at_its_switch_after_it_reached_the_next_is_still_served
     assert f.packets == 20 and f.n == 40 and f.lost == 0 and f.late_over_1ms == 0.0 and f.verdict == "pass"
     # the late stamp reads as that frame (and the bucket's debt behind it) 0.12 ms early
     assert f.delay_error_max_ms < 0.002 and f.delay_error_p1_ms == pytest.approx(-0.12, abs=0.002)
+
+
+def _burst_records(burst_b: int) -> str:
+    return "".join(json.dumps({
+        "window": w, "src": a, "dst": b, "port": "l", "backend": "htb-nft-nfqueue", "planned_rate_mbps": 8.0,
+        "planned_delay_ms": 2.0, "planned_loss": 0.0, "applied_rate_mbps": 8.0, "applied_delay_ms": 2.0,
+        "applied_loss": 0.0, "applied_burst_b": burst_b}) + "\n" for w in (0, 1) for a, b in (("uav0", "uav1"),
+                                                                                            ("uav1", "bs0")))
+
+
+def test_the_model_holds_the_bucket_depth_the_run_logged(tmp_path):
+    # an emulator with a 25 ms bucket at 8 Mbit/s (25 kB, `shaping.htb_burst_bytes`): 20 frames of
+    # 1 kB every 0.5 s leave at once; a model with tc's default 1600 B would send them 1 ms apart
+    # and read the emulator up to 19 ms early
+    tr = Traffic()
+    for b in range(8):
+        for k in range(20):
+            tr.add(0.2 + 0.5 * b, 1000, 6000)
+    rd = build(tmp_path, plan(), tr, burst_b=25_000)
+    rd.shaping_jsonl.write_text(_burst_records(25_000))
+    f = audit(rd.root)
+    assert f.verdict == "pass" and f.lost == 0 and abs(f.delay_error_p1_ms) < 0.002 and f.delay_error_max_ms < 0.002
+    # a run that logged no depth is held to tc's default (runs made before it was logged)
+    rd.shaping_jsonl.write_text("")
+    old = audit(rd.root)
+    assert old.delay_error_p1_ms < -5 and "delay_early_p1_ms" in old.failed

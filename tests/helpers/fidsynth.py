@@ -97,10 +97,12 @@ DropFn = Callable[[int, int], bool]
 
 def build(root: Path, p: Plan, traffic: Traffic, error: ErrorFn = lambda h, k: 0.0,
           drop: DropFn = lambda h, k: False, info: RunInfo | None = None,
-          extra: dict[str, list[tuple[float, bytes]]] | None = None, stamp: ErrorFn = lambda h, k: 0.0) -> RunDir:
+          extra: dict[str, list[tuple[float, bytes]]] | None = None, stamp: ErrorFn = lambda h, k: 0.0,
+          burst_b: float = fifo.HTB_BURST_BYTES) -> RunDir:
     """Emulate `traffic` over PATH with the FIFO model + `error`, dropping what `drop` says;
     `extra`: more frames per node's capture (Unix s, bytes), written as given; `stamp`: a capture
-    stamp off from when the frame was there (the emulation goes on from the true time)."""
+    stamp off from when the frame was there (the emulation goes on from the true time); `burst_b`:
+    the emulator's token-bucket depth."""
     rd = RunDir(root)
     rd.pcap_dir.mkdir(parents=True, exist_ok=True)
     rd.plan_json.write_text(p.to_json())
@@ -127,7 +129,7 @@ def build(root: Path, p: Plan, traffic: Traffic, error: ErrorFn = lambda h, k: 0
         # the port's rate by window, as the emulator rewrites it in place at each window's start
         rates = [next(x for x in w.links if {x.a, x.b} == {a, b}).rate_mbps for w in p.windows]
         start = fifo.serve(ready[keep], length[idx[keep]], T0 + np.array([w.t_s for w in p.windows]),
-                           np.array(rates))
+                           np.array(rates), burst_b)
         alive[idx[~keep]] = False
         got = idx[keep]
         t[got] = start + np.array([error(h, int(k)) for k in got])

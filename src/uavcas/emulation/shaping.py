@@ -38,6 +38,14 @@ LOSS_SCALE = 1_000_000  # loss resolution: 1e-6
 QUEUE_MS = 50.0  # pfifo sized to ~50 ms at the link rate: no bufferbloat, room for TCP
 MTU_FRAME_B = 1514  # the largest Ethernet frame the fabric carries (1500 B MTU): queues and HTB quanta in its units
 DEFAULT_RATE_MBPS = 1000.0
+# HTB's bucket depth, as time at the class's rate (never under tc's own default, one 1600-byte
+# "MTU"). A backlogged class that the host froze for a while (the whole VM, captures included,
+# 5-23 ms at a time here) catches up only as far as its bucket holds: with tc's default, one
+# frame, so a longer freeze left every later frame of the busy period late by the rest, for as
+# long as the queue stayed non-empty (issue 28 item 3). The cost: after an idle period this many
+# milliseconds' worth of frames leave back to back; the audit's model has the same bucket.
+HTB_BURST_S = 0.025
+HTB_MIN_BURST_B = 1600
 
 
 @dataclass(frozen=True)
@@ -57,6 +65,7 @@ class Applied:
     rate_mbps: float | None
     delay_ms: float | None
     loss: float | None
+    burst_b: int | None = None  # the HTB class's burst as the kernel holds it
 
 
 @dataclass(frozen=True)
@@ -82,6 +91,9 @@ class ShapingRecord:
     # which setting of the window: 0 as the window was applied, k after its k-th mid-window
     # reshape (an attack's shaping, e.g. a jammer's start or stop); counters are per segment
     segment: int = 0
+    # the HTB class's burst (bytes) the kernel held: the audit's model uses it (None: not read back,
+    # runs made before it was logged, which had tc's default)
+    applied_burst_b: int | None = None
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -106,15 +118,23 @@ def rate_bit(rate_mbps: float) -> int:
     return max(8, round(rate_mbps * 1e6))
 
 
+def htb_burst_bytes(rate_mbps: float) -> int:
+    """The HTB class's burst and cburst at `rate_mbps` (`HTB_BURST_S`)."""
+    return max(HTB_MIN_BURST_B, math.ceil(rate_bit(rate_mbps) * HTB_BURST_S / 8))
+
+
+def _htb_class(rate_mbps: float) -> str:
+    r, b = rate_bit(rate_mbps), htb_burst_bytes(rate_mbps)
+    return f"htb rate {r}bit ceil {r}bit burst {b}b cburst {b}b quantum {MTU_FRAME_B}"
+
+
 def htb_init_lines(port: str, rate_mbps: float = DEFAULT_RATE_MBPS) -> list[str]:
-    r = rate_bit(rate_mbps)
     return [f"qdisc add dev {port} root handle 1: htb default 1",
-            f"class add dev {port} parent 1: classid 1:1 htb rate {r}bit ceil {r}bit quantum {MTU_FRAME_B}"]
+            f"class add dev {port} parent 1: classid 1:1 {_htb_class(rate_mbps)}"]
 
 
 def htb_change_line(port: str, rate_mbps: float) -> str:
-    r = rate_bit(rate_mbps)
-    return f"class change dev {port} parent 1: classid 1:1 htb rate {r}bit ceil {r}bit quantum {MTU_FRAME_B}"
+    return f"class change dev {port} parent 1: classid 1:1 {_htb_class(rate_mbps)}"
 
 
 def pfifo_line(verb: str, port: str, rate_mbps: float) -> str:
@@ -188,16 +208,26 @@ def parse_tc_rate(text: str) -> float:
     return float(m.group(1)) * _UNIT[m.group(2).lower()] / 1e6
 
 
-def read_htb_rates(fabric_ns: str, ports: Sequence[str]) -> dict[str, float]:
-    """Rates of class 1:1 per port (`tc -j class show` has no JSON for htb in iproute2 6.1)."""
+def parse_tc_size(text: str) -> int:
+    """'4800b' / '9Kb' (tc's sizes: bytes, binary multiples) -> bytes."""
+    m = re.fullmatch(r"([\d.]+)([KMG]?)b", text)
+    if not m:
+        raise ValueError(f"unparsable tc size {text!r}")
+    return round(float(m.group(1)) * {"": 1, "K": 1024, "M": 1024**2, "G": 1024**3}[m.group(2)])
+
+
+def read_htb_classes(fabric_ns: str, ports: Sequence[str]) -> dict[str, tuple[float, int]]:
+    """(rate in Mbit/s, burst in bytes) of class 1:1 per port (`tc -j class show` has no JSON for
+    htb in iproute2 6.1)."""
     if not ports:
         return {}
     out = kernel.run(["tc", "-n", fabric_ns, "-batch", "-"],
                      input_text="".join(f"class show dev {p}\n" for p in ports)).stdout
-    rates = [parse_tc_rate(m.group(1)) for m in re.finditer(r"class htb 1:1 .*?\brate (\S+)", out)]
-    if len(rates) != len(ports):
-        raise kernel.KernelError(f"htb readback: {len(rates)} classes for {len(ports)} ports")
-    return dict(zip(ports, rates))
+    got = [(parse_tc_rate(m.group(1)), parse_tc_size(m.group(2)))
+           for m in re.finditer(r"class htb 1:1 .*?\brate (\S+) .*?\bburst (\S+)", out)]
+    if len(got) != len(ports):
+        raise kernel.KernelError(f"htb readback: {len(got)} classes for {len(ports)} ports")
+    return dict(zip(ports, got))
 
 
 class Shaper(ABC):
@@ -248,7 +278,7 @@ class Shaper(ABC):
         for s in shapes:
             a = applied.get(s.port, Applied(None, None, None))
             out.append(ShapingRecord(window, s.src, s.dst, s.port, self.backend, s.rate_mbps, s.delay_ms, s.loss,
-                                     a.rate_mbps, a.delay_ms, a.loss))
+                                     a.rate_mbps, a.delay_ms, a.loss, applied_burst_b=a.burst_b))
         return out
 
     def _changed(self, shapes: Iterable[Shape]) -> list[Shape]:
@@ -283,7 +313,7 @@ class NetemShaper(Shaper):
         return {"kernel_s": time.perf_counter() - t0}
 
     def readback(self, ports: Sequence[str]) -> dict[str, Applied]:
-        rates = read_htb_rates(self.fabric_ns, ports)
+        htb = read_htb_classes(self.fabric_ns, ports)
         qd = json.loads(kernel.run(["tc", "-n", self.fabric_ns, "-j", "qdisc", "show"]).stdout or "[]")
         netem = {q.get("dev"): q.get("options", {}) for q in qd if q.get("kind") == "netem"}
         out = {}
@@ -292,7 +322,8 @@ class NetemShaper(Shaper):
             delay = opt.get("delay", {})
             delay_s = delay.get("delay") if isinstance(delay, dict) else None
             loss = opt.get("loss-random", {}).get("loss", 0.0) if netem.get(p) is not None else None
-            out[p] = Applied(rates.get(p), None if delay_s is None else delay_s * 1000, loss)
+            rate, burst = htb.get(p, (None, None))
+            out[p] = Applied(rate, None if delay_s is None else delay_s * 1000, loss, burst)
         return out
 
     def counters(self, ports: Sequence[str]) -> dict[str, PortCounters]:
@@ -394,10 +425,11 @@ class FallbackShaper(Shaper):
         return {"delay_s": t2 - t1, "kernel_s": time.perf_counter() - t2}
 
     def readback(self, ports: Sequence[str]) -> dict[str, Applied]:
-        rates = read_htb_rates(self.fabric_ns, ports)
+        htb = read_htb_classes(self.fabric_ns, ports)
         losses = read_nft_losses(self.fabric_ns)
         table = nfqdelay.request(self.ctl_path, {"op": "get"})["table"] if self.daemon else {}
-        return {p: Applied(rates.get(p), table[p] / 1000 if p in table else None, losses.get(p, 0.0)) for p in ports}
+        return {p: Applied(htb.get(p, (None,))[0], table[p] / 1000 if p in table else None, losses.get(p, 0.0),
+                           htb.get(p, (None, None))[1]) for p in ports}
 
     def counters(self, ports: Sequence[str]) -> dict[str, PortCounters]:
         qd, link = read_qdisc_counters(self.fabric_ns), read_link_drops(self.fabric_ns)

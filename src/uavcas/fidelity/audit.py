@@ -30,6 +30,7 @@ from pathlib import Path
 
 import numpy as np
 
+from uavcas.emulation.shaping import htb_burst_bytes
 from uavcas.flows.follow import Followed, Timeline, follow, node_of_point, run_timeline
 from uavcas.flows.packets import PacketTable, read_packets
 from uavcas.rundir import RunDir, RunInfo
@@ -134,6 +135,8 @@ class _Audit:
         self.shaping = shaping
         self.setting = planned_settings(self.shaping)  # (window, segment, i, j) -> (delay, rate, loss)
         self.netem = info is not None and info.shaper_backend == "netem"
+        self.bursts = {(r["window"], r.get("segment", 0), r["src"], r["dst"]): r["applied_burst_b"]
+                       for r in rd.read_shaping() if r.get("applied_burst_b") is not None}
         self._crossings()
         self._losses()
         self._revisits()
@@ -185,7 +188,7 @@ class _Audit:
             o = np.lexsort((c.t_from[g], ready))
             g, k, ready = g[o], k[o], ready[o]
             w[g], sg[g] = ps.window[k], ps.segment[k]
-            start[g] = fifo.serve(ready, length[g], ps.t_s, ps.rate_mbps, self.tol.burst_bytes, ps.until_s,
+            start[g] = fifo.serve(ready, length[g], ps.t_s, ps.rate_mbps, self._burst(key, ps), ps.until_s,
                                   c.t_to[g])
             entered = c.t_from[g] if self.netem else ready
             port = _Port(ps, np.sort(entered), ready, start[g], g)
@@ -197,6 +200,16 @@ class _Audit:
         self.err_ms = (c.t_to - start) * 1000.0
         # the real queue took these frames, so it was not full: a model holding its limit is wrong
         self.c_over = ~np.isnan(start) & (held >= limit)
+
+    def _burst(self, key: int, ps: PortShaping) -> np.ndarray:
+        """The HTB bucket depth (bytes) of each of a port's settings: as the run logged the kernel
+        held it; a setting it did not log had `htb_burst_bytes` of its rate; a run that logged none
+        (made before), tc's default, `Tolerances.burst_bytes`."""
+        if not self.bursts:
+            return np.full(ps.rate_mbps.shape, self.tol.burst_bytes)
+        src, dst = self.names[key // self.n], self.names[key % self.n]
+        return np.array([self.bursts.get((int(w), int(sg), src, dst), htb_burst_bytes(float(r)))
+                         for w, sg, r in zip(ps.window, ps.segment, ps.rate_mbps)], dtype=np.float64)
 
     # losses ----------------------------------------------------------------------------------
     def _losses(self) -> None:

@@ -7,15 +7,16 @@ switch j on a link the plan gives delay d, rate R and loss p in the window in fo
    drawn before the delay, as the emulator's nft rule runs before its delay stage);
 2. **FIFO at the planned rate**: ready frames are served first come, first served (ties in
    capture order) by a token bucket of rate R and depth B bytes, the HTB class the emulator
-   installs (`burst` B, default `HTB_BURST_BYTES`, tc's default on a high-resolution-timer
-   kernel: one MTU). A frame may start when the bucket is not in debt and the frame before it
-   has started; starting charges its length L (Ethernet frame bytes, the captured `frame_len`),
-   and the bucket refills at R up to B:
+   installs (`burst` B: what the run logged the kernel held, `emulation.shaping.htb_burst_bytes`
+   of the rate; for runs that did not log it `HTB_BURST_BYTES`, tc's default on a
+   high-resolution-timer kernel: one MTU). A frame may start when the bucket is not in debt and
+   the frame before it has started; starting charges its length L (Ethernet frame bytes, the
+   captured `frame_len`), and the bucket refills at R up to B:
 
        start_k = max(r_k, start_{k-1}, Z_{k-1})
-       Z_k     = max(Z_{k-1}, start_k - 8 B / R(start_k)) + 8 L_k / R(start_k)   (Z: debt paid)
+       Z_k     = max(Z_{k-1}, start_k - 8 B(start_k) / R(start_k)) + 8 L_k / R(start_k)   (Z: debt paid)
 
-   R(t) is the rate *in force at t*: a window change rewrites the HTB class in place, the
+   R(t) and B(t) are the rate and depth *in force at t*: a window change rewrites the HTB class in place, the
    frames already queued stay and HTB charges each one at dequeue with the class's rate then
    (`htb_charge_class`), while a debt already run up is kept in time units (HTB's tokens are
    nanoseconds), so Z carries over a change unscaled;
@@ -45,12 +46,13 @@ CHANGE_HORIZON_S = 0.5  # how long after an apply ends the candidate change time
 
 
 def serve(ready_s: np.ndarray, length_b: np.ndarray, rate_t_s: np.ndarray, rate_mbps: np.ndarray,
-          burst_b: float = HTB_BURST_BYTES, rate_until_s: np.ndarray | None = None,
+          burst_b: float | np.ndarray = HTB_BURST_BYTES, rate_until_s: np.ndarray | None = None,
           seen_s: np.ndarray | None = None) -> np.ndarray:
     """Model start times of frames (already sorted by ready time) on one link direction.
 
     The rate is piecewise constant: `rate_mbps[k]` from `rate_t_s[k]` on (ascending; the first
-    rate also before `rate_t_s[0]`). Each frame is charged at the rate in force when it starts.
+    rate also before `rate_t_s[0]`), and so is the bucket's depth `burst_b` (one value for every
+    setting, or one per setting). Each frame is charged at the setting in force when it starts.
 
     Where a change is only known to have happened somewhere in `[rate_t_s[k], rate_until_s[k])`
     (a window's apply rewrites every port in one batch and logs when the batch began and ended,
@@ -69,9 +71,10 @@ def serve(ready_s: np.ndarray, length_b: np.ndarray, rate_t_s: np.ndarray, rate_
     base = float(ready_s[0])
     change = np.asarray(rate_t_s, dtype=np.float64) - base
     until = change if rate_until_s is None else np.asarray(rate_until_s, dtype=np.float64) - base
+    burst = np.broadcast_to(np.asarray(burst_b, dtype=np.float64) * 8.0, np.shape(rate_mbps))
     q = _Queue(ready=(ready_s - base).tolist(), bits=(np.asarray(length_b, dtype=np.float64) * 8.0).tolist(),
                bits_per_s=(np.asarray(rate_mbps, dtype=np.float64) * 1e6).tolist(),
-               change=change.tolist() + [math.inf], until=until.tolist() + [math.inf], burst=burst_b * 8.0,
+               change=change.tolist() + [math.inf], until=until.tolist() + [math.inf], burst=burst.tolist(),
                seen=None if seen_s is None else (np.asarray(seen_s, dtype=np.float64) - base).tolist())
     return np.array(q.serve(), dtype=np.float64) + base
 
@@ -85,7 +88,7 @@ class _Queue:
     bits_per_s: list[float]  # per rate setting
     change: list[float]  # setting k holds from change[k] (inf-terminated) ...
     until: list[float]  # ... at the latest from until[k]
-    burst: float
+    burst: list[float]  # bucket depth (bits) per setting
     seen: list[float] | None
 
     def serve(self) -> list[float]:
@@ -100,15 +103,15 @@ class _Queue:
                     m, prev, debt = self._resolve(m, prev, debt, k, out)
                 k += 1
                 continue
-            debt = self._charge(debt, s, self.bits[m], self.bits_per_s[k])
+            debt = self._charge(debt, s, self.bits[m], self.bits_per_s[k], self.burst[k])
             out[m] = prev = s
             m += 1
         return out
 
-    def _charge(self, debt: float, s: float, bits: float, bits_per_s: float) -> float:
+    def _charge(self, debt: float, s: float, bits: float, bits_per_s: float, burst: float) -> float:
         """When the bucket's debt is paid after a frame of `bits` starts at s (HTB: tokens capped
         at one burst, then the frame's cost at the class rate)."""
-        floor = s - self.burst / bits_per_s
+        floor = s - burst / bits_per_s
         return (debt if debt > floor else floor) + bits / bits_per_s
 
     def _resolve(self, m: int, prev: float, debt: float, k: int, out: list[float]) -> tuple[int, float, float]:
@@ -133,12 +136,13 @@ class _Queue:
         """Frames m..end-1 with the first h of them at setting k and the rest at k+1: (sum of
         |start - seen|, starts, last start, debt), or None when that cannot be."""
         old, new, until = self.bits_per_s[k], self.bits_per_s[k + 1], self.until[k + 1]
+        burst_old, burst_new = self.burst[k], self.burst[k + 1]
         starts, cost = [], 0.0
         for x in range(m, end):
             s = max(self.ready[x], prev, debt)
             if x - m < h and s >= until:
                 return None
-            debt = self._charge(debt, s, self.bits[x], old if x - m < h else new)
+            debt = self._charge(debt, s, self.bits[x], *((old, burst_old) if x - m < h else (new, burst_new)))
             starts.append(s)
             prev = s
             cost += abs(s - self.seen[x])

@@ -43,7 +43,8 @@ class Tolerances(_Strict):
     loops: float = Field(0.0, description="packets that looped (`fidelity.loops`: not re-routed in flight)")
     max_hop_s: float = Field(1.0, description="longest plausible hop (the packet follower)")
     saturated_bin_s: float = Field(0.2, description="bin width for throughput on saturated links")
-    burst_bytes: float = Field(1600.0, description="token-bucket depth of the rate stage (HTB burst)")
+    burst_bytes: float = Field(1600.0, description="token-bucket depth of the rate stage (HTB burst) of runs that "
+                               "did not log it (shaping.jsonl applied_burst_b): tc's default")
 
 
 class DelayErrors(_Strict):
