@@ -303,7 +303,7 @@ def test_a_frame_stamped_at_its_switch_after_it_reached_the_next_is_still_served
     tr.add(1.0, 1514, 6000)
     for k in range(19):
         tr.add(1.00013 + k * 1e-6, 1514, 6000)
-    rd = build(tmp_path, plan(delay_ms=0.1), tr, stamp=lambda h, k: 1.2e-4 if (h, k) == (0, 0) else 0.0)
+    rd = build(tmp_path, plan(delay_ms=0.1), tr, stamp=lambda h, k: 1.2e-4 if (h, k) == (0, 0) else 0.0, tcp=True)
     f = audit(rd.root)
     assert f.packets == 20 and f.n == 40 and f.lost == 0 and f.late_over_1ms == 0.0 and f.verdict == "pass"
     # the late stamp reads as that frame (and the bucket's debt behind it) 0.12 ms early

@@ -13,7 +13,7 @@ from helpers.followgen import D_MS, IPS, PLAN, POINTS, TL, TL_NH
 from helpers.followgen import send as _send
 from helpers.followgen import table as _table
 from helpers.pcapgen import T0, udp, write
-from uavcas.flows.follow import Timeline, follow, follow_run
+from uavcas.flows.follow import STAMP_SKEW_S, Timeline, follow, follow_run
 from uavcas.rundir import ForwardingEpoch, RunDir
 
 
@@ -267,7 +267,7 @@ def test_a_lost_copy_is_judged_at_the_rate_the_port_held():
 
 def test_two_stamps_out_of_forwarding_order_are_one_packet_in_forwarding_order():
     # the frame reached uav1 0.3 ms before uav0's capture stamped it (a TCP frame: no switch stamps
-    # it on receipt); swapped within `copies.EARLY_S`, it is one packet crossing both hops
+    # it on receipt); swapped within `STAMP_SKEW_S`, it is one packet crossing both hops
     seg = {"proto": 6, "sport": 40000, "dport": 80, "seq": 1000, "flags": 0x10, "len": 1514, "id": 4}
     rows = _send(1.0, ["uav0", "uav1", "bs0"], **seg)
     rows[0]["t"] = rows[1]["t"] + 0.0003
@@ -284,9 +284,12 @@ def test_two_stamps_out_of_forwarding_order_are_one_packet_in_forwarding_order()
     assert follow(_table(ok), TL).path(0)[0] == ["s-uav0", "s-uav1", "s-bs0"]
 
 
-def test_stamps_further_out_of_order_than_early_s_are_not_reordered():
+def test_only_tcp_stamps_within_stamp_skew_s_are_reordered():
+    # a UDP frame carries no departure time (every switch stamps it on receipt), and stamps further
+    # apart than STAMP_SKEW_S are not one frame's
     seg = {"proto": 6, "sport": 40000, "dport": 80, "seq": 1000, "flags": 0x10, "len": 1514, "id": 4}
-    rows = _send(1.0, ["uav0", "uav1", "bs0"], **seg)
-    rows[0]["t"] = rows[1]["t"] + 0.003
-    f = follow(_table(rows), TL)
-    assert f.n_packets == 2 and len(f.losses) == 1
+    for hdr, skew in (({**seg, "proto": 17}, 0.0003), (seg, STAMP_SKEW_S + 0.001)):
+        rows = _send(1.0, ["uav0", "uav1", "bs0"], **hdr)
+        rows[0]["t"] = rows[1]["t"] + skew
+        f = follow(_table(rows), TL)
+        assert ["s-uav0", "s-uav1", "s-bs0"] not in [f.path(p)[0] for p in range(f.n_packets)]

@@ -64,6 +64,14 @@ def udp_frame(src: str, dst: str, sport: int, dport: int, ip_id: int, frame_len:
     return b"\x02" * 6 + b"\x04" * 6 + b"\x08\x00" + ip + udp + b"\0" * (ip_len - 28)
 
 
+def tcp_frame(src: str, dst: str, sport: int, dport: int, ip_id: int, frame_len: int) -> bytes:
+    """Ethernet + IPv4 + TCP (an ACK, sequence number = IP id), exactly `frame_len` bytes."""
+    ip_len = frame_len - 14
+    ip = struct.pack("!BBHHHBBH4s4s", 0x45, 0, ip_len, ip_id, 0x4000, 64, 6, 0, _ip(src), _ip(dst))
+    tcp = struct.pack("!HHIIBBHHH", sport, dport, ip_id, 1, 5 << 4, 0x10, 65535, 0, 0)
+    return b"\x02" * 6 + b"\x04" * 6 + b"\x08\x00" + ip + tcp + b"\0" * (ip_len - 40)
+
+
 def write_pcap(path: Path, frames: list[tuple[float, bytes]]) -> None:
     out = [struct.pack("<IHHiIII", 0xA1B2C3D4, 2, 4, 0, 0, 65535, 1)]
     for t, frame in sorted(frames, key=lambda x: x[0]):
@@ -98,11 +106,11 @@ DropFn = Callable[[int, int], bool]
 def build(root: Path, p: Plan, traffic: Traffic, error: ErrorFn = lambda h, k: 0.0,
           drop: DropFn = lambda h, k: False, info: RunInfo | None = None,
           extra: dict[str, list[tuple[float, bytes]]] | None = None, stamp: ErrorFn = lambda h, k: 0.0,
-          burst_b: float = fifo.HTB_BURST_BYTES) -> RunDir:
+          burst_b: float = fifo.HTB_BURST_BYTES, tcp: bool = False) -> RunDir:
     """Emulate `traffic` over PATH with the FIFO model + `error`, dropping what `drop` says;
     `extra`: more frames per node's capture (Unix s, bytes), written as given; `stamp`: a capture
     stamp off from when the frame was there (the emulation goes on from the true time); `burst_b`:
-    the emulator's token-bucket depth."""
+    the emulator's token-bucket depth; `tcp`: TCP segments instead of UDP datagrams."""
     rd = RunDir(root)
     rd.pcap_dir.mkdir(parents=True, exist_ok=True)
     rd.plan_json.write_text(p.to_json())
@@ -136,7 +144,7 @@ def build(root: Path, p: Plan, traffic: Traffic, error: ErrorFn = lambda h, k: 0
         seen[b] = (got, t[got].copy())
     for node, (rows, times) in seen.items():
         times = times + np.array([stamp(PATH.index(node), int(k)) for k in rows])
-        frames = [(float(tt), udp_frame(IPS["uav0"], IPS["bs0"], traffic.sport[k], 9000,
+        frames = [(float(tt), (tcp_frame if tcp else udp_frame)(IPS["uav0"], IPS["bs0"], traffic.sport[k], 9000,
                                         k % 65536 if traffic.ip_id[k] is None else traffic.ip_id[k],
                                         traffic.length[k])) for k, tt in zip(rows, times)]
         write_pcap(rd.pcap_dir / f"s-{node}.pcap", frames + (extra or {}).get(node, []))

@@ -13,14 +13,17 @@ times in the packet table. `follow(table, timeline)` tells those observations ap
   unconnected UDP with IP id 0, duplicate ACKs) go through `copies.match`: FIFO order on each
   link, steps within what the link allows, a copy lost on the link kept from taking the next
   one's observation. Two observations at one point are never merged into one packet.
-* **Stamps out of order.** Two switches can stamp one TCP frame out of order: the kernel keeps
+* **Stamps out of order.** Two switches can stamp one TCP frame out of order. The kernel keeps
   TCP's departure time (a monotonic-clock `skb->tstamp`) across the whole fabric, so no switch
-  stamps the frame on receipt and its capture takes the time it got there, up to 0.15 ms late
-  here, more than a 0.1 ms hop. Adjacent observations of one packet whose time order is not a
-  forwarding step while the reverse is, within `copies.EARLY_S` of each other, are put in
-  forwarding order (`_forwarding_order`); left in time order, the packet split in two and the
-  link it crossed lost a frame that its queue did serve, making every later frame of that busy
-  period one frame's serialisation late in the audit.
+  stamps a TCP frame on receipt: the capture (`skb_tstamp`: none, so the clock when the tap
+  runs) and the delay stage (`skb_tstamp_cond`: the clock when it queues the frame) each read
+  the clock when they get to it. A capture read after the frame had already crossed the next
+  hop (a 0.1 ms hop; a host freeze in between: seen up to 23 ms, all TCP) put it first at the
+  next switch. Adjacent observations of one TCP packet whose time order is not a forwarding
+  step while the reverse is, within `STAMP_SKEW_S` of each other, are put in forwarding order
+  (`_forwarding_order`). Left in time order, the packet split in two and the link it crossed
+  lost a frame that its queue did serve: every later frame of that busy period was one frame's
+  serialisation late in the audit.
 * **Loops.** A frame that comes back to a switch it already crossed, sent there by the
   forwarding in force (a loop while tables change), continues its chain: that observation is a
   `revisit`, which the audit counts as a fidelity failure, not a new packet.
@@ -50,7 +53,7 @@ from uavcas.emulation.controller import compute
 from uavcas.rundir import ForwardingEpoch, RunDir, RunDirError
 from uavcas.twin.model import Plan
 
-from .copies import EARLY_S, CapacityFn, LinkBounds, Load, link_bounds, match
+from .copies import CapacityFn, LinkBounds, Load, link_bounds, match
 from .packets import PacketTable, address_to_words, read_packets
 
 KEY_COLUMNS: tuple[str, ...] = (
@@ -59,6 +62,10 @@ KEY_COLUMNS: tuple[str, ...] = (
 )  # fmt: skip
 MAX_HOP_S = 1.0  # planned delay + a full queue + scheduling lateness stays far below this
 POINT_PREFIX = "s-"  # capture point of node X's switch: s-X (docs/formats.md)
+# how far out of order two switches' stamps of one TCP frame can be (module docstring): the host
+# freezes it takes, 23 ms seen here, the delay daemon's release stalls up to 34 ms
+STAMP_SKEW_S = 0.05
+TCP = 6
 
 
 def node_of_point(point: str) -> str | None:
@@ -238,7 +245,7 @@ def follow(table: PacketTable, timeline: Timeline, max_hop_s: float = MAX_HOP_S,
         for k in keys:
             ks = k[order]
             new_group[1:] |= ks[1:] != ks[:-1]
-    order, t_order = _forwarding_order(order, new_group, ts, node, dst, timeline)
+    order, t_order = _forwarding_order(order, new_group, ts, np.asarray(table["proto"]), node, dst, timeline)
     t_s, nd, ds = ts[order], node[order], dst[order]
     gap = np.diff(t_s, prepend=-np.inf)
     new_seg = new_group | (gap > max_hop_s)
@@ -274,8 +281,8 @@ def follow(table: PacketTable, timeline: Timeline, max_hop_s: float = MAX_HOP_S,
                      timeline)
 
 
-def _forwarding_order(order: np.ndarray, new_group: np.ndarray, ts: np.ndarray, node: np.ndarray,
-                      dst: np.ndarray, timeline: Timeline) -> tuple[np.ndarray, np.ndarray]:
+def _forwarding_order(order: np.ndarray, new_group: np.ndarray, ts: np.ndarray, proto: np.ndarray,
+                      node: np.ndarray, dst: np.ndarray, timeline: Timeline) -> tuple[np.ndarray, np.ndarray]:
     """`order` (rows by identity, then time) with each adjacent pair of one packet's observations
     that is stamped out of forwarding order swapped (module docstring), and the times to order
     rows by from here on (`ts` with the two stamps of each swapped pair exchanged)."""
@@ -283,7 +290,8 @@ def _forwarding_order(order: np.ndarray, new_group: np.ndarray, ts: np.ndarray, 
     if order.shape[0] < 2:
         return order, t_order
     a, b = order[:-1], order[1:]
-    near = ~new_group[1:] & (ts[b] - ts[a] <= EARLY_S) & (node[a] >= 0) & (node[b] >= 0) & (dst[a] >= 0)
+    near = (~new_group[1:] & (ts[b] - ts[a] <= STAMP_SKEW_S) & (proto[a] == TCP) & (node[a] >= 0) & (node[b] >= 0)
+            & (dst[a] >= 0))
     k = np.flatnonzero(near)
     if k.shape[0] == 0:
         return order, t_order
