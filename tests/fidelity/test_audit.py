@@ -319,9 +319,9 @@ def _burst_records(burst_b: int) -> str:
 
 
 def test_the_model_holds_the_bucket_depth_the_run_logged(tmp_path):
-    # an emulator with a 25 ms bucket at 8 Mbit/s (25 kB, `shaping.htb_burst_bytes`): 20 frames of
-    # 1 kB every 0.5 s leave at once; a model with tc's default 1600 B would send them 1 ms apart
-    # and read the emulator up to 19 ms early
+    # a kernel that held a 25 kB bucket at 8 Mbit/s (tc's default is 1600 B + rate/HZ without
+    # high-resolution timers; a burst asked for): 20 frames of 1 kB every 0.5 s leave at once; a
+    # model with this kernel's 1600 B would send them 1 ms apart and read them up to 19 ms early
     tr = Traffic()
     for b in range(8):
         for k in range(20):

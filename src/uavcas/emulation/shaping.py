@@ -38,14 +38,6 @@ LOSS_SCALE = 1_000_000  # loss resolution: 1e-6
 QUEUE_MS = 50.0  # pfifo sized to ~50 ms at the link rate: no bufferbloat, room for TCP
 MTU_FRAME_B = 1514  # the largest Ethernet frame the fabric carries (1500 B MTU): queues and HTB quanta in its units
 DEFAULT_RATE_MBPS = 1000.0
-# HTB's bucket depth, as time at the class's rate (never under tc's own default, one 1600-byte
-# "MTU"). A backlogged class that the host froze for a while (the whole VM, captures included,
-# 5-23 ms at a time here) catches up only as far as its bucket holds: with tc's default, one
-# frame, so a longer freeze left every later frame of the busy period late by the rest, for as
-# long as the queue stayed non-empty (issue 28 item 3). The cost: after an idle period this many
-# milliseconds' worth of frames leave back to back; the audit's model has the same bucket.
-HTB_BURST_S = 0.025
-HTB_MIN_BURST_B = 1600
 
 
 @dataclass(frozen=True)
@@ -91,8 +83,9 @@ class ShapingRecord:
     # which setting of the window: 0 as the window was applied, k after its k-th mid-window
     # reshape (an attack's shaping, e.g. a jammer's start or stop); counters are per segment
     segment: int = 0
-    # the HTB class's burst (bytes) the kernel held: the audit's model uses it (None: not read back,
-    # runs made before it was logged, which had tc's default)
+    # the HTB class's burst (bytes) the kernel held: the audit's model uses it. tc's default is
+    # one 1600-byte "MTU" plus rate/HZ where the kernel lacks high-resolution timers, so it is
+    # read back, not assumed (None: not read back; runs made before it was logged had 1600 B)
     applied_burst_b: int | None = None
 
     def to_dict(self) -> dict:
@@ -118,23 +111,15 @@ def rate_bit(rate_mbps: float) -> int:
     return max(8, round(rate_mbps * 1e6))
 
 
-def htb_burst_bytes(rate_mbps: float) -> int:
-    """The HTB class's burst and cburst at `rate_mbps` (`HTB_BURST_S`)."""
-    return max(HTB_MIN_BURST_B, math.ceil(rate_bit(rate_mbps) * HTB_BURST_S / 8))
-
-
-def _htb_class(rate_mbps: float) -> str:
-    r, b = rate_bit(rate_mbps), htb_burst_bytes(rate_mbps)
-    return f"htb rate {r}bit ceil {r}bit burst {b}b cburst {b}b quantum {MTU_FRAME_B}"
-
-
 def htb_init_lines(port: str, rate_mbps: float = DEFAULT_RATE_MBPS) -> list[str]:
+    r = rate_bit(rate_mbps)
     return [f"qdisc add dev {port} root handle 1: htb default 1",
-            f"class add dev {port} parent 1: classid 1:1 {_htb_class(rate_mbps)}"]
+            f"class add dev {port} parent 1: classid 1:1 htb rate {r}bit ceil {r}bit quantum {MTU_FRAME_B}"]
 
 
 def htb_change_line(port: str, rate_mbps: float) -> str:
-    return f"class change dev {port} parent 1: classid 1:1 {_htb_class(rate_mbps)}"
+    r = rate_bit(rate_mbps)
+    return f"class change dev {port} parent 1: classid 1:1 htb rate {r}bit ceil {r}bit quantum {MTU_FRAME_B}"
 
 
 def pfifo_line(verb: str, port: str, rate_mbps: float) -> str:

@@ -30,7 +30,6 @@ from pathlib import Path
 
 import numpy as np
 
-from uavcas.emulation.shaping import htb_burst_bytes
 from uavcas.flows.follow import Followed, Timeline, follow, node_of_point, run_timeline
 from uavcas.flows.packets import PacketTable, read_packets
 from uavcas.rundir import RunDir, RunInfo
@@ -202,14 +201,12 @@ class _Audit:
         self.c_over = ~np.isnan(start) & (held >= limit)
 
     def _burst(self, key: int, ps: PortShaping) -> np.ndarray:
-        """The HTB bucket depth (bytes) of each of a port's settings: as the run logged the kernel
-        held it; a setting it did not log had `htb_burst_bytes` of its rate; a run that logged none
-        (made before), tc's default, `Tolerances.burst_bytes`."""
-        if not self.bursts:
-            return np.full(ps.rate_mbps.shape, self.tol.burst_bytes)
+        """The HTB bucket depth (bytes) of each of a port's settings, as the run logged the kernel
+        held it (shaping.jsonl `applied_burst_b`); where it did not (runs made before it was
+        logged), tc's default on this kernel, `Tolerances.burst_bytes`."""
         src, dst = self.names[key // self.n], self.names[key % self.n]
-        return np.array([self.bursts.get((int(w), int(sg), src, dst), htb_burst_bytes(float(r)))
-                         for w, sg, r in zip(ps.window, ps.segment, ps.rate_mbps)], dtype=np.float64)
+        return np.array([self.bursts.get((int(w), int(sg), src, dst), self.tol.burst_bytes)
+                         for w, sg in zip(ps.window, ps.segment)], dtype=np.float64)
 
     # losses ----------------------------------------------------------------------------------
     def _losses(self) -> None:

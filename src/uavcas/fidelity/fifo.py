@@ -7,9 +7,9 @@ switch j on a link the plan gives delay d, rate R and loss p in the window in fo
    drawn before the delay, as the emulator's nft rule runs before its delay stage);
 2. **FIFO at the planned rate**: ready frames are served first come, first served (ties in
    capture order) by a token bucket of rate R and depth B bytes, the HTB class the emulator
-   installs (`burst` B: what the run logged the kernel held, `emulation.shaping.htb_burst_bytes`
-   of the rate; for runs that did not log it `HTB_BURST_BYTES`, tc's default on a
-   high-resolution-timer kernel: one MTU). A frame may start when the bucket is not in debt and
+   installs (`burst` B: what the run logged the kernel held; for runs that did not log it
+   `HTB_BURST_BYTES`, tc's default on a high-resolution-timer kernel: one MTU, so a backlogged
+   class the host froze catches up only one frame's worth). A frame may start when the bucket is not in debt and
    the frame before it has started; starting charges its length L (Ethernet frame bytes, the
    captured `frame_len`), and the bucket refills at R up to B:
 
