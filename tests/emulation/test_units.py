@@ -14,6 +14,7 @@ from uavcas.emulation.controller import Detour, adjacency, compute, shortest_pat
 from uavcas.emulation.hosts import HostSpec, host_lines, node_argv, subnet_prefixlen
 from uavcas.emulation.naming import Naming
 from uavcas.emulation.nfqdelay import verdict_msg
+from uavcas.emulation.readback import parse_tc_rate, parse_tc_size
 from uavcas.emulation.shaping import (
     FallbackShaper,
     NetemShaper,
@@ -21,8 +22,6 @@ from uavcas.emulation.shaping import (
     nft_loss_lines,
     nft_port_init_lines,
     nft_table_ruleset,
-    parse_tc_rate,
-    parse_tc_size,
     queue_limit_pkts,
 )
 
