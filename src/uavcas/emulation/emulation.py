@@ -13,6 +13,7 @@ exit; after SIGKILL, `uavcas clean` uses the run's registry entry.
 from __future__ import annotations
 
 import atexit
+import os
 import signal
 import subprocess
 import threading
@@ -102,7 +103,7 @@ class Emulation:
             raise kernel.KernelError("emulation needs root and network namespaces")
         t0 = time.perf_counter()
         cgroups = self.hosts.caps.planned_dirs(self.names) if self.cpu_cap else []
-        self._lock = cleanup.RunLock(cleanup.RunRecord(self.prefix, __import__("os").getpid(),
+        self._lock = cleanup.RunLock(cleanup.RunRecord(self.prefix, os.getpid(),
                                                        self.namespaces, cgroups))
         self._torn_down = False
         atexit.register(self.teardown)

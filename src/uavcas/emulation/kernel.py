@@ -76,16 +76,26 @@ def run_batches(batches: Sequence[Batch], timeout_s: float = DEFAULT_TIMEOUT_S) 
         procs.append((b, p))
     errors = []
     deadline = time.monotonic() + timeout_s
-    for b, p in procs:
-        text = "\n".join(b.lines) + "\n"
-        try:
-            _, err = p.communicate(text, timeout=max(0.1, deadline - time.monotonic()))
-        except subprocess.TimeoutExpired:
-            p.kill()
-            _, err = p.communicate()
-            err = f"timed out after {timeout_s:g} s. {err}"
-        if p.returncode != 0:
-            errors.append(f"{b.tool} batch in {b.ns or 'root'} -> rc {p.returncode}: {err.strip()[:1500]}")
+    try:
+        for b, p in procs:
+            text = "\n".join(b.lines) + "\n"
+            try:
+                _, err = p.communicate(text, timeout=max(0.1, deadline - time.monotonic()))
+            except subprocess.TimeoutExpired:
+                p.kill()
+                _, err = p.communicate()
+                err = f"timed out after {timeout_s:g} s. {err}"
+            if p.returncode != 0:
+                errors.append(f"{b.tool} batch in {b.ns or 'root'} -> rc {p.returncode}: {err.strip()[:1500]}")
+    except BaseException:
+        # A signal turned into an exception (SIGTERM -> SystemExit) while a batch ran: the batch
+        # must not go on creating what the caller's teardown is about to remove (a namespace
+        # added after the teardown looked was left behind by 3 of 5 runs killed during set-up).
+        for _, p in procs:
+            if p.poll() is None:
+                p.kill()
+            p.wait()
+        raise
     if errors:
         raise KernelError("; ".join(errors))
 
