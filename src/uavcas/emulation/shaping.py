@@ -380,8 +380,11 @@ class FallbackShaper(Shaper):
         htb = read_htb_classes(self.fabric_ns, ports)
         losses = read_nft_losses(self.fabric_ns)
         table = nfqdelay.request(self.ctl_path, {"op": "get"})["table"] if self.daemon else {}
-        return {p: Applied(htb.get(p, (None,))[0], table[p] / 1000 if p in table else None, losses.get(p, 0.0),
-                           htb.get(p, (None, None))[1]) for p in ports}
+        out = {}
+        for p in ports:
+            rate, burst = htb.get(p, (None, None))
+            out[p] = Applied(rate, table[p] / 1000 if p in table else None, losses.get(p, 0.0), burst)
+        return out
 
     def counters(self, ports: Sequence[str]) -> dict[str, PortCounters]:
         qd, link = read_qdisc_counters(self.fabric_ns), read_link_drops(self.fabric_ns)

@@ -134,8 +134,9 @@ class _Audit:
         self.shaping = shaping
         self.setting = planned_settings(self.shaping)  # (window, segment, i, j) -> (delay, rate, loss)
         self.netem = info is not None and info.shaper_backend == "netem"
+        self.shaping_records = rd.read_shaping()  # shaping.jsonl, read once: bursts and counters
         self.bursts = {(r["window"], r.get("segment", 0), r["src"], r["dst"]): r["applied_burst_b"]
-                       for r in rd.read_shaping() if r.get("applied_burst_b") is not None}
+                       for r in self.shaping_records if r.get("applied_burst_b") is not None}
         self._crossings()
         self._losses()
         self._revisits()
@@ -330,7 +331,7 @@ class _Audit:
 
     def _counters(self) -> dict[tuple[int, str, str], Counters]:
         out = {}
-        for r in self.rd.read_shaping():
+        for r in self.shaping_records:
             fields = {k: r.get(k) for k in Counters.model_fields}
             if any(v is not None for v in fields.values()):
                 out[(r["window"], r.get("segment", 0), r["src"], r["dst"])] = Counters(**fields)
