@@ -24,8 +24,7 @@ def _classify(path_times: list[tuple[str, float]]) -> tuple[bool, list[str]]:
     table = _table(rows)
     f = follow(table, TL)
     assert f.n_packets == 1 and f.revisit.any()
-    fine = rerouted_in_flight(f, np.asarray(table["point"]), np.asarray(table["ts_s"]),
-                              np.arange(len(NAMES)), TL, np.array([0]))
+    fine = rerouted_in_flight(f, np.arange(len(NAMES)), TL, np.array([0]))
     return bool(fine[0]), f.path(0)[0]
 
 

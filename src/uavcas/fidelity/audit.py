@@ -144,8 +144,7 @@ class _Audit:
     def _revisits(self) -> None:
         """Packets back at a switch they had crossed: loops (faults) or re-routed in flight (`loops`)."""
         pids = np.unique(self.c.pid[self.c.revisit])
-        fine = rerouted_in_flight(self.fol, np.asarray(self.table["point"]), np.asarray(self.table["ts_s"]),
-                                  self.point_node, self.tl, pids)
+        fine = rerouted_in_flight(self.fol, self.point_node, self.tl, pids)
         self.looped_pids, self.rerouted_pids = pids[~fine], pids[fine]
         self.c_loop = self.c.revisit & np.isin(self.c.pid, self.looped_pids)  # per crossing
 

@@ -27,16 +27,14 @@ import numpy as np
 from uavcas.flows.follow import Followed, Timeline
 
 
-def rerouted_in_flight(fol: Followed, point: np.ndarray, ts: np.ndarray, point_node: np.ndarray,
-                       timeline: Timeline, pids: np.ndarray) -> np.ndarray:
+def rerouted_in_flight(fol: Followed, point_node: np.ndarray, timeline: Timeline, pids: np.ndarray) -> np.ndarray:
     """For each of `pids` (packets with a revisit), True when it was re-routed in flight, False
-    when it looped (module docstring). `point`, `ts`: per packet-table row, its capture point and
-    time; `point_node`: per capture point, its node's index (-1: none)."""
+    when it looped (module docstring). `point_node`: per capture point, its node's index (-1: none)."""
     out = np.zeros(pids.shape[0], dtype=bool)
     begin, end, nh = timeline.t_begin_unix, timeline.t_unix, timeline.next_hop
     for k, p in enumerate(pids.tolist()):
-        rows = fol.order[fol.offsets[p]:fol.offsets[p + 1]]
-        nodes, t, d = point_node[point[rows]], ts[rows], int(fol.dst_node[p])
+        rows, point, t = fol.visits(p)
+        nodes, d = point_node[point], int(fol.dst_node[p])
         revisits = np.flatnonzero(fol.revisit[rows])
         first, last = t[0], t[revisits.max()]
         # the change under way over the packet's revisits: old table = epoch e - 1, new = epoch e

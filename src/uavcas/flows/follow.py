@@ -207,10 +207,16 @@ class Followed:
     def n_packets(self) -> int:
         return int(self.offsets.shape[0] - 1)
 
+    def visits(self, pid: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """One packet's observations in hop order: their rows, capture points (indices into
+        `points`) and times (Unix s)."""
+        rows = self.order[self.offsets[pid]:self.offsets[pid + 1]]
+        return rows, self._point[rows], self._ts[rows]
+
     def path(self, pid: int) -> tuple[list[str], np.ndarray]:
         """The points (names) one packet was seen at, in order, and the times (Unix s)."""
-        rows = self.order[self.offsets[pid]:self.offsets[pid + 1]]
-        return [self.points[p] for p in self._point[rows]], self._ts[rows]
+        _, point, ts = self.visits(pid)
+        return [self.points[p] for p in point], ts
 
     def crossings(self) -> Crossings:
         o = self.order
