@@ -71,6 +71,18 @@ def update_order(fdb: dict[tuple[int, str], str]) -> list[tuple[int, str]]:
     return sorted(fdb, key=lambda k: (hops(k), k))
 
 
+@dataclass(frozen=True)
+class PlannedUpdate:
+    """A window change's FDB work computed ahead (`Fabric.plan_update`), and what it was computed
+    from: valid while the fabric still holds that very FDB and those known detours."""
+
+    fwd: Forwarding
+    from_fdb: dict[tuple[int, str], str]
+    known: tuple[tuple[str, str], ...]
+    want: dict[tuple[int, str], str]
+    lines: list[str]
+
+
 def key(i: int, j: int) -> LinkKey:
     if i == j:
         raise ValueError("a link needs two different switches")
@@ -89,7 +101,7 @@ class Fabric:
         self.fdb: dict[tuple[int, str], str] = {}  # (switch index, dst MAC) -> port
         self.detours_active: tuple[tuple[str, str], ...] = ()  # (victim, bs) diverting now
         self.detours_known: dict[tuple[str, str], Detour] = {}
-        self._planned: tuple[Forwarding, dict, tuple, dict, list[str]] | None = None  # see plan_update
+        self._planned: PlannedUpdate | None = None
 
     # setup -------------------------------------------------------------------------------
     def setup(self, precreate: Iterable[LinkKey] = ()) -> dict[str, float]:
@@ -250,12 +262,10 @@ class Fabric:
         The current FDB is matched by identity: it is replaced, never edited in place."""
         known = tuple(self.detours_known)
         p = self._planned
-        if p is not None and p[0] is fwd and p[1] is self.fdb and p[2] == known:
-            return p[3], p[4]
-        want = self.desired_fdb(fwd)
-        lines = self.fdb_lines(want)
-        self._planned = (fwd, self.fdb, known, want, lines)
-        return want, lines
+        if p is None or p.fwd is not fwd or p.from_fdb is not self.fdb or p.known != known:
+            want = self.desired_fdb(fwd)
+            p = self._planned = PlannedUpdate(fwd, self.fdb, known, want, self.fdb_lines(want))
+        return p.want, p.lines
 
     def apply_forwarding(self, fwd: Forwarding) -> int:
         want, lines = self.plan_update(fwd)

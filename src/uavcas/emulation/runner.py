@@ -210,9 +210,8 @@ def _play(st: _State, opt: RunOptions, notify: Callable[[Progress], None]) -> No
     st.timings["apps_s"] = time.time() - t
     with urgent(CONTROL_RT_PRIORITY if opt.urgent else 0):
         t_links = time.time()
-        w0 = plan.windows[0]  # its forwarding and FDB batch planned first, as for every later window
-        emu.plan_change(w0.links, [r.hops for r in w0.routes], st.executor.wormholes_for(w0))
-        _, ready = emu.prepare_links(w0.links, wait_s=LINKS_READY_S)
+        _plan_change(st, 0)  # window 0's forwarding and FDB batch planned first, as for every later window
+        _, ready = emu.prepare_links(plan.windows[0].links, wait_s=LINKS_READY_S)
         st.timings["links_ready_s"] = time.time() - t_links
         if not ready:
             st.wind_down_errors.append(f"window 0: links not operational after {LINKS_READY_S:g} s")
@@ -290,6 +289,12 @@ class _Background:
             raise self.error
 
 
+def _plan_change(st: _State, i: int) -> None:
+    """Plan window i's change in idle time, with the arguments `_apply_window` will give it."""
+    w = st.plan.windows[i]
+    st.emu.plan_change(w.links, [r.hops for r in w.routes], st.executor.wormholes_for(w))
+
+
 def _prepare_next(st: _State, opt: RunOptions, upcoming: list[_Event]) -> None:
     """Between events: raise the next window's new links and compute its forwarding and FDB batch,
     so that the change itself neither waits for them nor drops frames on links not yet operational.
@@ -305,7 +310,7 @@ def _prepare_next(st: _State, opt: RunOptions, upcoming: list[_Event]) -> None:
     until = st.t0 + upcoming[0].t_s - PREPARE_MARGIN_S  # never delay the next event
     t = time.time()
     with urgent(CONTROL_RT_PRIORITY if opt.urgent else 0):
-        st.emu.plan_change(w.links, [r.hops for r in w.routes], st.executor.wormholes_for(w))
+        _plan_change(st, nxt.obj)
         raised, ready = st.emu.prepare_links(w.links, wait_s=max(0.0, until - time.time()))
     if not ready and upcoming[0] is nxt:
         st.wind_down_errors.append(f"window {nxt.obj}: links not operational when it began")
