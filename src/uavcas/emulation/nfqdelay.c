@@ -11,10 +11,25 @@
  *   - verdicts due together go out in one sendmsg; a timerfd armed at absolute deadlines with
  *     1 ns timer slack wakes it; SCHED_FIFO (when allowed) so CPU-bound work cannot delay it.
  *
+ * Pacing (a port given a rate): the port's frames are also served FIFO by a token bucket of that
+ * rate and a depth of `burst` bytes, in virtual time, exactly the link model the fidelity audit
+ * checks (uavcas.fidelity.fifo):
+ *     ready_k = stamp_k + delay
+ *     start_k = max(ready_k, start_{k-1}, Z_{k-1})
+ *     Z_k     = max(Z_{k-1}, start_k - 8 burst / rate) + 8 len_k / rate
+ * and each frame is released at start_k; a frame that finds `limit` frames ready and not started
+ * at ready_k is dropped (the queue tail). Why here and not in HTB alone: a backlogged HTB class
+ * whose host froze for 5-48 ms refills only its one-frame bucket during the freeze, so every
+ * frame of the rest of its busy period leaves late by the freeze; here the schedule is computed
+ * from the frames' stamps, so after a freeze the frames due during it go out at once and the
+ * rest keep their times (the HTB class behind it is given a deep bucket, so it lets that
+ * catch-up pass and only bounds the rate if this process is gone). A rate change re-times the
+ * frames not yet started at the new rate (HTB charges a queued frame at dequeue), keeping Z.
+ *
  * Build: cc -O2 -o uavcas-nfqdelay nfqdelay.c   (uavcas.emulation.nfqdelay builds it on demand)
  * Run:   uavcas-nfqdelay --queue N --ctl PATH [--rt PRIO] [--nice N] [--lead-us U] [--maxlen N]
  * Control (UNIX stream socket, one request line per connection, one JSON line back):
- *   "set NAME=US NAME=US ...", "get", "stop".
+ *   "set NAME=US[,RATE_BPS,BURST_B,LIMIT_PKTS] ...", "get", "stop".
  */
 #define _GNU_SOURCE
 #include <arpa/inet.h>
@@ -50,15 +65,20 @@
 #define NFQA_VERDICT_HDR 2
 #define NFQA_TIMESTAMP 4
 #define NFQA_IFINDEX_PHYSOUTDEV 8
+#define NFQA_PAYLOAD_ 10
+#define NFQA_CAP_LEN 16
 #define NFQA_CFG_CMD 1
 #define NFQA_CFG_PARAMS 2
 #define NFQA_CFG_QUEUE_MAXLEN 3
 #define NFQA_CFG_MASK 4
 #define NFQA_CFG_FLAGS 5
 #define NFQNL_CFG_CMD_BIND 1
-#define NFQNL_COPY_META 1
+#define NFQNL_COPY_PACKET 2
+#define COPY_RANGE 4  /* the IPv4 header's first word: the kernel then also sends NFQA_CAP_LEN, the packet's length */
 #define NFQA_CFG_F_FAIL_OPEN 1
+#define NF_DROP 0
 #define NF_ACCEPT 1
+#define ETH_HLEN_ 14  /* NFQUEUE's length is the IP packet's; the captures and the model count the frame */
 #define BATCH 64
 #define VERDICT_LEN 32
 #define N_BUCKETS 10
@@ -67,16 +87,27 @@
 
 static const long BUCKET_US[N_BUCKETS] = {25, 50, 100, 200, 500, 1000, 2000, 5000, 10000, 1000000000L};
 
-typedef struct { uint64_t due; uint32_t id; } item_t;
+typedef struct { uint64_t due; uint32_t id; uint32_t port; uint64_t seq; } item_t;  /* port 0: not paced */
+
+/* a paced port's frames not yet started, oldest first: ring[(head + i) % cap], seq = base + i */
+typedef struct { int64_t ready, start, z_after; uint32_t len; } entry_t;
+typedef struct {
+    int64_t rate_bps, burst_b; uint32_t limit;
+    int64_t z, last_start;  /* Z and start of the last frame admitted */
+    int64_t z0, start0;      /* the same just before the ring's first frame (its released predecessor's) */
+    entry_t *ring; size_t head, n, cap; uint64_t base;
+    uint64_t paced, drops;
+    int retimed;  /* re-timed by the request being handled: its heap items need their new starts */
+} port_t;
 
 static struct {
     int nl, tfd, ctl, ts_sock;
     uint16_t queue;
     int64_t lead_ns;
     item_t *heap; size_t n, cap;
-    int64_t *delay_ns; char **names; size_t n_if;  /* by ifindex */
+    int64_t *delay_ns; char **names; port_t *ports; size_t n_if;  /* by ifindex */
     char *out; size_t out_len, out_cap;
-    uint64_t packets, overflows, unknown_port, kernel_ts, max_lag_ns;
+    uint64_t packets, overflows, unknown_port, kernel_ts, no_len, max_lag_ns;
     uint64_t lag_hist[N_BUCKETS], recv_hist[N_BUCKETS], wake_hist[N_BUCKETS];
     int64_t armed_at, max_loop_ns, max_loop_at;  /* timer target; slowest loop iteration and when */
     struct { int64_t t_real, max_lag; uint64_t n; } stalls[MAX_STALLS]; int n_stalls, in_stall;
@@ -108,7 +139,7 @@ static void bucket(uint64_t *hist, int64_t ns) {
 }
 
 /* heap ------------------------------------------------------------------------------------ */
-static void heap_push(uint64_t due, uint32_t id) {
+static void heap_push(uint64_t due, uint32_t id, uint32_t port, uint64_t seq) {
     if (S.n == S.cap) { S.cap = S.cap ? 2 * S.cap : 4096; S.heap = xrealloc(S.heap, S.cap * sizeof(item_t)); }
     size_t i = S.n++;
     while (i > 0) {
@@ -117,7 +148,20 @@ static void heap_push(uint64_t due, uint32_t id) {
         S.heap[i] = S.heap[p];
         i = p;
     }
-    S.heap[i].due = due; S.heap[i].id = id;
+    S.heap[i].due = due; S.heap[i].id = id; S.heap[i].port = port; S.heap[i].seq = seq;
+}
+
+static void sift_down(size_t i) {
+    item_t it = S.heap[i];
+    for (;;) {
+        size_t c = 2 * i + 1;
+        if (c >= S.n) break;
+        if (c + 1 < S.n && S.heap[c + 1].due < S.heap[c].due) c++;
+        if (it.due <= S.heap[c].due) break;
+        S.heap[i] = S.heap[c];
+        i = c;
+    }
+    S.heap[i] = it;
 }
 
 static item_t heap_pop(void) {
@@ -174,7 +218,7 @@ static void bind_queue(uint32_t maxlen) {
     off = put_attr(buf, off, NFQA_CFG_CMD, &cmd, sizeof cmd);
     config("nfqueue bind", buf, off);
     off = put_hdr(buf, NFQNL_MSG_CONFIG, NLM_F_REQUEST | NLM_F_ACK);
-    struct { uint32_t range; uint8_t mode; } __attribute__((packed)) params = {0, NFQNL_COPY_META};
+    struct { uint32_t range; uint8_t mode; } __attribute__((packed)) params = {htonl(COPY_RANGE), NFQNL_COPY_PACKET};
     off = put_attr(buf, off, NFQA_CFG_PARAMS, &params, sizeof params);
     uint32_t v = htonl(maxlen);
     off = put_attr(buf, off, NFQA_CFG_QUEUE_MAXLEN, &v, 4);
@@ -184,14 +228,95 @@ static void bind_queue(uint32_t maxlen) {
     config("nfqueue params", buf, off);
 }
 
-static void add_verdict(uint32_t id) {
+static void add_verdict_v(uint32_t id, uint32_t verdict) {
     if (S.out_len + VERDICT_LEN > S.out_cap) { S.out_cap = S.out_cap ? 2 * S.out_cap : 65536; S.out = xrealloc(S.out, S.out_cap); }
     char *b = S.out + S.out_len;
     size_t off = put_hdr(b, NFQNL_MSG_VERDICT, NLM_F_REQUEST);
-    uint32_t vh[2] = {htonl(NF_ACCEPT), htonl(id)};
+    uint32_t vh[2] = {htonl(verdict), htonl(id)};
     off = put_attr(b, off, NFQA_VERDICT_HDR, vh, 8);
     ((struct nlmsghdr *)b)->nlmsg_len = off;
     S.out_len += VERDICT_LEN;
+}
+
+static void add_verdict(uint32_t id) { add_verdict_v(id, NF_ACCEPT); }
+
+/* pacing ----------------------------------------------------------------------------------- */
+static entry_t *ring_at(port_t *p, size_t i) { return &p->ring[(p->head + i) % p->cap]; }
+
+static void ring_push(port_t *p, entry_t e) {
+    if (p->n == p->cap) {
+        size_t cap = p->cap ? 2 * p->cap : 256;
+        entry_t *r = xrealloc(NULL, cap * sizeof *r);
+        for (size_t i = 0; i < p->n; i++) r[i] = *ring_at(p, i);
+        free(p->ring); p->ring = r; p->head = 0; p->cap = cap;
+    }
+    p->ring[(p->head + p->n) % p->cap] = e; p->n++;
+}
+
+/* forget the frames released by `now` (they can no longer be re-timed or be queued ahead) */
+static void ring_prune(port_t *p, int64_t now) {
+    while (p->n && ring_at(p, 0)->start - S.lead_ns <= now) {
+        p->start0 = ring_at(p, 0)->start; p->z0 = ring_at(p, 0)->z_after;
+        p->head = (p->head + 1) % p->cap; p->n--; p->base++;
+    }
+}
+
+/* frames of the ring not started at t: starts are non-decreasing along the ring */
+static size_t backlog_at(port_t *p, int64_t t) {
+    size_t lo = 0, hi = p->n;
+    while (lo < hi) { size_t mid = (lo + hi) / 2; if (ring_at(p, mid)->start > t) hi = mid; else lo = mid + 1; }
+    return p->n - lo;
+}
+
+/* the model's token bucket: start and Z after a frame of `len` bytes ready at `ready` */
+static void charge(const port_t *p, int64_t ready, uint32_t len, int64_t prev_start, int64_t z, int64_t *start, int64_t *z_after) {
+    int64_t st = ready;
+    if (prev_start > st) st = prev_start;
+    if (z > st) st = z;
+    int64_t credit = st - (int64_t)((double)p->burst_b * 8e9 / (double)p->rate_bps);
+    if (credit > z) z = credit;
+    *start = st; *z_after = z + (int64_t)((double)len * 8e9 / (double)p->rate_bps);
+}
+
+static void pace(uint32_t ifindex, uint32_t id, int64_t ready, uint32_t len, int64_t now) {
+    port_t *p = &S.ports[ifindex];
+    ring_prune(p, now);
+    if (p->limit && backlog_at(p, ready) >= p->limit) { p->drops++; add_verdict_v(id, NF_DROP); return; }
+    entry_t e = {ready, 0, 0, len};
+    charge(p, ready, len, p->last_start, p->z, &e.start, &e.z_after);
+    p->z = e.z_after; p->last_start = e.start; p->paced++;
+    ring_push(p, e);
+    heap_push((uint64_t)e.start, id, ifindex, p->base + p->n - 1);
+}
+
+/* a new rate: re-time the frames not yet released, as HTB charges a queued frame at dequeue */
+static void retime(uint32_t ifindex, int64_t now) {
+    port_t *p = &S.ports[ifindex];
+    ring_prune(p, now);
+    if (!p->n) return;
+    int64_t last_start = p->start0, zz = p->z0;
+    for (size_t i = 0; i < p->n; i++) {
+        entry_t *e = ring_at(p, i);
+        charge(p, e->ready, e->len, last_start, zz, &e->start, &e->z_after);
+        last_start = e->start; zz = e->z_after;
+    }
+    p->last_start = last_start; p->z = zz;
+    p->retimed = 1;
+}
+
+/* the release heap after re-timing: each re-timed frame takes its new start (one pass, then heapify) */
+static void rekey(void) {
+    int any = 0;
+    for (size_t k = 0; k < S.n; k++) {
+        uint32_t i = S.heap[k].port;
+        if (!i || i >= S.n_if || !S.ports[i].retimed) continue;
+        port_t *p = &S.ports[i];
+        if (S.heap[k].seq >= p->base && S.heap[k].seq < p->base + p->n)
+            S.heap[k].due = (uint64_t)ring_at(p, S.heap[k].seq - p->base)->start;
+        any = 1;
+    }
+    for (size_t i = 0; i < S.n_if; i++) S.ports[i].retimed = 0;
+    if (any) for (size_t k = S.n / 2; k-- > 0;) sift_down(k);
 }
 
 static void flush(void) {
@@ -232,7 +357,7 @@ static void release_due(void) {
 }
 
 static void on_packet(const char *m, size_t len, int64_t recv_mono, int64_t real_minus_mono) {
-    uint32_t id = 0, ifindex = 0; int have_id = 0; int64_t ts_mono = 0;
+    uint32_t id = 0, ifindex = 0, cap_len = 0, ip_len = 0; int have_id = 0; int64_t ts_mono = 0;
     size_t off = 20;
     while (off + 4 <= len) {
         const struct nlattr *a = (const struct nlattr *)(m + off);
@@ -241,6 +366,8 @@ static void on_packet(const char *m, size_t len, int64_t recv_mono, int64_t real
         const char *p = m + off + 4;
         if (type == NFQA_PACKET_HDR) { memcpy(&id, p, 4); id = ntohl(id); have_id = 1; }
         else if (type == NFQA_IFINDEX_PHYSOUTDEV) { memcpy(&ifindex, p, 4); ifindex = ntohl(ifindex); }
+        else if (type == NFQA_CAP_LEN) { memcpy(&cap_len, p, 4); cap_len = ntohl(cap_len); }
+        else if (type == NFQA_PAYLOAD_ && a->nla_len >= 8) { uint16_t tl; memcpy(&tl, p + 2, 2); ip_len = ntohs(tl); }
         else if (type == NFQA_TIMESTAMP) {
             uint64_t sec, usec;
             memcpy(&sec, p, 8); memcpy(&usec, p + 8, 8);
@@ -260,8 +387,12 @@ static void on_packet(const char *m, size_t len, int64_t recv_mono, int64_t real
     int64_t d = 0;
     if (ifindex < S.n_if && S.names[ifindex]) d = S.delay_ns[ifindex];
     else S.unknown_port++;
-    if (d <= 0) add_verdict(id);
-    else heap_push((uint64_t)(base + d), id);
+    if (ifindex < S.n_if && S.ports[ifindex].rate_bps > 0) {
+        if (!cap_len) cap_len = ip_len;  /* a packet no longer than the copy range */
+        if (!cap_len) { S.no_len++; cap_len = 1500; }
+        pace(ifindex, id, base + d, cap_len + ETH_HLEN_, recv_mono);
+    } else if (d <= 0) add_verdict(id);
+    else heap_push((uint64_t)(base + d), id, 0, 0);
 }
 
 static void on_netlink(void) {
@@ -321,23 +452,50 @@ static void sb_table(sbuf *b) {
     sb_add(b, "}");
 }
 
+/* "pacing": {NAME: [rate_bps, burst_b, limit_pkts, frames paced, tail drops]} for the paced ports */
+static void sb_pacing(sbuf *b) {
+    sb_add(b, "\"pacing\": {");
+    int first = 1;
+    for (size_t k = 0; k < S.n_if; k++) {
+        port_t *p = &S.ports[k];
+        if (!S.names[k] || (!p->rate_bps && !p->paced)) continue;
+        sb_add(b, "%s\"%s\": [%lld, %lld, %u, %llu, %llu]", first ? "" : ", ", S.names[k], (long long)p->rate_bps,
+               (long long)p->burst_b, p->limit, (unsigned long long)p->paced, (unsigned long long)p->drops);
+        first = 0;
+    }
+    sb_add(b, "}");
+}
+
 static void sb_hist(sbuf *b, const char *key, const uint64_t *hist) {
     sb_add(b, "\"%s\": {", key);
     for (int k = 0; k < N_BUCKETS; k++) sb_add(b, "%s\"%ld\": %llu", k ? ", " : "", BUCKET_US[k], (unsigned long long)hist[k]);
     sb_add(b, "}");
 }
 
-static int set_delay(const char *name, long long us, sbuf *err) {
+/* one item of "set": NAME=US or NAME=US,RATE_BPS,BURST_B,LIMIT_PKTS (rate 0: delay only) */
+static int set_port(const char *name, const char *value, sbuf *err) {
+    long long us = 0, rate = 0, burst = 0, limit = 0;
+    char tail = 0;
+    int got = sscanf(value, "%lld,%lld,%lld,%lld%c", &us, &rate, &burst, &limit, &tail);
+    if (!(got == 1 || got == 4) || us < 0 || rate < 0 || burst < 0 || limit < 0 || (rate > 0 && burst <= 0)) {
+        sb_add(err, "bad item %s=%s", name, value); return -1;
+    }
     unsigned idx = if_nametoindex(name);
     if (!idx) { sb_add(err, "no interface %s", name); return -1; }
     if (idx >= S.n_if) {
         size_t n = idx + 64;
         S.delay_ns = xrealloc(S.delay_ns, n * sizeof *S.delay_ns); S.names = xrealloc(S.names, n * sizeof *S.names);
-        for (size_t k = S.n_if; k < n; k++) { S.delay_ns[k] = 0; S.names[k] = NULL; }
+        S.ports = xrealloc(S.ports, n * sizeof *S.ports);
+        for (size_t k = S.n_if; k < n; k++) { S.delay_ns[k] = 0; S.names[k] = NULL; memset(&S.ports[k], 0, sizeof S.ports[k]); }
         S.n_if = n;
     }
     if (!S.names[idx]) S.names[idx] = strdup(name);
     S.delay_ns[idx] = us * 1000;
+    port_t *p = &S.ports[idx];
+    int retimed = got == 4 && (p->rate_bps != rate || p->burst_b != burst);
+    if (got == 4) { p->rate_bps = rate; p->burst_b = burst; p->limit = (uint32_t)limit; }
+    if (retimed && rate > 0) retime(idx, now_ns(CLOCK_MONOTONIC));
+    /* a port no longer paced: its queued frames keep their times, new ones are only delayed */
     return 0;
 }
 
@@ -349,16 +507,18 @@ static void handle(char *line, sbuf *out) {
             char *eq = strchr(tok, '=');
             if (!eq) { sb_add(&err, "bad item %s", tok); break; }
             *eq = 0;
-            if (set_delay(tok, atoll(eq + 1), &err)) break;
+            if (set_port(tok, eq + 1, &err)) break;
         }
+        rekey();
         if (err.n) { sb_add(out, "{\"ok\": false, \"error\": \"%s\"}", err.s); free(err.s); return; }
-        sb_add(out, "{\"ok\": true, "); sb_table(out); sb_add(out, "}");
+        sb_add(out, "{\"ok\": true, "); sb_table(out); sb_add(out, ", "); sb_pacing(out); sb_add(out, "}");
     } else if (op && !strcmp(op, "get")) {
-        sb_add(out, "{\"ok\": true, "); sb_table(out);
+        sb_add(out, "{\"ok\": true, "); sb_table(out); sb_add(out, ", "); sb_pacing(out);
         sb_add(out, ", \"stats\": {\"impl\": \"c\", \"packets\": %llu, \"queued\": %zu, \"overflows\": %llu, "
-               "\"unknown_port\": %llu, \"kernel_ts\": %llu, \"max_lag_us\": %.1f, \"lead_us\": %.1f, ",
+               "\"unknown_port\": %llu, \"kernel_ts\": %llu, \"no_len\": %llu, \"max_lag_us\": %.1f, \"lead_us\": %.1f, ",
                (unsigned long long)S.packets, S.n, (unsigned long long)S.overflows,
-               (unsigned long long)S.unknown_port, (unsigned long long)S.kernel_ts, S.max_lag_ns / 1000.0,
+               (unsigned long long)S.unknown_port, (unsigned long long)S.kernel_ts, (unsigned long long)S.no_len,
+               S.max_lag_ns / 1000.0,
                S.lead_ns / 1000.0);
         sb_hist(out, "lag_hist_us", S.lag_hist); sb_add(out, ", "); sb_hist(out, "recv_hist_us", S.recv_hist);
         sb_add(out, ", "); sb_hist(out, "wake_hist_us", S.wake_hist);
@@ -416,7 +576,7 @@ static void arm(void) {
 static void on_signal(int sig) { (void)sig; S.stop = 1; }
 
 int main(int argc, char **argv) {
-    int queue = 0, rt = 0, nice_v = -15; long lead_us = 0; unsigned maxlen = 8192;
+    int queue = 0, rt = 0, nice_v = -15; long lead_us = 0; unsigned maxlen = 65536;  /* paced ports hold their queues here now (up to 2000 frames each) */
     for (int k = 1; k < argc; k++) {
         if (!strcmp(argv[k], "--queue") && k + 1 < argc) queue = atoi(argv[++k]);
         else if (!strcmp(argv[k], "--ctl") && k + 1 < argc) S.ctl_path = argv[++k];

@@ -3,7 +3,7 @@
 This kernel has no netem (nor fq/etf for EDT), so propagation delay is added in userspace:
 `iptables -A FORWARD -m physdev --physdev-out l+ -j NFQUEUE --queue-bypass` in the fabric
 namespace sends every bridged IPv4 frame leaving a switch-to-switch port here; the daemon reads
-only metadata (copy mode META: no payload), looks the delay up by the *physical out port*
+metadata and the IP header's first word (copy range 4: the packet's length), looks the delay up by the *physical out port*
 (NFQA_IFINDEX_PHYSOUTDEV, i.e. the link direction) and accepts the packet when it is due.
 
 Two implementations, one protocol: the compiled verdict loop `nfqdelay.c` (built on first use
@@ -20,20 +20,29 @@ stays the one the shaper started. What both do to hold delay (issue #14, EMULATI
   granular), PR_SET_TIMERSLACK 1 ns;
 * SCHED_FIFO priority `--rt` for the helper (the kernel's RT throttling, 95 % of a period, keeps
   a runaway from freezing the machine), else nice -15.
+* pacing: a port given a rate (`set NAME=US,RATE_BPS,BURST_B,LIMIT_PKTS`) also serves its frames
+  FIFO through a token bucket in virtual time, the fidelity audit's link model
+  (`uavcas.fidelity.fifo`), and releases each at its start; the queue tail is dropped at the
+  limit. HTB alone refills only a one-frame bucket while the host is frozen, so a backlogged
+  link stayed late by the freeze for the rest of its busy period (nfqdelay.c says more).
 Fail-open: if the queue overflows the kernel accepts instead of dropping, and `--queue-bypass`
 passes packets undelayed if the daemon dies.
 
 Control: a UNIX stream socket; one request line per connection, one JSON line back:
-  set l0-1=5000 l1-0=5000 ...   -> {"ok": true, "table": {"l0-1": 5000, ...}}   (microseconds)
+  set l0-1=5000 l1-0=5000,270000,1600,16 ...
+                                -> {"ok": true, "table": {"l0-1": 5000, ...}, "pacing": {...}}
+      (delay in microseconds; optionally rate bit/s, bucket bytes, queue limit frames;
+       "pacing": {port: [rate_bps, burst_b, limit_pkts, frames paced, tail drops]})
   get                           -> {"ok": true, "table": ..., "stats": {...}}
   stop                          -> {"ok": true}
-`request(path, {"op": "set", "delays_us": {...}})` speaks it from Python.
+`request(path, {"op": "set", "delays_us": {...}, "pacing": {port: Pacing}})` speaks it from Python.
 Run: python -m uavcas.emulation.nfqdelay --queue 0 --ctl PATH  (inside the fabric namespace)
 """
 
 from __future__ import annotations
 
 import argparse
+import collections
 import ctypes
 import errno
 import gc
@@ -45,6 +54,7 @@ import signal
 import socket
 import struct
 import time
+from dataclasses import dataclass
 
 from .delayhelper import build_helper
 from .priority import DELAY_RT_PRIORITY
@@ -52,12 +62,14 @@ from .priority import DELAY_RT_PRIORITY
 NETLINK_NETFILTER = 12
 NFNL_SUBSYS_QUEUE = 3
 NFQNL_MSG_PACKET, NFQNL_MSG_VERDICT, NFQNL_MSG_CONFIG = 0, 1, 2
-NFQA_PACKET_HDR, NFQA_VERDICT_HDR, NFQA_TIMESTAMP, NFQA_IFINDEX_PHYSOUTDEV = 1, 2, 4, 8
+NFQA_PACKET_HDR, NFQA_VERDICT_HDR, NFQA_TIMESTAMP, NFQA_IFINDEX_PHYSOUTDEV, NFQA_PAYLOAD, NFQA_CAP_LEN = 1, 2, 4, 8, 10, 16
 NFQA_CFG_CMD, NFQA_CFG_PARAMS, NFQA_CFG_QUEUE_MAXLEN, NFQA_CFG_MASK, NFQA_CFG_FLAGS = 1, 2, 3, 4, 5
 NFQNL_CFG_CMD_BIND = 1
-NFQNL_COPY_META = 1
+NFQNL_COPY_PACKET = 2
+COPY_RANGE = 4  # the IPv4 header's first word: the kernel then also sends NFQA_CAP_LEN, the packet's length
 NFQA_CFG_F_FAIL_OPEN = 1
-NF_ACCEPT = 1
+NF_DROP, NF_ACCEPT = 0, 1
+ETH_HLEN = 14  # NFQUEUE's length is the IP packet's; captures and the model count the Ethernet frame
 NLM_F_REQUEST, NLM_F_ACK = 1, 4
 NLMSG_ERROR = 2
 CLOCK_MONOTONIC, TFD_TIMER_ABSTIME = 1, 1
@@ -92,9 +104,72 @@ def _msg(msg_type: int, flags: int, queue: int, attrs: bytes, seq: int = 0) -> b
     return struct.pack("=IHHII", 16 + len(body), (NFNL_SUBSYS_QUEUE << 8) | msg_type, flags, seq, 0) + body
 
 
-def verdict_msg(queue: int, packet_id: int) -> bytes:
+def verdict_msg(queue: int, packet_id: int, verdict: int = NF_ACCEPT) -> bytes:
     return _msg(NFQNL_MSG_VERDICT, NLM_F_REQUEST, queue,
-                _attr(NFQA_VERDICT_HDR, struct.pack("!II", NF_ACCEPT, packet_id)))
+                _attr(NFQA_VERDICT_HDR, struct.pack("!II", verdict, packet_id)))
+
+
+@dataclass(frozen=True)
+class Pacing:
+    """A port's token bucket in the delay stage: rate (bit/s), depth (bytes), queue limit (frames)."""
+
+    rate_bps: int
+    burst_b: int
+    limit_pkts: int
+
+    def item(self) -> str:
+        return f"{self.rate_bps},{self.burst_b},{self.limit_pkts}"
+
+
+class PacedPort:
+    """One paced port's virtual FIFO (the same arithmetic as nfqdelay.c's `pace`): `frames`
+    holds [ready, start, z_after, length, packet id] of the frames not yet released, oldest first."""
+
+    def __init__(self, pacing: Pacing) -> None:
+        self.pacing = pacing
+        self.frames: collections.deque[list[int]] = collections.deque()
+        self.z = self.last_start = self.z0 = self.start0 = 0
+        self.paced = self.drops = 0
+
+    def charge(self, ready: int, length: int, prev_start: int, z: int) -> tuple[int, int]:
+        rate, burst = self.pacing.rate_bps, self.pacing.burst_b
+        start = max(ready, prev_start, z)
+        z = max(z, start - int(burst * 8e9 / rate))
+        return start, z + int(length * 8e9 / rate)
+
+    def prune(self, now: int, lead: int) -> None:
+        while self.frames and self.frames[0][1] - lead <= now:
+            f = self.frames.popleft()
+            self.start0, self.z0 = f[1], f[2]
+
+    def admit(self, ready: int, length: int, pid: int) -> int | None:
+        """The frame's start, or None: dropped at the queue tail."""
+        if self.pacing.limit_pkts:
+            waiting = 0  # frames ready and not started at `ready`: starts are non-decreasing
+            for f in reversed(self.frames):
+                if f[1] <= ready or waiting >= self.pacing.limit_pkts:
+                    break
+                waiting += 1
+            if waiting >= self.pacing.limit_pkts:
+                self.drops += 1
+                return None
+        start, self.z = self.charge(ready, length, self.last_start, self.z)
+        self.last_start = start
+        self.paced += 1
+        self.frames.append([ready, start, self.z, length, pid])
+        return start
+
+    def retime(self) -> None:
+        """The frames not yet released at the port's (new) rate, as HTB charges at dequeue."""
+        prev, z = self.start0, self.z0
+        for f in self.frames:
+            f[1], f[2] = self.charge(f[0], f[3], prev, z)
+            prev, z = f[1], f[2]
+        self.last_start, self.z = prev, z
+
+    def summary(self) -> list[int]:
+        p = self.pacing
+        return [p.rate_bps, p.burst_b, p.limit_pkts, self.paced, self.drops]
 
 
 def _bucket(hist: list[int], lag_us: float) -> None:
@@ -107,12 +182,14 @@ def _bucket(hist: list[int], lag_us: float) -> None:
 class DelayDaemon:
     """The pure-Python verdict loop (the fallback of the compiled helper; same protocol)."""
 
-    def __init__(self, queue: int, ctl_path: str, maxlen: int = 8192, lead_us: float = DEFAULT_LEAD_US) -> None:
+    def __init__(self, queue: int, ctl_path: str, maxlen: int = 65536, lead_us: float = DEFAULT_LEAD_US) -> None:
         self.queue = queue
         self.lead_ns = int(lead_us * 1000)
         self.delay_ns: dict[int, int] = {}  # physoutdev ifindex -> delay
         self.table_us: dict[str, int] = {}  # port name -> delay, as applied
         self.heap: list[tuple[int, int]] = []  # (due_ns, packet_id)
+        self.paced: dict[int, PacedPort] = {}  # ifindex -> its pacing (ports given a rate)
+        self.paced_names: dict[str, int] = {}
         self.packets = self.unknown_port = self.overflows = self.kernel_ts = 0
         self.lag_hist = [0] * len(LAG_BUCKETS_US)
         self.recv_hist = [0] * len(LAG_BUCKETS_US)
@@ -150,7 +227,7 @@ class DelayDaemon:
         self._request(_msg(NFQNL_MSG_CONFIG, cfg, self.queue,
                            _attr(NFQA_CFG_CMD, struct.pack("!BxH", NFQNL_CFG_CMD_BIND, socket.AF_INET))))
         self._request(_msg(NFQNL_MSG_CONFIG, cfg, self.queue,
-                           _attr(NFQA_CFG_PARAMS, struct.pack("!IB", 0, NFQNL_COPY_META))
+                           _attr(NFQA_CFG_PARAMS, struct.pack("!IB", COPY_RANGE, NFQNL_COPY_PACKET))
                            + _attr(NFQA_CFG_QUEUE_MAXLEN, struct.pack("!I", maxlen))
                            + _attr(NFQA_CFG_MASK, struct.pack("!I", NFQA_CFG_F_FAIL_OPEN))
                            + _attr(NFQA_CFG_FLAGS, struct.pack("!I", NFQA_CFG_F_FAIL_OPEN))))
@@ -184,6 +261,7 @@ class DelayDaemon:
         pid = None
         ifindex = 0
         stamp = 0
+        cap_len = 0
         while pos + 4 <= end:
             alen, akind = struct.unpack_from("=HH", data, pos)
             if alen < 4:
@@ -193,6 +271,10 @@ class DelayDaemon:
                 (pid,) = struct.unpack_from("!I", data, pos + 4)
             elif akind == NFQA_IFINDEX_PHYSOUTDEV:
                 (ifindex,) = struct.unpack_from("!I", data, pos + 4)
+            elif akind == NFQA_CAP_LEN:
+                (cap_len,) = struct.unpack_from("!I", data, pos + 4)
+            elif akind == NFQA_PAYLOAD and alen >= 8 and not cap_len:
+                (cap_len,) = struct.unpack_from("!H", data, pos + 6)  # the IPv4 total length
             elif akind == NFQA_TIMESTAMP:
                 sec, usec = struct.unpack_from("!QQ", data, pos + 4)
                 stamp = sec * 1_000_000_000 + usec * 1000 - real_minus_mono
@@ -209,7 +291,15 @@ class DelayDaemon:
         if delay is None:
             self.unknown_port += 1
             delay = 0
-        if delay <= 0:
+        port = self.paced.get(ifindex)
+        if port is not None:
+            port.prune(now, self.lead_ns)
+            start = port.admit(base + delay, (cap_len or 1500) + ETH_HLEN, pid)
+            if start is None:
+                out.append(verdict_msg(self.queue, pid, NF_DROP))
+            else:
+                heapq.heappush(self.heap, (start, pid))
+        elif delay <= 0:
             out.append(verdict_msg(self.queue, pid))
         else:
             heapq.heappush(self.heap, (base + delay, pid))
@@ -268,25 +358,57 @@ class DelayDaemon:
         if op == "set":
             delay_ns = dict(self.delay_ns)
             table = {}
+            retimed = []
             for item in items:
-                name, sep, us = item.partition("=")
-                if not sep:
-                    raise ValueError(f"bad item {item!r}")
+                name, sep, value = item.partition("=")
+                fields = value.split(",")
+                try:
+                    nums = [int(v) for v in fields]
+                except ValueError:
+                    nums = []
+                if not sep or len(nums) not in (1, 4) or min(nums) < 0 or (len(nums) == 4 and nums[1] and not nums[2]):
+                    raise ValueError(f"bad item {item}")
                 try:
                     index = socket.if_nametoindex(name)
                 except OSError:
                     raise ValueError(f"no interface {name}") from None
-                table[name] = int(us)
-                delay_ns[index] = int(us) * 1000
+                table[name] = nums[0]
+                delay_ns[index] = nums[0] * 1000
+                if len(nums) == 4:
+                    pacing = Pacing(*nums[1:])
+                    port = self.paced.get(index)
+                    if pacing.rate_bps == 0:
+                        self.paced.pop(index, None)  # its queued frames keep their times
+                    elif port is None:
+                        self.paced[index] = PacedPort(pacing)
+                        self.paced_names[name] = index
+                    elif port.pacing != pacing:
+                        port.pacing = pacing
+                        retimed.append(port)
             self.delay_ns = delay_ns
             self.table_us.update(table)
-            return {"ok": True, "table": self.table_us}
+            if retimed:
+                self._rekey(retimed)
+            return {"ok": True, "table": self.table_us, "pacing": self.pacing_table()}
         if op == "get":
-            return {"ok": True, "table": self.table_us, "stats": self.stats()}
+            return {"ok": True, "table": self.table_us, "pacing": self.pacing_table(), "stats": self.stats()}
         if op == "stop":
             self.running = False
             return {"ok": True}
         return {"ok": False, "error": f"unknown op {op!r}"}
+
+    def _rekey(self, ports: list[PacedPort]) -> None:
+        now = time.monotonic_ns()
+        start_of = {}
+        for port in ports:
+            port.prune(now, self.lead_ns)
+            port.retime()
+            start_of.update({f[4]: f[1] for f in port.frames})
+        self.heap = [(start_of.get(pid, due), pid) for due, pid in self.heap]
+        heapq.heapify(self.heap)
+
+    def pacing_table(self) -> dict[str, list[int]]:
+        return {name: self.paced[i].summary() for name, i in self.paced_names.items() if i in self.paced}
 
     def stats(self) -> dict:
         return {"impl": "python", "packets": self.packets, "queued": len(self.heap), "overflows": self.overflows,
@@ -336,11 +458,15 @@ def request_line(req: dict) -> str:
     """The protocol line of a request dict ({"op": "set", "delays_us": {...}} / get / stop)."""
     op = req.get("op")
     if op == "set":
+        pacing: dict[str, Pacing] = req.get("pacing") or {}
+        unknown = sorted(set(pacing) - set(req["delays_us"]))
+        if unknown:
+            raise ValueError(f"pacing for ports without a delay: {unknown[:3]}")
         items = []
         for name, us in req["delays_us"].items():
-            if not name or any(c.isspace() or c == "=" for c in name):
+            if not name or any(c.isspace() or c in "=," for c in name):
                 raise ValueError(f"bad port name {name!r}")
-            items.append(f"{name}={int(us)}")
+            items.append(f"{name}={int(us)}" + (f",{pacing[name].item()}" if name in pacing else ""))
         return " ".join(["set", *items])
     if op in ("get", "stop"):
         return op

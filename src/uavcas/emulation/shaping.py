@@ -6,9 +6,14 @@ loss, and both directions are independent. Backends, chosen by probing the kerne
 
 * `NetemShaper` (hosts with netem; Mininet TCLink style): HTB class for rate, netem child for
   delay and loss; each window `tc class change` + `tc qdisc change` (queues are kept).
-* `FallbackShaper` (this kernel, no netem): HTB class + `pfifo` child for rate; for loss an nft
-  bridge table, `oifname vmap @ports` -> one chain per port with a `numgen random` drop rule,
-  rewritten atomically for changed ports only; the NFQUEUE delay daemon (`nfqdelay`) for delay.
+* `FallbackShaper` (this kernel, no netem): the NFQUEUE delay daemon (`nfqdelay`) for delay and
+  rate (it paces each port through the audit's token-bucket FIFO from the frames' kernel stamps
+  and drops the queue tail), behind it an HTB class at the same rate with a deep bucket
+  (`HTB_GUARD_S`) + `pfifo` child, which only bounds the rate if the daemon is gone; for loss an
+  nft bridge table, `oifname vmap @ports` -> one chain per port with a `numgen random` drop
+  rule, rewritten atomically for changed ports only. Why the daemon paces and HTB does not: a
+  backlogged HTB class refills only its one-frame bucket while the host is frozen (5-48 ms
+  freezes were seen on this 2-core VM), so the rest of its busy period left late by the freeze.
 
 Each backend reads back what the kernel/daemon actually hold; `records()` turns planned vs
 applied into typed `ShapingRecord`s (one line of shaping.jsonl each). `counters()` reads each
@@ -38,6 +43,8 @@ LOSS_SCALE = 1_000_000  # loss resolution: 1e-6
 QUEUE_MS = 50.0  # pfifo sized to ~50 ms at the link rate: no bufferbloat, room for TCP
 MTU_FRAME_B = 1514  # the largest Ethernet frame the fabric carries (1500 B MTU): queues and HTB quanta in its units
 DEFAULT_RATE_MBPS = 1000.0
+PACE_BURST_B = 1600  # the delay stage's bucket: one frame, the depth of tc's default HTB class (the link as before)
+HTB_GUARD_S = 0.1  # the guard HTB class's bucket behind a pacing daemon: 100 ms at the rate, for catch-up after a freeze
 
 
 @dataclass(frozen=True)
@@ -57,7 +64,7 @@ class Applied:
     rate_mbps: float | None
     delay_ms: float | None
     loss: float | None
-    burst_b: int | None = None  # the HTB class's burst as the kernel holds it
+    burst_b: int | None = None  # the bucket of the stage that paces the link (HTB's, or the delay stage's)
 
 
 @dataclass(frozen=True)
@@ -83,9 +90,11 @@ class ShapingRecord:
     # which setting of the window: 0 as the window was applied, k after its k-th mid-window
     # reshape (an attack's shaping, e.g. a jammer's start or stop); counters are per segment
     segment: int = 0
-    # the HTB class's burst (bytes) the kernel held: the audit's model uses it. tc's default is
-    # one 1600-byte "MTU" plus rate/HZ where the kernel lacks high-resolution timers, so it is
-    # read back, not assumed (None: not read back; runs made before it was logged had 1600 B)
+    # the bucket (bytes) of the stage that paces the link, read back from it: the audit's model
+    # uses it. The HTB class's on the netem backend (tc's default is one 1600-byte "MTU" plus
+    # rate/HZ where the kernel lacks high-resolution timers, so it is read back, not assumed);
+    # the delay stage's on the fallback backend (None: not read back; runs made before it was
+    # logged had 1600 B)
     applied_burst_b: int | None = None
 
     def to_dict(self) -> dict:
@@ -111,15 +120,29 @@ def rate_bit(rate_mbps: float) -> int:
     return max(8, round(rate_mbps * 1e6))
 
 
-def htb_init_lines(port: str, rate_mbps: float = DEFAULT_RATE_MBPS) -> list[str]:
+def guard_burst_b(rate_mbps: float) -> int:
+    """The guard HTB class's bucket: `HTB_GUARD_S` at the rate, at least 8 MTU frames."""
+    return max(8 * MTU_FRAME_B, math.ceil(rate_mbps * 1e6 * HTB_GUARD_S / 8))
+
+
+def _htb_class(rate_mbps: float, burst_b: int | None) -> str:
     r = rate_bit(rate_mbps)
+    deep = "" if burst_b is None else f" burst {burst_b} cburst {burst_b}"  # ceil = rate: both buckets bind
+    return f"htb rate {r}bit ceil {r}bit{deep} quantum {MTU_FRAME_B}"
+
+
+def htb_init_lines(port: str, rate_mbps: float = DEFAULT_RATE_MBPS, burst_b: int | None = None) -> list[str]:
     return [f"qdisc add dev {port} root handle 1: htb default 1",
-            f"class add dev {port} parent 1: classid 1:1 htb rate {r}bit ceil {r}bit quantum {MTU_FRAME_B}"]
+            f"class add dev {port} parent 1: classid 1:1 {_htb_class(rate_mbps, burst_b)}"]
 
 
-def htb_change_line(port: str, rate_mbps: float) -> str:
-    r = rate_bit(rate_mbps)
-    return f"class change dev {port} parent 1: classid 1:1 htb rate {r}bit ceil {r}bit quantum {MTU_FRAME_B}"
+def htb_change_line(port: str, rate_mbps: float, burst_b: int | None = None) -> str:
+    return f"class change dev {port} parent 1: classid 1:1 {_htb_class(rate_mbps, burst_b)}"
+
+
+def pacing(rate_mbps: float) -> nfqdelay.Pacing:
+    """The delay stage's pacing of a port at `rate_mbps`: one-frame bucket, the port's queue limit."""
+    return nfqdelay.Pacing(rate_bit(rate_mbps), PACE_BURST_B, queue_limit_pkts(rate_mbps))
 
 
 def pfifo_line(verb: str, port: str, rate_mbps: float) -> str:
@@ -286,7 +309,7 @@ class NetemShaper(Shaper):
 
 
 class FallbackShaper(Shaper):
-    """No netem: HTB + pfifo (rate), nft numgen (loss), NFQUEUE daemon (delay)."""
+    """No netem: NFQUEUE daemon (delay and pacing), guard HTB + pfifo, nft numgen (loss)."""
 
     backend = "htb-nft-nfqueue"
     queue_num = 0
@@ -340,7 +363,7 @@ class FallbackShaper(Shaper):
     def init_lines(self, ports: Sequence[str]) -> list[str]:
         lines = []
         for p in ports:
-            lines += htb_init_lines(p)
+            lines += htb_init_lines(p, DEFAULT_RATE_MBPS, guard_burst_b(DEFAULT_RATE_MBPS))
             lines.append(pfifo_line("add", p, DEFAULT_RATE_MBPS))
         return lines
 
@@ -354,7 +377,7 @@ class FallbackShaper(Shaper):
             old = self.current.get(s.port)
             old_rate = DEFAULT_RATE_MBPS if old is None else old.rate_mbps
             if old is None or old.rate_mbps != s.rate_mbps:
-                lines.append(htb_change_line(s.port, s.rate_mbps))
+                lines.append(htb_change_line(s.port, s.rate_mbps, guard_burst_b(s.rate_mbps)))
             if queue_limit_pkts(old_rate) != queue_limit_pkts(s.rate_mbps):
                 lines.append(pfifo_line("change", s.port, s.rate_mbps))
         return lines
@@ -366,11 +389,13 @@ class FallbackShaper(Shaper):
         losses = {s.port: s.loss for s in changed if (self.current.get(s.port) or _NOLOSS).loss != s.loss}
         if losses:
             batches.append(kernel.Batch("nft", self.fabric_ns, nft_loss_lines(losses)))
-        delays = {s.port: round(s.delay_ms * 1000) for s in changed
-                  if (self.current.get(s.port) or _NOLOSS).delay_ms != s.delay_ms}
+        # every changed port's delay and pacing, in one request: the daemon re-times a port's
+        # queued frames when its rate changes
+        delays = {s.port: round(s.delay_ms * 1000) for s in changed}
+        paced = {s.port: pacing(s.rate_mbps) for s in changed}
         t1 = time.perf_counter()
         if delays:  # a socket round trip to the daemon (~1 ms); tc, nft and ip run concurrently
-            nfqdelay.request(self.ctl_path, {"op": "set", "delays_us": delays})
+            nfqdelay.request(self.ctl_path, {"op": "set", "delays_us": delays, "pacing": paced})
         t2 = time.perf_counter()
         kernel.run_batches(batches)
         self.current = new
@@ -379,18 +404,25 @@ class FallbackShaper(Shaper):
     def readback(self, ports: Sequence[str]) -> dict[str, Applied]:
         htb = read_htb_classes(self.fabric_ns, ports)
         losses = read_nft_losses(self.fabric_ns)
-        table = nfqdelay.request(self.ctl_path, {"op": "get"})["table"] if self.daemon else {}
+        got = nfqdelay.request(self.ctl_path, {"op": "get"}) if self.daemon else {}
+        table, paced = got.get("table", {}), got.get("pacing", {})
         out = {}
         for p in ports:
-            rate, burst = htb.get(p, (None, None))
+            # the pacing daemon's rate and bucket, which shape the link; HTB's where it paces none
+            rate, burst = (paced[p][0] / 1e6, paced[p][1]) if p in paced else htb.get(p, (None, None))
             out[p] = Applied(rate, table[p] / 1000 if p in table else None, losses.get(p, 0.0), burst)
         return out
 
     def counters(self, ports: Sequence[str]) -> dict[str, PortCounters]:
         qd, link = read_qdisc_counters(self.fabric_ns), read_link_drops(self.fabric_ns)
         nft = read_nft_counters(self.fabric_ns)
-        return {p: PortCounters(qd[p]["htb"].get("packets"), qd[p].get("pfifo", {}).get("drops"), nft.get(p, 0),
-                                link.get(p)) for p in ports if "htb" in qd.get(p, {})}
+        paced = nfqdelay.request(self.ctl_path, {"op": "get"}).get("pacing", {}) if self.daemon else {}
+
+        def tail_drops(p: str) -> int | None:  # the daemon's at its queue limit, and the guard pfifo's
+            pf = qd[p].get("pfifo", {}).get("drops")
+            return None if pf is None and p not in paced else (pf or 0) + (paced[p][4] if p in paced else 0)
+        return {p: PortCounters(qd[p]["htb"].get("packets"), tail_drops(p), nft.get(p, 0), link.get(p))
+                for p in ports if "htb" in qd.get(p, {})}
 
     def daemon_stats(self) -> dict:
         return nfqdelay.request(self.ctl_path, {"op": "get"})["stats"]
