@@ -117,3 +117,24 @@ def test_a_real_run_is_audited(tmp_path):
     assert crossings > 100 and abs(counted - crossings) <= 0.1 * crossings, (counted, crossings)
     assert json.loads(rd.run_json.read_text())["fidelity"]["verdict"] in ("pass", "fail")
     assert info.timings.links_ready_s is not None and time.time() - info.t_end_unix < 600
+
+
+@pytest.mark.parametrize("impl", IMPLS)
+def test_a_saturated_link_is_paced_by_the_delay_stage(impl, monkeypatch):
+    """Offered 3.3 Mbit/s on a 2 Mbit/s path: the delay stage paces both hops at the planned rate,
+    drops the queue tail at its limit, and the guard HTB behind it drops nothing."""
+    monkeypatch.setenv(nfqdelay.IMPL_ENV, impl)
+    with Emulation(_plan(rate_mbps=2.0), prefix=new_prefix()) as emu:
+        emu.apply_window(0)
+        r = selftest.measure_udp(emu, "uav0", "bs0", 800, 400, size=1000)
+        got = nfqdelay.request(emu.shaper.ctl_path, {"op": "get"})
+        counters = emu.shaper.counters(list(got["pacing"]))
+    first = [p for p in got["pacing"] if got["pacing"][p][3] + got["pacing"][p][4] >= 800]
+    assert len(first) == 1, got["pacing"]  # the first hop's port saw every frame
+    rate, burst, limit, paced, drops = got["pacing"][first[0]]
+    assert (rate, burst, limit) == (2_000_000, 1600, 16)
+    # 1,042-byte frames at 400 pps against 2 Mbit/s: about 40 % cannot be carried
+    assert 0.3 < drops / (paced + drops) < 0.5 and abs(r["loss"] - drops / 800) < 0.02, (r, drops)
+    assert counters[first[0]].queue_drops == drops  # the daemon's tail drops; the guard pfifo dropped none
+    # queued at most `limit` frames of 4.2 ms each behind two 4 ms hops
+    assert r["delays_ms"]["max"] < 8.0 + 17 * 4.2 + 5.0, r

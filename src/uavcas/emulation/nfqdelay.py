@@ -42,7 +42,6 @@ Run: python -m uavcas.emulation.nfqdelay --queue 0 --ctl PATH  (inside the fabri
 from __future__ import annotations
 
 import argparse
-import collections
 import ctypes
 import errno
 import gc
@@ -54,9 +53,9 @@ import signal
 import socket
 import struct
 import time
-from dataclasses import dataclass
 
 from .delayhelper import build_helper
+from .pacing import PacedPort, Pacing
 from .priority import DELAY_RT_PRIORITY
 
 NETLINK_NETFILTER = 12
@@ -107,69 +106,6 @@ def _msg(msg_type: int, flags: int, queue: int, attrs: bytes, seq: int = 0) -> b
 def verdict_msg(queue: int, packet_id: int, verdict: int = NF_ACCEPT) -> bytes:
     return _msg(NFQNL_MSG_VERDICT, NLM_F_REQUEST, queue,
                 _attr(NFQA_VERDICT_HDR, struct.pack("!II", verdict, packet_id)))
-
-
-@dataclass(frozen=True)
-class Pacing:
-    """A port's token bucket in the delay stage: rate (bit/s), depth (bytes), queue limit (frames)."""
-
-    rate_bps: int
-    burst_b: int
-    limit_pkts: int
-
-    def item(self) -> str:
-        return f"{self.rate_bps},{self.burst_b},{self.limit_pkts}"
-
-
-class PacedPort:
-    """One paced port's virtual FIFO (the same arithmetic as nfqdelay.c's `pace`): `frames`
-    holds [ready, start, z_after, length, packet id] of the frames not yet released, oldest first."""
-
-    def __init__(self, pacing: Pacing) -> None:
-        self.pacing = pacing
-        self.frames: collections.deque[list[int]] = collections.deque()
-        self.z = self.last_start = self.z0 = self.start0 = 0
-        self.paced = self.drops = 0
-
-    def charge(self, ready: int, length: int, prev_start: int, z: int) -> tuple[int, int]:
-        rate, burst = self.pacing.rate_bps, self.pacing.burst_b
-        start = max(ready, prev_start, z)
-        z = max(z, start - int(burst * 8e9 / rate))
-        return start, z + int(length * 8e9 / rate)
-
-    def prune(self, now: int, lead: int) -> None:
-        while self.frames and self.frames[0][1] - lead <= now:
-            f = self.frames.popleft()
-            self.start0, self.z0 = f[1], f[2]
-
-    def admit(self, ready: int, length: int, pid: int) -> int | None:
-        """The frame's start, or None: dropped at the queue tail."""
-        if self.pacing.limit_pkts:
-            waiting = 0  # frames ready and not started at `ready`: starts are non-decreasing
-            for f in reversed(self.frames):
-                if f[1] <= ready or waiting >= self.pacing.limit_pkts:
-                    break
-                waiting += 1
-            if waiting >= self.pacing.limit_pkts:
-                self.drops += 1
-                return None
-        start, self.z = self.charge(ready, length, self.last_start, self.z)
-        self.last_start = start
-        self.paced += 1
-        self.frames.append([ready, start, self.z, length, pid])
-        return start
-
-    def retime(self) -> None:
-        """The frames not yet released at the port's (new) rate, as HTB charges at dequeue."""
-        prev, z = self.start0, self.z0
-        for f in self.frames:
-            f[1], f[2] = self.charge(f[0], f[3], prev, z)
-            prev, z = f[1], f[2]
-        self.last_start, self.z = prev, z
-
-    def summary(self) -> list[int]:
-        p = self.pacing
-        return [p.rate_bps, p.burst_b, p.limit_pkts, self.paced, self.drops]
 
 
 def _bucket(hist: list[int], lag_us: float) -> None:
