@@ -121,8 +121,8 @@ def test_a_real_run_is_audited(tmp_path):
 
 @pytest.mark.parametrize("impl", IMPLS)
 def test_a_saturated_link_is_paced_by_the_delay_stage(impl, monkeypatch):
-    """Offered 3.3 Mbit/s on a 2 Mbit/s path: the delay stage paces both hops at the planned rate,
-    drops the queue tail at its limit, and the guard HTB behind it drops nothing."""
+    """Offered 3.3 Mbit/s on a 2 Mbit/s path: the delay stage paces both hops at the planned rate
+    and drops the queue tail at its limit; the HTB + pfifo behind it (1 Gbit/s) drop nothing."""
     monkeypatch.setenv(nfqdelay.IMPL_ENV, impl)
     with Emulation(_plan(rate_mbps=2.0), prefix=new_prefix()) as emu:
         emu.apply_window(0)
@@ -135,6 +135,6 @@ def test_a_saturated_link_is_paced_by_the_delay_stage(impl, monkeypatch):
     assert (rate, burst, limit) == (2_000_000, 1600, 16)
     # 1,042-byte frames at 400 pps against 2 Mbit/s: about 40 % cannot be carried
     assert 0.3 < drops / (paced + drops) < 0.5 and abs(r["loss"] - drops / 800) < 0.02, (r, drops)
-    assert counters[first[0]].queue_drops == drops  # the daemon's tail drops; the guard pfifo dropped none
+    assert counters[first[0]].queue_drops == drops  # the daemon's tail drops; the pfifo dropped none
     # queued at most `limit` frames of 4.2 ms each behind two 4 ms hops
     assert r["delays_ms"]["max"] < 8.0 + 17 * 4.2 + 5.0, r

@@ -13,7 +13,7 @@ from uavcas.emulation import cleanup, naming
 from uavcas.emulation.controller import Detour, adjacency, compute, shortest_path
 from uavcas.emulation.hosts import HostSpec, host_lines, node_argv, subnet_prefixlen
 from uavcas.emulation.naming import Naming
-from uavcas.emulation.nfqdelay import verdict_msg
+from uavcas.emulation.nfqdelay import request_line, verdict_msg
 from uavcas.emulation.readback import parse_tc_rate, parse_tc_size
 from uavcas.emulation.shaping import (
     FallbackShaper,
@@ -138,15 +138,15 @@ def test_netem_shaper_exact_requests(tmp_path: Path):
         "qdisc change dev l0-1 parent 1:1 handle 10: netem delay 2500us loss 12.5% limit 45"]
 
 
-def test_fallback_tc_requests_change_in_place(tmp_path: Path):
+def test_fallback_window_change_is_one_daemon_request_and_no_tc(tmp_path: Path):
     sh = FallbackShaper("x-fab", tmp_path)
+    # the HTB class + pfifo a port is created with only count: never changed afterwards
     assert sh.init_lines(["l1-0"])[-1] == "qdisc add dev l1-0 parent 1:1 handle 10: pfifo limit 2000"
-    assert sh.tc_lines([_shape()]) == [
-        "class change dev l0-1 parent 1: classid 1:1 htb rate 10000000bit ceil 10000000bit quantum 1514",
-        "qdisc change dev l0-1 parent 1:1 handle 10: pfifo limit 42"]
+    req = sh.daemon_request([_shape()])
+    assert request_line(req) == "set l0-1=5000,10000000,1600,42"  # delay us, rate bit/s, bucket B, queue limit
     sh.current["l0-1"] = _shape()
-    assert sh.tc_lines([_shape(delay=1.0)]) == []  # delay only: the daemon, not tc
-    assert not any("del" in line for line in sh.tc_lines([_shape(rate=54.0)]))
+    assert sh.daemon_request([_shape()]) is None  # unchanged: no request at all
+    assert request_line(sh.daemon_request([_shape(delay=1.0)])) == "set l0-1=1000,10000000,1600,42"
 
 
 def test_tc_sizes_are_read_back_in_bytes():

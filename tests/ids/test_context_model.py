@@ -48,7 +48,7 @@ def test_context_stage_adds_to_the_flow_models_scores():
     y = np.select([X["Flow Duration"] > 0.5, X["ctx_ttl_off_frac"] > 0.5], ["DoS", "Replay"], "Benign")
     est = baseline("context", n_jobs=1).fit(X, y)
     z = (est.flow_model_.predict(X[["Flow Duration"]].to_numpy(), raw_score=True)
-         + est.model_.predict(X.to_numpy(), raw_score=True))
+         + np.clip(est.model_.predict(X.to_numpy(), raw_score=True), -est.context_bound, est.context_bound))
     np.testing.assert_allclose(est.predict_proba(X), np.exp(z) / np.exp(z).sum(1, keepdims=True), rtol=1e-9)
     # the flow stage alone cannot tell Replay from Benign; the context stage can
     Xt = pd.DataFrame({"Flow Duration": rng.normal(size=n), "ctx_ttl_off_frac": rng.normal(size=n)})
@@ -58,6 +58,26 @@ def test_context_stage_adds_to_the_flow_models_scores():
     assert (flow_only[rest] == yt[rest]).mean() < 0.75 and (est.predict(Xt)[rest] == yt[rest]).mean() > 0.9
     assert baseline("context", n_jobs=1).fit(X.to_numpy(), y).flow_model_ is None
     assert baseline("context-joint", n_jobs=1).fit(X, y).flow_model_ is None
+
+
+def test_the_context_stage_cannot_overturn_a_confident_flow_decision():
+    """Bounded at b, the context moves a raw score by at most b: a flow decision held at more than
+    b log-odds stands, however far the context columns lie from the training runs'."""
+    rng = np.random.default_rng(0)
+    n = 800
+    X = pd.DataFrame({"Flow Duration": rng.normal(size=n), "ctx_ttl_off_frac": rng.normal(size=n)})
+    # the context column flips the label where it is high: the context stage learns a large correction
+    y = np.where((X["Flow Duration"] > 0) ^ (X["ctx_ttl_off_frac"] > 1.5), "DoS", "Benign")
+    Xt = X.assign(ctx_ttl_off_frac=rng.uniform(3, 6, size=n))  # context out of the training range
+    free = baseline("context", n_jobs=1, context_bound=None).fit(X, y)
+    bounded = baseline("context", n_jobs=1, context_bound=0.5).fit(X, y)
+    flow = bounded.flow_model_.predict(Xt[["Flow Duration"]].to_numpy(), raw_score=True)
+    correction = free.model_.predict(Xt.to_numpy(), raw_score=True)
+    sure = np.abs(flow) > 0.5
+    assert sure.sum() > 100 and np.abs(correction[sure]).max() > 0.5  # unbounded, it could flip them
+    flow_call = np.where(flow > 0, "DoS", "Benign")
+    assert (bounded.predict(Xt)[sure] == flow_call[sure]).all()
+    assert (free.predict(Xt)[sure] != flow_call[sure]).any()
 
 
 def test_selection_by_name_and_refusals():

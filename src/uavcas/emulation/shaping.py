@@ -6,14 +6,16 @@ loss, and both directions are independent. Backends, chosen by probing the kerne
 
 * `NetemShaper` (hosts with netem; Mininet TCLink style): HTB class for rate, netem child for
   delay and loss; each window `tc class change` + `tc qdisc change` (queues are kept).
-* `FallbackShaper` (this kernel, no netem): the NFQUEUE delay daemon (`nfqdelay`) for delay and
-  rate (it paces each port through the audit's token-bucket FIFO from the frames' kernel stamps
-  and drops the queue tail), behind it an HTB class at the same rate with a deep bucket
-  (`HTB_GUARD_S`) + `pfifo` child, which only bounds the rate if the daemon is gone; for loss an
+* `FallbackShaper` (this kernel, no netem): the NFQUEUE delay daemon (`nfqdelay`) for delay,
+  rate and queue: it paces each port through the audit's token-bucket FIFO from the frames'
+  kernel stamps and drops the queue tail at the port's limit (`emulation.pacing`); for loss an
   nft bridge table, `oifname vmap @ports` -> one chain per port with a `numgen random` drop
-  rule, rewritten atomically for changed ports only. Why the daemon paces and HTB does not: a
-  backlogged HTB class refills only its one-frame bucket while the host is frozen (5-48 ms
-  freezes were seen on this 2-core VM), so the rest of its busy period left late by the freeze.
+  rule, rewritten atomically for changed ports only. Each port keeps the HTB class + `pfifo` it
+  was created with (1 Gbit/s): it counts the frames sent and is never changed, so a window
+  change is one request to the daemon, the nft batch and the fabric's, with no `tc` at all.
+  Why the daemon paces and HTB does not: a backlogged HTB class refills only its one-frame
+  bucket while the host is frozen (5-48 ms freezes were seen on this 2-core VM), so the rest of
+  its busy period left late by the freeze; the daemon's schedule comes from the stamps.
 
 Each backend reads back what the kernel/daemon actually hold; `records()` turns planned vs
 applied into typed `ShapingRecord`s (one line of shaping.jsonl each). `counters()` reads each
@@ -44,7 +46,6 @@ QUEUE_MS = 50.0  # pfifo sized to ~50 ms at the link rate: no bufferbloat, room 
 MTU_FRAME_B = 1514  # the largest Ethernet frame the fabric carries (1500 B MTU): queues and HTB quanta in its units
 DEFAULT_RATE_MBPS = 1000.0
 PACE_BURST_B = 1600  # the delay stage's bucket: one frame, the depth of tc's default HTB class (the link as before)
-HTB_GUARD_S = 0.1  # the guard HTB class's bucket behind a pacing daemon: 100 ms at the rate, for catch-up after a freeze
 
 
 @dataclass(frozen=True)
@@ -120,24 +121,15 @@ def rate_bit(rate_mbps: float) -> int:
     return max(8, round(rate_mbps * 1e6))
 
 
-def guard_burst_b(rate_mbps: float) -> int:
-    """The guard HTB class's bucket: `HTB_GUARD_S` at the rate, at least 8 MTU frames."""
-    return max(8 * MTU_FRAME_B, math.ceil(rate_mbps * 1e6 * HTB_GUARD_S / 8))
-
-
-def _htb_class(rate_mbps: float, burst_b: int | None) -> str:
+def htb_init_lines(port: str, rate_mbps: float = DEFAULT_RATE_MBPS) -> list[str]:
     r = rate_bit(rate_mbps)
-    deep = "" if burst_b is None else f" burst {burst_b} cburst {burst_b}"  # ceil = rate: both buckets bind
-    return f"htb rate {r}bit ceil {r}bit{deep} quantum {MTU_FRAME_B}"
-
-
-def htb_init_lines(port: str, rate_mbps: float = DEFAULT_RATE_MBPS, burst_b: int | None = None) -> list[str]:
     return [f"qdisc add dev {port} root handle 1: htb default 1",
-            f"class add dev {port} parent 1: classid 1:1 {_htb_class(rate_mbps, burst_b)}"]
+            f"class add dev {port} parent 1: classid 1:1 htb rate {r}bit ceil {r}bit quantum {MTU_FRAME_B}"]
 
 
-def htb_change_line(port: str, rate_mbps: float, burst_b: int | None = None) -> str:
-    return f"class change dev {port} parent 1: classid 1:1 {_htb_class(rate_mbps, burst_b)}"
+def htb_change_line(port: str, rate_mbps: float) -> str:
+    r = rate_bit(rate_mbps)
+    return f"class change dev {port} parent 1: classid 1:1 htb rate {r}bit ceil {r}bit quantum {MTU_FRAME_B}"
 
 
 def pacing(rate_mbps: float) -> nfqdelay.Pacing:
@@ -309,7 +301,7 @@ class NetemShaper(Shaper):
 
 
 class FallbackShaper(Shaper):
-    """No netem: NFQUEUE daemon (delay and pacing), guard HTB + pfifo, nft numgen (loss)."""
+    """No netem: NFQUEUE daemon (delay, rate, queue), nft numgen (loss); HTB + pfifo only count."""
 
     backend = "htb-nft-nfqueue"
     queue_num = 0
@@ -363,7 +355,7 @@ class FallbackShaper(Shaper):
     def init_lines(self, ports: Sequence[str]) -> list[str]:
         lines = []
         for p in ports:
-            lines += htb_init_lines(p, DEFAULT_RATE_MBPS, guard_burst_b(DEFAULT_RATE_MBPS))
+            lines += htb_init_lines(p)
             lines.append(pfifo_line("add", p, DEFAULT_RATE_MBPS))
         return lines
 
@@ -371,31 +363,26 @@ class FallbackShaper(Shaper):
         return [kernel.Batch("tc", self.fabric_ns, self.init_lines(ports)),
                 kernel.Batch("nft", self.fabric_ns, nft_port_init_lines(ports))]
 
-    def tc_lines(self, shapes: Sequence[Shape]) -> list[str]:
-        lines = []
-        for s in self._changed(shapes):
-            old = self.current.get(s.port)
-            old_rate = DEFAULT_RATE_MBPS if old is None else old.rate_mbps
-            if old is None or old.rate_mbps != s.rate_mbps:
-                lines.append(htb_change_line(s.port, s.rate_mbps, guard_burst_b(s.rate_mbps)))
-            if queue_limit_pkts(old_rate) != queue_limit_pkts(s.rate_mbps):
-                lines.append(pfifo_line("change", s.port, s.rate_mbps))
-        return lines
+    def daemon_request(self, shapes: Sequence[Shape]) -> dict | None:
+        """Every changed port's delay and pacing, in one request (None: nothing changed); the
+        daemon re-times a port's queued frames when its rate changes."""
+        changed = self._changed(shapes)
+        if not changed:
+            return None
+        return {"op": "set", "delays_us": {s.port: round(s.delay_ms * 1000) for s in changed},
+                "pacing": {s.port: pacing(s.rate_mbps) for s in changed}}
 
     def apply(self, shapes: Sequence[Shape], also: Sequence[kernel.Batch] = ()) -> dict[str, float]:
         changed = self._changed(shapes)
         new = {**self.current, **{s.port: s for s in shapes}}
-        batches = [kernel.Batch("tc", self.fabric_ns, self.tc_lines(shapes)), *also]
+        batches = list(also)
         losses = {s.port: s.loss for s in changed if (self.current.get(s.port) or _NOLOSS).loss != s.loss}
         if losses:
             batches.append(kernel.Batch("nft", self.fabric_ns, nft_loss_lines(losses)))
-        # every changed port's delay and pacing, in one request: the daemon re-times a port's
-        # queued frames when its rate changes
-        delays = {s.port: round(s.delay_ms * 1000) for s in changed}
-        paced = {s.port: pacing(s.rate_mbps) for s in changed}
+        request = self.daemon_request(shapes)
         t1 = time.perf_counter()
-        if delays:  # a socket round trip to the daemon (~1 ms); tc, nft and ip run concurrently
-            nfqdelay.request(self.ctl_path, {"op": "set", "delays_us": delays, "pacing": paced})
+        if request:  # a socket round trip to the daemon (~1 ms); nft and ip run concurrently
+            nfqdelay.request(self.ctl_path, request)
         t2 = time.perf_counter()
         kernel.run_batches(batches)
         self.current = new
@@ -418,7 +405,7 @@ class FallbackShaper(Shaper):
         nft = read_nft_counters(self.fabric_ns)
         paced = nfqdelay.request(self.ctl_path, {"op": "get"}).get("pacing", {}) if self.daemon else {}
 
-        def tail_drops(p: str) -> int | None:  # the daemon's at its queue limit, and the guard pfifo's
+        def tail_drops(p: str) -> int | None:  # the daemon's at its queue limit, and the pfifo's (none)
             pf = qd[p].get("pfifo", {}).get("drops")
             return None if pf is None and p not in paced else (pf or 0) + (paced[p][4] if p in paced else 0)
         return {p: PortCounters(qd[p]["htb"].get("packets"), tail_drops(p), nft.get(p, 0), link.get(p))
