@@ -81,7 +81,8 @@ def _pairs(items: list[str], flag: str) -> list[tuple[str, Path]]:
 
 
 def read_benches(benches: list[tuple[str, Path]]) -> tuple[pd.DataFrame, pd.DataFrame, list[dict]]:
-    """(summary rows with a view column, per-seed rows with a view column, each protocol's results.json)."""
+    """(summary rows with a view column, per-seed rows with a view column, each protocol's results.json);
+    where two outputs hold the same view, protocol and model, the later one's rows are kept."""
     lbs, seeds, metas = [], [], []
     for view, d in benches:
         lb = pd.read_csv(d / "leaderboard.csv", keep_default_na=False, na_values=[""])
@@ -91,9 +92,13 @@ def read_benches(benches: list[tuple[str, Path]]) -> tuple[pd.DataFrame, pd.Data
             metas.append({**meta, "view": view})
             rs = pd.read_csv(rj.parent / "results.csv", keep_default_na=False, na_values=[""])
             seeds.append(rs.assign(view=view))
+    # a later --bench of the same view and protocol replaces the models it holds (a re-run of
+    # some models, e.g. the context detector after a change that leaves the baselines' code alone)
     lb = pd.concat(lbs, ignore_index=True).drop_duplicates(["view", "protocol", "model", "metric", "class"],
                                                            keep="last")
-    return lb, pd.concat(seeds, ignore_index=True), metas
+    seeds = pd.concat(seeds, ignore_index=True).drop_duplicates(
+        ["view", "protocol", "seed", "model", "metric", "class"], keep="last")
+    return lb, seeds, metas
 
 
 def read_campaign(root: Path) -> pd.DataFrame:
