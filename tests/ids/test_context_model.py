@@ -12,7 +12,7 @@ from uavcas.cli import app
 from uavcas.dataset.synthetic import write_dataset
 from uavcas.flows.standards.cic import FEATURES
 from uavcas.ids import baseline, detectors
-from uavcas.ids.context import select_columns
+from uavcas.ids.context import class_weights, select_columns
 from uavcas.schema import CONTEXT_FEATURES
 
 runner = CliRunner()
@@ -147,3 +147,34 @@ def test_context_detector_on_episode_rows():
     res = run_protocol(df, "multiclass", BenchConfig(models=("context",), seeds=(0,), importance=False, n_threads=1))
     f1 = {s.cls: s.value for s in res.scores if s.metric == "f1" and s.model == "Context"}
     assert f1["Replay"] > 0.9, f1  # it learned from an episode context column, by name
+
+
+def test_class_weights_by_frequency():
+    yi = np.repeat([0, 1, 2], [400, 100, 25])
+    for kind, power in (("sqrt", 0.5), ("balanced", 1.0)):
+        w = class_weights(yi, kind)
+        assert w[1] / w[0] == pytest.approx(4.0 ** power) and w[2] / w[0] == pytest.approx(16.0 ** power)
+        assert sum(w[c] * n for c, n in zip((0, 1, 2), (400, 100, 25))) == pytest.approx(len(yi))
+    assert class_weights(yi, None) is None
+    with pytest.raises(ValueError, match="class_weight"):
+        class_weights(yi, "inverse")
+
+
+def test_sqrt_weights_call_a_rare_overlapping_class_less_often():
+    """A rare class that overlaps Benign: weighted by the inverse square root of its frequency it
+    is predicted on fewer Benign rows than with 'balanced' weights, and the sqrt weights reach
+    LightGBM (the default)."""
+    rng = np.random.default_rng(0)
+
+    def rows(n_benign, n_rare):
+        X = pd.DataFrame({"Flow Duration": rng.normal(size=n_benign + n_rare),
+                          "ctx_route_lonely_frac": np.r_[rng.normal(size=n_benign), rng.normal(1.0, 1.0, n_rare)]})
+        return X, np.repeat(["Benign", "Wormhole"], [n_benign, n_rare])
+    X, y = rows(1900, 40)
+    Xt, yt = rows(2000, 0)
+    est = baseline("context", n_jobs=1).fit(X, y)
+    assert est.class_weight == "sqrt" and est.model_.class_weight == est.class_weight_
+    assert est.class_weight_[1] / est.class_weight_[0] == pytest.approx(np.sqrt(1900 / 40))
+    called = {w: (baseline("context", n_jobs=1, class_weight=w).fit(X, y).predict(Xt) == "Wormhole").sum()
+              for w in ("sqrt", "balanced")}
+    assert called["sqrt"] < called["balanced"], called
