@@ -165,17 +165,8 @@ static void sift_down(size_t i) {
 }
 
 static item_t heap_pop(void) {
-    item_t top = S.heap[0], last = S.heap[--S.n];
-    size_t i = 0;
-    for (;;) {
-        size_t c = 2 * i + 1;
-        if (c >= S.n) break;
-        if (c + 1 < S.n && S.heap[c + 1].due < S.heap[c].due) c++;
-        if (last.due <= S.heap[c].due) break;
-        S.heap[i] = S.heap[c];
-        i = c;
-    }
-    if (S.n) S.heap[i] = last;
+    item_t top = S.heap[0];
+    if (--S.n) { S.heap[0] = S.heap[S.n]; sift_down(0); }
     return top;
 }
 
