@@ -3,8 +3,9 @@
 This kernel has no netem (nor fq/etf for EDT), so propagation delay is added in userspace:
 `iptables -A FORWARD -m physdev --physdev-out l+ -j NFQUEUE --queue-bypass` in the fabric
 namespace sends every bridged IPv4 frame leaving a switch-to-switch port here; the daemon reads
-metadata and the IP header's first word (copy range 4: the packet's length), looks the delay up by the *physical out port*
-(NFQA_IFINDEX_PHYSOUTDEV, i.e. the link direction) and accepts the packet when it is due.
+metadata and the IP header's first word (copy range 4: the packet's length), looks the delay up
+by the *physical out port* (NFQA_IFINDEX_PHYSOUTDEV, i.e. the link direction) and accepts the
+packet when it is due.
 
 Two implementations, one protocol: the compiled verdict loop `nfqdelay.c` (built on first use
 with the system C compiler, cached beside the interpreter; `python -m uavcas.emulation.nfqdelay
@@ -61,7 +62,8 @@ from .priority import DELAY_RT_PRIORITY
 NETLINK_NETFILTER = 12
 NFNL_SUBSYS_QUEUE = 3
 NFQNL_MSG_PACKET, NFQNL_MSG_VERDICT, NFQNL_MSG_CONFIG = 0, 1, 2
-NFQA_PACKET_HDR, NFQA_VERDICT_HDR, NFQA_TIMESTAMP, NFQA_IFINDEX_PHYSOUTDEV, NFQA_PAYLOAD, NFQA_CAP_LEN = 1, 2, 4, 8, 10, 16
+NFQA_PACKET_HDR, NFQA_VERDICT_HDR, NFQA_TIMESTAMP, NFQA_IFINDEX_PHYSOUTDEV = 1, 2, 4, 8
+NFQA_PAYLOAD, NFQA_CAP_LEN = 10, 16
 NFQA_CFG_CMD, NFQA_CFG_PARAMS, NFQA_CFG_QUEUE_MAXLEN, NFQA_CFG_MASK, NFQA_CFG_FLAGS = 1, 2, 3, 4, 5
 NFQNL_CFG_CMD_BIND = 1
 NFQNL_COPY_PACKET = 2
