@@ -59,6 +59,13 @@ def test_the_mixed_run_passes_its_audit(run):
 def test_missions_and_commands_are_acknowledged(run):
     plan, info = run.read_plan(), run.read_info()
     assert info.exit_status == 0 and len(info.http_clients) == 6  # mixed: the image fetches run too
+    drops = {(r["window"], r["src"], r["dst"]): r["queue_drops"] or 0 for r in run.read_shaping()}
+
+    def dropped_back(uav: str, bs: str, window: int) -> bool:
+        """A hop of the UAV's planned path to the BS dropped frames at its queue tail in the window."""
+        hops = next(r.hops for r in plan.windows[window].routes if (r.src, r.dst) == (uav, bs))
+        return any(drops.get((window, a, b), 0) > 0 for a, b in zip(hops, hops[1:]))
+
     for bs in (n.name for n in plan.nodes if n.kind == "bs"):
         log = read_log(run.logs_dir / f"mavlink-{bs}.jsonl")
         served = next(e for e in log if e["event"] == "listening")["uavs"]
@@ -67,12 +74,19 @@ def test_missions_and_commands_are_acknowledged(run):
             online = [w.index for w in plan.windows if uav not in plan.disconnected_uavs(w)]
             if not online:
                 continue
-            ups = [e for e in log if e["event"] == "mission_upload" and e["uav"] == uav]
-            assert [e["result"] for e in ups] == ["accepted"], (uav, ups)
-            acks = {e["window"]: e["result"] for e in log if e["event"] == "command_result" and e["uav"] == uav}
-            assert all(acks.get(k) == "accepted" for k in online if k >= 1), (uav, acks)
+            # Every exchange reaches the UAV, which accepts it. The BS hears the answer unless the
+            # UAV's path back dropped frames at a full queue in that window: the image fetches
+            # keep some uplinks saturated (uav4 -> bs0 tail-drops a quarter of its frames), and
+            # four lost acks in a row there are the link's, not the application's.
             ulog = read_log(run.logs_dir / f"mavlink-{uav}.jsonl")
             assert [e["result"] for e in ulog if e["event"] == "mission_receive"] == ["accepted"]
+            # the UAV's log has run time, not windows: a command is sent at its window's start
+            answered = {int(e["t_s"] // plan.window_s) for e in ulog if e["event"] == "command" and e["result"] == 0}
+            ups = [e for e in log if e["event"] == "mission_upload" and e["uav"] == uav]
+            assert len(ups) == 1 and (ups[0]["result"] == "accepted" or dropped_back(uav, bs, 0)), (uav, ups)
+            acks = {e["window"]: e["result"] for e in log if e["event"] == "command_result" and e["uav"] == uav}
+            for k in (k for k in online if k >= 1):
+                assert k in answered and (acks.get(k) == "accepted" or dropped_back(uav, bs, k)), (uav, k, acks)
             # run.json's streams summary says the same
             assert uav in info.streams["mavlink"][bs]["uploaded"]
             assert info.streams["mavlink"][bs]["received_by_uav"][uav]["GLOBAL_POSITION_INT"] > 0
