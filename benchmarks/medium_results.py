@@ -197,6 +197,9 @@ def checks(lb: pd.DataFrame, seeds: pd.DataFrame, classes: dict[str, pd.DataFram
                          "**not measured**"])
             continue
         m = seed_margins(seeds, view)
+        if get(lb, view, "multiclass", "Context", "f1_macro", "stealth") is None:  # the targets it would measure
+            rows.append([f"{view}: Context stealth macro-F1 and Wormhole F1", "no multiclass output of this view "
+                         "among the inputs", "**not measured**"])
         if not m.empty:
             won = int((m.margin >= STEALTH_MARGIN).sum())
             rows.append([f"{view}: Context stealth macro-F1 >= best baseline + {STEALTH_MARGIN:.2f} on >= "
