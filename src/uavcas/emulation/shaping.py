@@ -39,6 +39,7 @@ from pathlib import Path
 
 from . import kernel, nfqdelay
 from .counters import NFT_TABLE, PortCounters, read_link_drops, read_nft_counters, read_qdisc_counters
+from .pacing import Pacing
 from .readback import read_htb_classes, read_nft_losses
 
 LOSS_SCALE = 1_000_000  # loss resolution: 1e-6
@@ -132,9 +133,9 @@ def htb_change_line(port: str, rate_mbps: float) -> str:
     return f"class change dev {port} parent 1: classid 1:1 htb rate {r}bit ceil {r}bit quantum {MTU_FRAME_B}"
 
 
-def pacing(rate_mbps: float) -> nfqdelay.Pacing:
+def pacing(rate_mbps: float) -> Pacing:
     """The delay stage's pacing of a port at `rate_mbps`: one-frame bucket, the port's queue limit."""
-    return nfqdelay.Pacing(rate_bit(rate_mbps), PACE_BURST_B, queue_limit_pkts(rate_mbps))
+    return Pacing(rate_bit(rate_mbps), PACE_BURST_B, queue_limit_pkts(rate_mbps))
 
 
 def pfifo_line(verb: str, port: str, rate_mbps: float) -> str:
@@ -366,11 +367,7 @@ class FallbackShaper(Shaper):
     def daemon_request(self, shapes: Sequence[Shape]) -> dict | None:
         """Every changed port's delay and pacing, in one request (None: nothing changed); the
         daemon re-times a port's queued frames when its rate changes."""
-        changed = self._changed(shapes)
-        if not changed:
-            return None
-        return {"op": "set", "delays_us": {s.port: round(s.delay_ms * 1000) for s in changed},
-                "pacing": {s.port: pacing(s.rate_mbps) for s in changed}}
+        return _set_request(self._changed(shapes))
 
     def apply(self, shapes: Sequence[Shape], also: Sequence[kernel.Batch] = ()) -> dict[str, float]:
         changed = self._changed(shapes)
@@ -379,7 +376,7 @@ class FallbackShaper(Shaper):
         losses = {s.port: s.loss for s in changed if (self.current.get(s.port) or _NOLOSS).loss != s.loss}
         if losses:
             batches.append(kernel.Batch("nft", self.fabric_ns, nft_loss_lines(losses)))
-        request = self.daemon_request(shapes)
+        request = _set_request(changed)
         t1 = time.perf_counter()
         if request:  # a socket round trip to the daemon (~1 ms); nft and ip run concurrently
             nfqdelay.request(self.ctl_path, request)
@@ -416,6 +413,14 @@ class FallbackShaper(Shaper):
 
 
 _NOLOSS = Shape("", "", "", DEFAULT_RATE_MBPS, 0.0, 0.0)
+
+
+def _set_request(changed: Sequence[Shape]) -> dict | None:
+    """The daemon's `set` request for the changed shapes (None: none)."""
+    if not changed:
+        return None
+    return {"op": "set", "delays_us": {s.port: round(s.delay_ms * 1000) for s in changed},
+            "pacing": {s.port: pacing(s.rate_mbps) for s in changed}}
 
 
 def make_shaper(backend: str, fabric_ns: str, run_dir: Path) -> Shaper:
