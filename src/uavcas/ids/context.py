@@ -28,8 +28,8 @@ two of five seeds (weighted F1 0.93 and 0.94; 0.9998 for the flow model alone). 
 context still decides where the flow model is unsure, which is where the stealth classes are
 (their flows look like Benign ones, so the flow scores of the two sit close), and cannot
 overturn a flow decision held at more than 3: binary weighted F1 0.9725 -> 0.9968 over the five
-seeds, stealth macro-F1 within 0.01 of unbounded on every seed of both views' multiclass
-protocol (docs/measurements.md, stop 27).
+seeds (balanced weights; 0.9973 with the square-root weights below), stealth macro-F1 within
+0.01 of unbounded on every seed of both views' multiclass protocol (docs/measurements.md, stop 27).
 
 Class weights (`class_weight`) are the inverse square root of each class's frequency ('sqrt'),
 not its inverse ('balanced'). The benchmark scores macro-F1, and a class's F1 is best at a
