@@ -125,7 +125,9 @@ EPISODE_STATS: tuple[str, ...] = ("mean", "max")
 # the flows' context columns summarised per episode (mean and max over the same flows)
 # the same route measures over the episode's own packets (`flows.routes`), whichever flow they belong to
 EPISODE_ROUTE_FEATURES: tuple[str, ...] = (
-    "ctx_pkt_route_lonely_frac", "ctx_pkt_path_len_shift", "ctx_pkt_delay_shift_ms", "ctx_pkt_route_lonely_max")
+    "ctx_pkt_route_lonely_frac", "ctx_pkt_path_len_shift", "ctx_pkt_delay_shift_ms", "ctx_pkt_route_lonely_max",
+    "ctx_pkt_path_len_shift_peer_max", "ctx_pkt_delay_shift_peer_max_ms", "ctx_pkt_off_own_route_frac",
+    "ctx_pkt_off_own_route_max")
 EPISODE_CONTEXT_FEATURES: tuple[str, ...] = tuple(
     f"{c}_{s}" for c in CONTEXT_FEATURES for s in EPISODE_STATS) + EPISODE_ROUTE_FEATURES
 EPISODE_COUNT_COLUMNS: tuple[str, ...] = ("packets",)  # the host's packets in the window (truth's denominator)

@@ -11,7 +11,7 @@ import pytest
 from helpers.capture_tables import HOP_S, send, table
 from uavcas.flows.assemble import FlowConfig, assemble
 from uavcas.flows.context import context_frame, context_frames
-from uavcas.flows.routes import route_codes
+from uavcas.flows.routes import RouteShifts, episode_route_context, off_own_route, route_codes, route_matrix
 from uavcas.flows.transmissions import transmissions
 from uavcas.schema import CONTEXT_FEATURES, CONTEXT_ROUTE_FEATURES
 
@@ -96,7 +96,7 @@ def test_route_codes_tell_order_and_length_apart():
            + send(3.0, ["a", "r", "b"], "a", "b", sport=1, dport=1, proto=17, id=4))
     p = table(obs)
     t = transmissions(p)
-    codes = route_codes(p, t)[np.argsort(t.t_ns)]
+    codes = route_codes(route_matrix(p, t))[np.argsort(t.t_ns)]
     assert codes[0] == codes[3] and len({int(c) for c in codes[:3]}) == 3
 
 
@@ -109,3 +109,48 @@ def test_the_route_columns_are_part_of_the_context_and_nothing_else_moves():
     assert routes.tx.shape[0] == len(p) and routes.shifts.lonely.shape[0] == int(routes.tx.max()) + 1
     # reversed row order: the same columns, flow by flow
     pd.testing.assert_frame_equal(frame(obs).sort_index(), frame(obs[::-1]).sort_index())
+
+
+def test_episode_route_columns_take_the_largest_peer_mean_even_when_negative():
+    """Episode 0: peer 7's packets shifted by +1 and +0 switches (mean 0.5), peer 8's by +0.1 twice:
+    the mean over the episode is 0.3, the per-peer largest 0.5. Episode 1: every peer shortened
+    (-1, -2): the largest is -1, not the 0 of "none defined". Episode 2: no finite shift, so 0."""
+    path = np.array([1.0, 0.0, 0.1, 0.1, -1.0, -2.0, np.nan])
+    delay = np.array([4.0, 0.0, 1.0, 1.0, -3.0, -5.0, np.nan])
+    shifts = RouteShifts(lonely=np.array([1.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0]), path_shift=path,
+                         delay_shift_ms=delay, off_own=np.array([1.0, np.nan, 0.0, 0.0, 0.0, np.nan, np.nan]))
+    group = np.array([0, 0, 0, 0, 1, 1, 2])
+    peer = np.array([7, 7, 8, 8, 7, 8, 7])
+    out = episode_route_context(group, np.arange(7), peer, shifts, 3)
+    assert out["ctx_pkt_path_len_shift"] == pytest.approx([0.3, -1.5, 0.0])
+    assert out["ctx_pkt_path_len_shift_peer_max"] == pytest.approx([0.5, -1.0, 0.0])
+    assert out["ctx_pkt_delay_shift_peer_max_ms"] == pytest.approx([2.0, -3.0, 0.0])
+    assert out["ctx_pkt_route_lonely_max"] == pytest.approx([1.0, 0.0, 0.0])
+    # the off-own-route share counts only the packets where a comparison was made
+    assert out["ctx_pkt_off_own_route_frac"] == pytest.approx([1 / 3, 0.0, 0.0])
+    assert out["ctx_pkt_off_own_route_max"] == pytest.approx([1.0, 0.0, 0.0])
+    # a packet row points at its transmission: two rows of one transmission count twice
+    twice = episode_route_context(np.array([0, 0]), np.array([0, 0]), np.array([7, 7]), shifts, 1)
+    assert twice["ctx_pkt_path_len_shift_peer_max"] == pytest.approx([1.0])
+
+
+def test_a_relay_that_forwards_a_victim_away_from_its_own_route_is_seen():
+    """r carries a's packets to b straight on while r's own packets to b go through x (a wormhole at
+    r); x carries r's packets to b as it sends its own (a planned relay): only a's are off the own
+    route. A transit hop with no own traffic to the same destination there (a -> x through r) is
+    undefined, and so is a route with no transit hop (x -> b)."""
+    obs = []
+    for k in range(20):
+        t0 = 0.04 * k
+        obs += send(t0, ["a", "r", "b"], "a", "b", sport=1, dport=1, proto=17, id=100 + k)
+        obs += send(t0 + 0.005, ["r", "x", "b"], "r", "b", sport=2, dport=1, proto=17, id=200 + k)
+        obs += send(t0 + 0.010, ["x", "b"], "x", "b", sport=3, dport=1, proto=17, id=300 + k)
+        obs += send(t0 + 0.015, ["a", "r", "x"], "a", "x", sport=4, dport=1, proto=17, id=400 + k)
+    p = table(obs)
+    t = transmissions(p)
+    off = off_own_route(route_matrix(p, t), t, t.t_ns // 1_000_000_000)
+    sport = np.zeros(t.n_points.shape[0], dtype=np.int64)
+    sport[t.tx] = np.asarray(p["sport"])
+    by = {int(s): off[sport == s] for s in np.unique(sport)}
+    assert by[1].shape == (20,) and np.all(by[1] == 1.0) and np.all(by[2] == 0.0)
+    assert np.isnan(by[3]).all() and np.isnan(by[4]).all()

@@ -158,5 +158,9 @@ def test_route_columns_summarise_the_episodes_own_packets():
                   "ctx_pkt_route_lonely_max"] == 0.0 and df.loc[("uav0", 2), "ctx_pkt_route_lonely_max"] == 0.0
     b = df.loc[("bs0", 2)]  # of bs0's three peers, uav3's traffic was half detoured
     assert (b.ctx_pkt_route_lonely_max, b.ctx_pkt_route_lonely_frac) == (pytest.approx(0.5), pytest.approx(50 / 300))
+    # its path and delay shifts: a third of the victim pair's over bs0's three peers, whole per peer
+    assert b.ctx_pkt_path_len_shift == pytest.approx(47 / 300)
+    assert b.ctx_pkt_path_len_shift_peer_max == pytest.approx(0.47)
+    assert b.ctx_pkt_delay_shift_peer_max_ms == pytest.approx(0.47, abs=1e-3)  # one hop of 1 ms on 47 of 100
     with pytest.raises(ValueError, match="routes"):
         host_window_frame(p, fl, ff, truth, make_plan(), T0)
