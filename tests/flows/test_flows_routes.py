@@ -135,10 +135,11 @@ def test_episode_route_columns_take_the_largest_peer_mean_even_when_negative():
 
 
 def test_a_relay_that_forwards_a_victim_away_from_its_own_route_is_seen():
-    """r carries a's packets to b straight on while r's own packets to b go through x (a wormhole at
-    r); x carries r's packets to b as it sends its own (a planned relay): only a's are off the own
-    route. A transit hop with no own traffic to the same destination there (a -> x through r) is
-    undefined, and so is a route with no transit hop (x -> b)."""
+    """r passes a's packets to b straight on while r's own packets to b go through x (a wormhole at
+    r): both kinds disagree at r. x passes r's packets to b as it sends its own (a planned relay):
+    x's own agree. A hop with nothing of the other kind to the same destination there (a -> x
+    through r, with no own traffic of r to x; a's own first hops, with no passing traffic of a) is
+    undefined."""
     obs = []
     for k in range(20):
         t0 = 0.04 * k
@@ -152,5 +153,5 @@ def test_a_relay_that_forwards_a_victim_away_from_its_own_route_is_seen():
     sport = np.zeros(t.n_points.shape[0], dtype=np.int64)
     sport[t.tx] = np.asarray(p["sport"])
     by = {int(s): off[sport == s] for s in np.unique(sport)}
-    assert by[1].shape == (20,) and np.all(by[1] == 1.0) and np.all(by[2] == 0.0)
-    assert np.isnan(by[3]).all() and np.isnan(by[4]).all()
+    assert by[1].shape == (20,) and np.all(by[1] == 1.0) and np.all(by[2] == 1.0)
+    assert np.all(by[3] == 0.0) and np.isnan(by[4]).all()

@@ -22,7 +22,8 @@ looks at every transmission when it crossed the network:
   over the pair's earlier context windows of their mean path length) and `delay_shift_ms`
   (first-to-last observation time less the median of the earlier windows' median delay; NaN
   when one switch saw it or the pair has no earlier window) and `off_own` (`off_own_route`: a
-  switch it crossed in transit sent it another way than its own traffic to the same destination).
+  switch it crossed sent it another way than it sent the other kind, its own or passing traffic,
+  to the same destination).
 
 Measured (1 s bins): a plan window's re-planning changed 25-100 % of the pairs seen in a 10-UAV
 and two 6-UAV runs; a wormhole's start changed 1 of 19 pairs (5 %) in the first and 2 of 12
@@ -95,32 +96,42 @@ def route_codes(routes: np.ndarray) -> np.ndarray:
 
 
 def off_own_route(routes: np.ndarray, t: "Transmissions", bin_: np.ndarray) -> np.ndarray:
-    """Per transmission: 1.0 when a switch it crossed in transit sent it to another next switch than
-    the one that switch's own traffic to the same destination took in the same bin (the most
-    frequent, ties to the lower index), 0.0 when every such comparison agrees, NaN when none can be
-    made (no own traffic there to that destination in the bin). Planned routes share their
-    suffixes (a relay forwards a passing packet as it forwards its own); a wormhole's detour takes
-    the victim's packets from the attacker's switch straight to the base station that the
-    attacker's own traffic reaches another way."""
+    """Per transmission: 1.0 when a switch it crossed sent it to another next switch than the one
+    that switch sent the other kind of traffic to the same destination in the same bin (its own
+    traffic against passing traffic, each kind's most frequent next switch, ties to the lower
+    index), 0.0 when every such comparison agrees, NaN when none can be made. Planned routes share
+    their suffixes (a relay forwards a passing packet as it forwards its own); a wormhole's detour
+    takes only the victim's traffic with its base station another way: at the attacker's switch
+    the victim's packets pass straight to the base station that the attacker's own reach another
+    way, and at the victim's and the base station's switches their own packets to each other
+    leave another way than the ones they relay."""
     n_tx = routes.shape[0]
     out = np.full(n_tx, np.nan)
     if n_tx == 0 or routes.shape[1] < 2:
         return out
-    own_home = t.home[t.src]
-    own = routes[:, 0] >= 0
-    own &= (routes[:, 1] >= 0) & (routes[:, 0] == own_home)
-    first = pd.DataFrame({"b": bin_[own], "x": routes[own, 0], "d": t.dst[own], "n": routes[own, 1]})
-    modal = (first.value_counts().rename("c").reset_index()
-             .sort_values(["b", "x", "d", "c", "n"], ascending=[True, True, True, False, True], kind="stable")
-             .drop_duplicates(["b", "x", "d"]).set_index(["b", "x", "d"])["n"])
-    for i in range(1, routes.shape[1] - 1):
-        hop = np.flatnonzero(routes[:, i + 1] >= 0)
-        if not hop.shape[0]:
+    hops = []
+    for i in range(routes.shape[1] - 1):
+        tx = np.flatnonzero(routes[:, i + 1] >= 0)
+        if not tx.shape[0]:
             break
-        want = modal.reindex(pd.MultiIndex.from_arrays([bin_[hop], routes[hop, i], t.dst[hop]])).to_numpy()
-        ok = np.isfinite(want)
-        rows, differs = hop[ok], (routes[hop[ok], i + 1] != want[ok]).astype(np.float64)
-        out[rows] = np.fmax(out[rows], differs)  # NaN (not yet compared) gives way to a comparison
+        # own: the source's first switch is its home; transit: any later switch (a packet entering
+        # away from its source's home, a spoofed one, is neither at its first switch)
+        kind = np.where(i > 0, 1, np.where(routes[tx, 0] == t.home[t.src[tx]], 0, -1))
+        hops.append(pd.DataFrame({"tx": tx, "b": bin_[tx], "x": routes[tx, i], "d": t.dst[tx],
+                                  "n": routes[tx, i + 1], "kind": kind}))
+    h = pd.concat(hops, ignore_index=True)
+    h = h[h["kind"] >= 0]
+    keys = ["b", "x", "d", "kind"]
+    modal = (h[keys + ["n"]].value_counts().rename("c").reset_index()
+             .sort_values(keys + ["c", "n"], ascending=[True] * 4 + [False, True], kind="stable")
+             .drop_duplicates(keys).set_index(keys)["n"])
+    other = modal.reindex(pd.MultiIndex.from_arrays([h["b"], h["x"], h["d"], 1 - h["kind"]])).to_numpy()
+    ok = np.isfinite(other)
+    rows, differs = h["tx"].to_numpy()[ok], (h["n"].to_numpy()[ok] != other[ok]).astype(np.float64)
+    order = np.argsort(-differs, kind="stable")  # a disagreement outweighs an agreement of the same packet
+    rows, differs = rows[order], differs[order]
+    first = np.unique(rows, return_index=True)[1]
+    out[rows[first]] = differs[first]
     return out
 
 
