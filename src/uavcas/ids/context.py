@@ -39,10 +39,13 @@ it: in the window-host view Wormhole holds 1.3 % of the rows and 'balanced' weig
 times a Benign row, so Benign episodes the context cannot tell apart from a detour were called
 Wormhole (256 of the 5 seeds' predictions against 39 right: F1 0.14). The square root weighs it
 about 7 times, nearer that threshold for the weak classes while the rare classes still count.
-It does not make Wormhole easy (F1 0.18 over five seeds in that view): of the episode context
-columns only the lonely-route shares tell a detour from Benign route changes (AUROC 0.78), and
-a base station's path and delay shifts are averaged over every peer's packets, the detoured
-victim's a fifth of them.
+It does not make Wormhole easy (F1 0.18 over five seeds in that view). The episode route
+columns that a detour moves (`flows.routes`: lonely route changes, path and delay shifts and
+switches that send their own and passing traffic to one destination different ways, each also
+as the largest over a node's peers) reach AUROC 0.80 against Benign episodes at best, and a
+fifth of the Benign episodes carry some such evidence (a swarm re-plans its routes every window);
+with them this detector's Wormhole F1 stays near 0.17 and the one-stage `context-joint` reaches
+about 0.29 (docs/measurements.md, stop 28).
 
 The ablation uses the same learner and settings on other inputs (each variant is a detector
 module of its own, `uavcas.ids.detectors.context*`):
