@@ -136,9 +136,9 @@ _CTX_FLOW: dict[str, tuple[str, str]] = {
     "ctx_pkt_route_lonely_max": ("ratio", "the largest such share over the node's peers (the other end's address)"),
     "ctx_pkt_path_len_shift_peer_max": ("switches", "the largest mean path shift over the node's peers' packets"),
     "ctx_pkt_delay_shift_peer_max_ms": ("ms", "the largest mean one-way delay shift over the node's peers' packets"),
-    "ctx_pkt_off_own_route_frac": ("ratio", "share of the episode's packets that a switch they crossed in transit sent "
-                                            "another way than its own packets to the same destination, in the "
-                                            "same 1 s bin (of those where both were seen)"),
+    "ctx_pkt_off_own_route_frac": ("ratio", "share of the episode's packets that a switch sent another way than "
+                                            "it sent the other kind of traffic (its own or passing) to the same "
+                                            "destination in the same 1 s bin (of those where both were seen)"),
     "ctx_pkt_off_own_route_max": ("ratio", "the largest such share over the node's peers (the other end's address)"),
     "ctx_pkt_path_len_shift": ("switches", "mean over the episode's packets of switches that saw it less its directed "
                                            "pair's earlier median"),
