@@ -70,6 +70,14 @@ def earlier_median(tab: pd.DataFrame, metric: str) -> pd.Series:
     return tab[metric].groupby(tab["key"]).transform(lambda s: s.expanding().median().shift(1).ffill())
 
 
+def modal_by(frame: pd.DataFrame, keys: list[str], value: str) -> pd.DataFrame:
+    """Per group of `keys`, its most frequent `value` (ties to the smaller): one row per group,
+    columns `keys` and `value`, sorted by `keys`."""
+    counts = frame[keys + [value]].value_counts().rename("_count").reset_index()
+    counts = counts.sort_values(keys + ["_count", value], ascending=[True] * len(keys) + [False, True], kind="stable")
+    return counts.drop_duplicates(keys)[keys + [value]].reset_index(drop=True)
+
+
 def route_matrix(p: "PacketTable", t: "Transmissions") -> np.ndarray:
     """Per transmission, the capture points that saw it in crossing order (its ingress first), padded
     with -1 to the longest route: shape (transmissions, longest path)."""
@@ -118,22 +126,17 @@ def off_own_route(routes: np.ndarray, t: "Transmissions", bin_: np.ndarray) -> n
             break
         # own: the source's first switch is its home; transit: any later switch (a packet entering
         # away from its source's home, a spoofed one, is neither at its first switch)
-        kind = np.where(i > 0, 1, np.where(routes[tx, 0] == t.home[t.src[tx]], 0, -1))
+        kind = np.ones(tx.shape[0], dtype=np.int64) if i else np.where(routes[tx, 0] == t.home[t.src[tx]], 0, -1)
         hops.append(pd.DataFrame({"tx": tx, "b": bin_[tx], "x": routes[tx, i], "d": t.dst[tx],
                                   "n": routes[tx, i + 1], "kind": kind}))
     h = pd.concat(hops, ignore_index=True)
     h = h[h["kind"] >= 0]
     keys = ["b", "x", "d", "kind"]
-    modal = (h[keys + ["n"]].value_counts().rename("c").reset_index()
-             .sort_values(keys + ["c", "n"], ascending=[True] * 4 + [False, True], kind="stable")
-             .drop_duplicates(keys).set_index(keys)["n"])
+    modal = modal_by(h, keys, "n").set_index(keys)["n"]
     other = modal.reindex(pd.MultiIndex.from_arrays([h["b"], h["x"], h["d"], 1 - h["kind"]])).to_numpy()
     ok = np.isfinite(other)
-    rows, differs = h["tx"].to_numpy()[ok], (h["n"].to_numpy()[ok] != other[ok]).astype(np.float64)
-    order = np.argsort(-differs, kind="stable")  # a disagreement outweighs an agreement of the same packet
-    rows, differs = rows[order], differs[order]
-    first = np.unique(rows, return_index=True)[1]
-    out[rows[first]] = differs[first]
+    # a disagreement outweighs an agreement of the same packet; fmax lets a comparison replace NaN
+    np.fmax.at(out, h["tx"].to_numpy()[ok], (h["n"].to_numpy()[ok] != other[ok]).astype(np.float64))
     return out
 
 
@@ -154,10 +157,7 @@ def lonely_routes(pair: np.ndarray, bin_: np.ndarray, code: np.ndarray, delivere
     d = pd.DataFrame({"pair": pair[delivered], "bin": bin_[delivered], "code": code[delivered]})
     if d.empty:
         return np.zeros(pair.shape[0])
-    # the modal route per (pair, bin): most transmissions, ties to the smaller code
-    counts = d.value_counts().rename("n").reset_index()
-    counts = counts.sort_values(["pair", "bin", "n", "code"], ascending=[True, True, False, True], kind="stable")
-    modal = counts.drop_duplicates(["pair", "bin"]).sort_values(["pair", "bin"], kind="stable").reset_index(drop=True)
+    modal = modal_by(d, ["pair", "bin"], "code")  # the modal route per (pair, bin)
     prev = modal.groupby("pair")["code"].shift(1)
     seen = prev.notna()
     changed = seen & (modal["code"] != prev)
@@ -248,17 +248,14 @@ def episode_route_context(group: np.ndarray, rows_tx: np.ndarray, rows_peer: np.
         ("ctx_pkt_route_lonely_frac", shifts.lonely), ("ctx_pkt_path_len_shift", shifts.path_shift),
         ("ctx_pkt_delay_shift_ms", shifts.delay_shift_ms), ("ctx_pkt_off_own_route_frac", shifts.off_own))}
     # per peer, then the largest: a base station's episode holds every UAV's packets, and a
-    # wormhole detours one victim's; averaged over all peers its shift is a fifth of itself
+    # wormhole detours one victim's; averaged over all peers its shift shrinks by their number
+    pairs, inv = np.unique(np.stack([group, rows_peer], 1).reshape(-1, 2), axis=0, return_inverse=True)
     for name, value in (("ctx_pkt_route_lonely_max", shifts.lonely),
                         ("ctx_pkt_path_len_shift_peer_max", shifts.path_shift),
                         ("ctx_pkt_delay_shift_peer_max_ms", shifts.delay_shift_ms),
                         ("ctx_pkt_off_own_route_max", shifts.off_own)):
-        best = np.zeros(n)
-        if group.shape[0]:
-            pairs, inv = np.unique(np.stack([group, rows_peer], 1), axis=0, return_inverse=True)
-            per_peer = np.nan_to_num(_nanmean_by(inv.reshape(-1), value[rows_tx], pairs.shape[0]))
-            start = np.full(n, -np.inf)
-            np.maximum.at(start, pairs[:, 0], per_peer)
-            best = np.where(np.isfinite(start), start, 0.0)
-        out[name] = best
+        per_peer = np.nan_to_num(_nanmean_by(inv.reshape(-1), value[rows_tx], pairs.shape[0]))
+        best = np.full(n, -np.inf)
+        np.maximum.at(best, pairs[:, 0], per_peer)
+        out[name] = np.where(np.isfinite(best), best, 0.0)  # 0: an episode without packets
     return out
