@@ -16,7 +16,7 @@ from uavcas.emulation.apps import mavlink as mv
 class Relay(threading.Thread):
     """UDP middle box: datagrams from the UAV go to the GCS and back; all of them are recorded."""
 
-    def __init__(self, gcs_port: int) -> None:
+    def __init__(self, gcs_port: int, drop_once: tuple[str, ...] = ("MISSION_ITEM_INT", "COMMAND_LONG")) -> None:
         super().__init__(daemon=True)
         self.sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
         self.sock.bind(("127.0.0.1", 0))
@@ -26,7 +26,7 @@ class Relay(threading.Thread):
         self.up: list[tuple[float, bytes]] = []  # UAV -> GCS
         self.down: list[tuple[float, bytes]] = []  # GCS -> UAV
         self.stop = False
-        self.drop_once = {"MISSION_ITEM_INT", "COMMAND_LONG"}
+        self.drop_once = set(drop_once)  # the first GCS -> UAV datagram of each type is lost
 
     def run(self) -> None:
         while not self.stop:

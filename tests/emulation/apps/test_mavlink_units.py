@@ -71,3 +71,33 @@ def test_gcs_and_uav_exchange_mission_commands_and_streams_over_udp(tmp_path):
     relayed = sum(m.get_type() == "GLOBAL_POSITION_INT" for _, m in up)
     # both ends stop at the same deadline: the last one relayed may arrive after the GCS stopped
     assert relayed - 1 <= summary["received_by_uav"]["uav0"]["GLOBAL_POSITION_INT"] <= relayed
+
+
+def test_a_lost_stream_request_is_sent_again_for_its_group_alone(tmp_path):
+    # The mixed run of tests/emulation/test_mavlink_root.py once lost uav2's EXTENDED_STATUS
+    # request on a loaded downlink: the other groups streamed, and SYS_STATUS never came.
+    from pymavlink.dialects.v20 import common
+
+    p = plan(CFG, seed=14, windows=2, window_s=3.0)
+    gcs_port = free_port()
+    relay = Relay(gcs_port, drop_once=("REQUEST_DATA_STREAM",))  # the first one: EXTENDED_STATUS
+    relay.start()
+    dur, t0_path = p.duration_s, tmp_path / "t0"
+    gspec = mv.GcsSpec(name="bs0", sysid=p.node("bs0").sysid, bind_ip="127.0.0.1", port=gcs_port,
+                       uavs=[mv.gcs_target(p, "uav0")], t0_path=t0_path, window_s=p.window_s, n_windows=2,
+                       duration_s=dur, log_path=tmp_path / "mavlink-bs0.jsonl")
+    uspec = mv.uav_spec(p, "uav0", "127.0.0.1", None, dur, tmp_path / "mavlink-uav0.jsonl", gcs_port=relay.port,
+                        bind_port=0, t0_path=t0_path)
+    run_endpoints(tmp_path, gspec, uspec, relay)
+
+    assert not relay.drop_once
+    down, up = parse_each(relay.down), parse_each(relay.up)
+    requests = [(t, m.req_stream_id) for t, m in down if m.get_type() == "REQUEST_DATA_STREAM"]
+    ext = common.MAV_DATA_STREAM_EXTENDED_STATUS
+    assert [s for _, s in requests[:4]] == [s for s, _ in mv.StreamRates().requests()]
+    assert [s for _, s in requests[4:]] == [ext]  # the lost group again, and only it, once
+    assert requests[4][0] - requests[0][0] == pytest.approx(2.0, abs=0.3)
+    first = {typ: min(t for t, m in up if m.get_type() == typ) for typ in ("SYS_STATUS", "GLOBAL_POSITION_INT")}
+    assert first["GLOBAL_POSITION_INT"] < requests[4][0] < first["SYS_STATUS"]
+    started = {e["group"]: e["requests"] for e in mv.read_log(gspec.log_path) if e["event"] == "stream"}
+    assert started == {s: 2 if s == ext else 1 for s, _ in mv.StreamRates().requests()}

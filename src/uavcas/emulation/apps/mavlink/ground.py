@@ -10,7 +10,10 @@ from pymavlink.dialects.v20 import common
 
 from . import signing
 from .link import Log, Peer, Periodic, Stop, await_t0, recv_all
-from .specs import COMPONENT_AUTOPILOT, COMPONENT_GCS, GcsSpec, GcsTarget
+from .specs import COMPONENT_AUTOPILOT, COMPONENT_GCS, STREAM_MESSAGES, GcsSpec, GcsTarget
+
+# the stream group each streamed message belongs to (ArduPilot's grouping, `specs.STREAM_MESSAGES`)
+GROUP_OF = {name: sid for sid, names in STREAM_MESSAGES.items() for name in names}
 
 
 def run_gcs(spec: GcsSpec) -> dict:
@@ -32,7 +35,10 @@ def run_gcs(spec: GcsSpec) -> dict:
     # one signing state checks every datagram (its streams' last timestamps persist across the
     # per-datagram parsers); each peer signs what it sends with its own
     checks = signing.new_signing_state(spec.signing) if spec.signing is not None else None
-    stream_wait_s = 2.0  # re-request streams not seen this long after a request (bounded retries)
+    # Re-request the stream groups not heard this long after a request (bounded retries). Each
+    # group is its own REQUEST_DATA_STREAM datagram, and a loaded downlink can drop any one of
+    # them: a UAV heard streaming POSITION may still never have been asked for EXTENDED_STATUS.
+    stream_wait_s = 2.0
     while not stop.flag and (now := time.time()) < deadline:
         waits = [deadline]
         for sysid, st in state.items():
@@ -59,7 +65,7 @@ def run_gcs(spec: GcsSpec) -> dict:
                     state[src] = {"hb": Periodic(spec.rates.heartbeat_rate_hz, time.time()), "pending": None,
                                   "pending_at": 0.0, "tries": 0, "mission_t0": time.time() - spec.t0_unix,
                                   "uploaded": False, "cmd": None, "cmd_at": 0.0, "cmd_tries": 0,
-                                  "streams_at": None, "stream_tries": 0, "streaming": False,
+                                  "streams_at": None, "stream_tries": 0, "streams_heard": set(),
                                   "window": max(0, int((time.time() - spec.t0_unix) // spec.window_s))}
                     log("heard", uav=targets[src].name, sysid=src)
                     _request_streams(peers[src], m, spec, src, state[src])
@@ -96,10 +102,10 @@ def run_gcs(spec: GcsSpec) -> dict:
                 else:
                     st["cmd_tries"] += 1
                     _send_command(peer, m, src, st)
-            if (not st["streaming"] and st["streams_at"] is not None and now >= st["streams_at"] + stream_wait_s
-                    and st["stream_tries"] < spec.retry.mission_retries):
+            if (_streams_missing(spec, st) and st["streams_at"] is not None
+                    and now >= st["streams_at"] + stream_wait_s and st["stream_tries"] < spec.retry.mission_retries):
                 st["stream_tries"] += 1
-                _request_streams(peer, m, spec, src, st)
+                _request_streams(peer, m, spec, src, st, only=_streams_missing(spec, st))
     summary = {"node": spec.name, "sysid": spec.sysid, "sent": dict(sent), "received": dict(received),
                "received_by_uav": {k: dict(v) for k, v in received_by.items()},
                "uploaded": sorted(targets[s].name for s, st in state.items() if st["uploaded"])}
@@ -107,9 +113,16 @@ def run_gcs(spec: GcsSpec) -> dict:
     return summary
 
 
-def _request_streams(peer: Peer, m, spec: GcsSpec, src: int, st: dict) -> None:
+def _streams_missing(spec: GcsSpec, st: dict) -> set[int]:
+    """The stream groups requested at a non-zero rate whose messages have not been heard yet."""
+    return {sid for sid, rate in spec.rates.requests() if rate > 0} - st["streams_heard"]
+
+
+def _request_streams(peer: Peer, m, spec: GcsSpec, src: int, st: dict, only: set[int] | None = None) -> None:
+    """REQUEST_DATA_STREAM for every group (`only`: those groups alone, a re-request)."""
     for sid, rate in spec.rates.requests():
-        peer.send(m.MAVLink_request_data_stream_message(src, COMPONENT_AUTOPILOT, sid, rate, 1 if rate else 0))
+        if only is None or sid in only:
+            peer.send(m.MAVLink_request_data_stream_message(src, COMPONENT_AUTOPILOT, sid, rate, 1 if rate else 0))
     st["streams_at"] = time.time()
 
 
@@ -145,9 +158,10 @@ def _send_command(peer: Peer, m, src: int, st: dict) -> None:
 
 def _gcs_handle(m, msg, typ: str, peer: Peer, tgt: GcsTarget, st: dict, spec: GcsSpec, log) -> None:
     t = round(time.time() - spec.t0_unix, 4)
-    if typ in ("GLOBAL_POSITION_INT", "ATTITUDE", "VFR_HUD", "SYS_STATUS") and not st["streaming"]:
-        st["streaming"] = True
-        log("streams", uav=tgt.name, result="started", requests=st["stream_tries"] + 1)
+    if typ in GROUP_OF and GROUP_OF[typ] not in st["streams_heard"]:
+        st["streams_heard"].add(GROUP_OF[typ])
+        log("stream", uav=tgt.name, group=GROUP_OF[typ], message=typ, result="started", t_s=t,
+            requests=st["stream_tries"] + 1)
     if typ == "MISSION_REQUEST_INT" and msg.target_system == spec.sysid and st["pending"] is not None:
         if 0 <= msg.seq < len(tgt.waypoints):
             st["pending"], st["tries"] = ("item", msg.seq), 0
