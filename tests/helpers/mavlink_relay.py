@@ -48,6 +48,18 @@ class Relay(threading.Thread):
                 self.sock.sendto(data, self.gcs)
 
 
+def bs0_uav0_specs(tmp_path, p, gcs_port: int, relay: Relay, dur: float) -> tuple:
+    """The GCS of bs0 on `gcs_port` and uav0's autopilot talking to it through `relay`, for plan
+    `p`, both stopping `dur` seconds after t0 and logging into `tmp_path`."""
+    t0_path = tmp_path / "t0"
+    gspec = mv.GcsSpec(name="bs0", sysid=p.node("bs0").sysid, bind_ip="127.0.0.1", port=gcs_port,
+                       uavs=[mv.gcs_target(p, "uav0")], t0_path=t0_path, window_s=p.window_s,
+                       n_windows=len(p.windows), duration_s=dur, log_path=tmp_path / "mavlink-bs0.jsonl")
+    uspec = mv.uav_spec(p, "uav0", "127.0.0.1", None, dur, tmp_path / "mavlink-uav0.jsonl", gcs_port=relay.port,
+                        bind_port=0, t0_path=t0_path)
+    return gspec, uspec
+
+
 def run_endpoints(tmp_path, gspec, uspec, relay: Relay, at_t0=lambda t0: None) -> float:
     """Both endpoints as processes until their deadline: they load, bind and say "ready" before t0
     (as in a run), then t0 is published and `at_t0(t0)` runs meanwhile. Returns t0."""

@@ -61,9 +61,6 @@ ROUTE_BIN_S = 1.0  # short against a plan window (5 s), long against a stream's 
 LONELY_SHARE = 0.2  # re-planned windows changed >= 25 % of pairs in the runs measured; one detour 5-17 %
 
 
-_NS = 1_000_000_000
-
-
 def earlier_median(tab: pd.DataFrame, metric: str) -> pd.Series:
     """Median of the key's earlier windows that had a value (NaN in its first one). `tab` is
     sorted by (key, window)."""

@@ -126,8 +126,7 @@ def test_autopilot_reports_the_spoofers_drift_between_the_logged_times(tmp_path)
     att = att.model_copy(update={"start_s": 2.0, "stop_s": 4.0})  # inside the 6 s run, after the streams start
     victim = att.victims[0]
     gcs_port = free_port()
-    relay = Relay(gcs_port)
-    relay.drop_once = set()
+    relay = Relay(gcs_port, drop_once=())
     relay.start()
     dur, t0_path, apps = p.duration_s + 0.5, tmp_path / "t0", tmp_path / "apps"
     gspec = mv.GcsSpec(name="bs0", sysid=p.node("bs0").sysid, bind_ip="127.0.0.1", port=gcs_port,

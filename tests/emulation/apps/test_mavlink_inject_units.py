@@ -48,8 +48,7 @@ def test_forged_rtl_is_accepted_without_signing_and_dropped_with_it(tmp_path, si
     victim, bs = p.attacks[0].victims[0], "bs0"
     key = mv.signing_spec(p.seed, p.config) if signed else None
     gcs_port, uav_port = free_port(), free_port()
-    relay = Relay(gcs_port)
-    relay.drop_once = set()
+    relay = Relay(gcs_port, drop_once=())
     relay.start()
     dur, t0_path = p.duration_s + 0.5, tmp_path / "t0"
     gspec = mv.GcsSpec(name=bs, sysid=p.node(bs).sysid, bind_ip="127.0.0.1", port=gcs_port, signing=key,

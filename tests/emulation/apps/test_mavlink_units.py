@@ -10,7 +10,7 @@ from collections import Counter
 
 import pytest
 
-from helpers.mavlink_relay import Relay, free_port, parse_each, run_endpoints, type_of
+from helpers.mavlink_relay import Relay, bs0_uav0_specs, free_port, parse_each, run_endpoints, type_of
 from uavcas.emulation.apps import mavlink as mv
 from uavcas.twin.plan import plan
 from uavcas.twin.track import Track, geodetic_to_local
@@ -24,12 +24,7 @@ def test_gcs_and_uav_exchange_mission_commands_and_streams_over_udp(tmp_path):
     gcs_port = free_port()
     relay = Relay(gcs_port)
     relay.start()
-    dur, t0_path = p.duration_s + 0.5, tmp_path / "t0"
-    gspec = mv.GcsSpec(name="bs0", sysid=p.node("bs0").sysid, bind_ip="127.0.0.1", port=gcs_port,
-                       uavs=[mv.gcs_target(p, "uav0")], t0_path=t0_path, window_s=p.window_s, n_windows=3,
-                       duration_s=dur, log_path=tmp_path / "mavlink-bs0.jsonl")
-    uspec = mv.uav_spec(p, "uav0", "127.0.0.1", None, dur, tmp_path / "mavlink-uav0.jsonl", gcs_port=relay.port,
-                        bind_port=0, t0_path=t0_path)
+    gspec, uspec = bs0_uav0_specs(tmp_path, p, gcs_port, relay, p.duration_s + 0.5)
     run_endpoints(tmp_path, gspec, uspec, relay)
 
     glog, ulog = mv.read_log(gspec.log_path), mv.read_log(uspec.log_path)
@@ -82,12 +77,7 @@ def test_a_lost_stream_request_is_sent_again_for_its_group_alone(tmp_path):
     gcs_port = free_port()
     relay = Relay(gcs_port, drop_once=("REQUEST_DATA_STREAM",))  # the first one: EXTENDED_STATUS
     relay.start()
-    dur, t0_path = p.duration_s, tmp_path / "t0"
-    gspec = mv.GcsSpec(name="bs0", sysid=p.node("bs0").sysid, bind_ip="127.0.0.1", port=gcs_port,
-                       uavs=[mv.gcs_target(p, "uav0")], t0_path=t0_path, window_s=p.window_s, n_windows=2,
-                       duration_s=dur, log_path=tmp_path / "mavlink-bs0.jsonl")
-    uspec = mv.uav_spec(p, "uav0", "127.0.0.1", None, dur, tmp_path / "mavlink-uav0.jsonl", gcs_port=relay.port,
-                        bind_port=0, t0_path=t0_path)
+    gspec, uspec = bs0_uav0_specs(tmp_path, p, gcs_port, relay, p.duration_s)
     run_endpoints(tmp_path, gspec, uspec, relay)
 
     assert not relay.drop_once
