@@ -23,6 +23,9 @@ class PortCounters:
     queue_drops: int | None
     loss_drops: int | None
     link_drops: int | None = None  # dropped on transmit by the port itself (no queue attached yet, peer down)
+    # admitted and charged by the delay stage's pacer (fallback backend): against `sent_packets`,
+    # frames the pacer charged link time for that never left the port
+    paced_packets: int | None = None
 
 
 def read_link_drops(fabric_ns: str) -> dict[str, int]:

@@ -102,4 +102,5 @@ def _with_counters(rec: ShapingRecord, before: PortCounters | None, after: PortC
     return replace(rec, sent_packets=delta(before.sent_packets, after.sent_packets),
                    queue_drops=delta(before.queue_drops, after.queue_drops),
                    loss_drops=delta(before.loss_drops, after.loss_drops),
-                   link_drops=delta(before.link_drops, after.link_drops))
+                   link_drops=delta(before.link_drops, after.link_drops),
+                   paced_packets=delta(before.paced_packets, after.paced_packets))

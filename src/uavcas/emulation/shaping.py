@@ -89,6 +89,7 @@ class ShapingRecord:
     queue_drops: int | None = None
     loss_drops: int | None = None
     link_drops: int | None = None
+    paced_packets: int | None = None  # admitted by the delay stage's pacer (fallback backend only)
     # which setting of the window: 0 as the window was applied, k after its k-th mid-window
     # reshape (an attack's shaping, e.g. a jammer's start or stop); counters are per segment
     segment: int = 0
@@ -405,7 +406,8 @@ class FallbackShaper(Shaper):
         def tail_drops(p: str) -> int | None:  # the daemon's at its queue limit, and the pfifo's (none)
             pf = qd[p].get("pfifo", {}).get("drops")
             return None if pf is None and p not in paced else (pf or 0) + (paced[p][4] if p in paced else 0)
-        return {p: PortCounters(qd[p]["htb"].get("packets"), tail_drops(p), nft.get(p, 0), link.get(p))
+        return {p: PortCounters(qd[p]["htb"].get("packets"), tail_drops(p), nft.get(p, 0), link.get(p),
+                                paced[p][3] if p in paced else None)
                 for p in ports if "htb" in qd.get(p, {})}
 
     def daemon_stats(self) -> dict:

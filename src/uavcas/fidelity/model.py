@@ -65,6 +65,7 @@ class Counters(_Strict):
     queue_drops: int | None = None  # queue tail (pfifo) drops
     loss_drops: int | None = None  # random-loss rule drops (nft)
     link_drops: int | None = None  # dropped by the port on transmit (queue not attached yet, peer down)
+    paced_packets: int | None = None  # admitted and charged by the delay stage's pacer (fallback backend)
 
 
 class LinkWindow(DelayErrors):
