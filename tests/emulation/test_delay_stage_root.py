@@ -143,3 +143,37 @@ def test_a_saturated_link_is_paced_by_the_delay_stage(impl, monkeypatch):
     # the first hop's queue stays near its limit (16 frames of 4.2 ms at 2 Mbit/s); the second
     # queues only what a late release of the first bunched up, and never past its own limit
     assert 8.0 + 14 * 4.2 < r["delays_ms"]["median"] and r["delays_ms"]["max"] < 8.0 + 2 * 17 * 4.2, r
+
+
+def test_rewriting_the_detours_loses_no_frame_the_delay_stage_holds():
+    """The wormhole's nft table is rewritten while a saturated path holds a full queue in the
+    delay stage: every frame lost is one the pacer dropped at its queue tail. Deleting the
+    table's base chain (as before) unregistered a netfilter hook, and the kernel then dropped
+    every frame queued in the namespace's NFQUEUE, which the pacer had charged link time for."""
+    import threading
+
+    from uavcas.emulation.controller import Detour
+
+    with Emulation(_plan(rate_mbps=2.0), prefix=new_prefix()) as emu:
+        emu.apply_window(0)
+        # a detour of traffic this test never sends (uav1 <-> bs0 via uav0), toggled on and off
+        detour, done, rewrites = Detour("uav1", "uav0", "bs0", ("uav1", "uav0", "bs0")), threading.Event(), []
+
+        def toggle() -> None:
+            time.sleep(0.3)
+            while not done.is_set():
+                rewrites.append(emu.fabric.apply_detours([detour] if len(rewrites) % 2 == 0 else []))
+                time.sleep(0.15)
+
+        t = threading.Thread(target=toggle)
+        t.start()
+        try:
+            r = selftest.measure_udp(emu, "uav0", "bs0", 800, 400, size=1000)
+        finally:
+            done.set()
+            t.join()
+        got = nfqdelay.request(emu.shaper.ctl_path, {"op": "get"})
+    assert sum(rewrites) >= 8, rewrites
+    drops = sum(v[4] for v in got["pacing"].values())
+    # 800 sent; the path's two paced ports dropped `drops` at their tails, and nothing else was lost
+    assert drops > 100 and abs(round(r["loss"] * 800) - drops) <= 2, (r["loss"] * 800, drops, got["pacing"])
