@@ -94,12 +94,17 @@ class ForwardingEpoch(_Strict):
     in between a frame may have met either table. `next_hop[switch][destination]` is the
     neighbour switch (node names) a frame for `destination` leaves `switch` towards; a missing
     entry means the switch had no way there (the frame is dropped).
+
+    `detours["victim>bs"]`: the switches a wormhole detour carries the victim's frames to bs
+    through (victim first), and bs's frames back in reverse, on alias MACs outside `next_hop`
+    (`emulation.controller`); absent in runs made before detours were logged.
     """
 
     t_begin_unix: float
     t_unix: float
     window: int
     next_hop: dict[str, dict[str, str]]
+    detours: dict[str, list[str]] = {}
 
 
 class FidelitySummary(_Strict):

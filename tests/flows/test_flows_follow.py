@@ -131,6 +131,34 @@ def test_logged_forwarding_overrides_the_plan():
     assert f.n_packets == 1 and f.losses.to_point.tolist() == [-1] and f.losses.from_point.tolist() == [1]
 
 
+def test_a_logged_wormhole_detour_gives_the_victims_frames_their_next_hops_and_only_them():
+    # The table sends uav1 <-> bs0 over their direct link; the detour carries uav1's frames to
+    # bs0 (and bs0's back) through uav0 and uav2 on alias MACs, outside the table
+    # (emulation.controller). A medium run's audit, reading the table alone, chained detoured
+    # frames from the first switch straight to the last and left the middle ones orphaned.
+    path = ["uav1", "uav0", "uav2", "bs0"]
+    tl = Timeline.from_epochs(PLAN, [
+        ForwardingEpoch(t_begin_unix=T0, t_unix=T0, window=0, next_hop=TL_NH[0]),
+        ForwardingEpoch(t_begin_unix=T0 + 2.0, t_unix=T0 + 2.01, window=0, next_hop=TL_NH[0],
+                        detours={"uav1>bs0": path}),
+        ForwardingEpoch(t_begin_unix=T0 + 4.0, t_unix=T0 + 4.01, window=0, next_hop=TL_NH[0])])
+    ix = {n: k for k, n in enumerate(tl.nodes)}
+
+    def hops(t, at, src, dst, with_src=True):
+        now, nxt = tl.hops(np.array([T0 + t]), np.array([ix[at]]), np.array([ix[dst]]),
+                           np.array([ix[src]]) if with_src else None)
+        return tl.nodes[now[0]] if now[0] >= 0 else None, tl.nodes[nxt[0]] if nxt[0] >= 0 else None
+
+    assert hops(1.0, "uav1", "uav1", "bs0") == ("bs0", "bs0")  # before the detour: the table
+    assert hops(3.0, "uav1", "uav1", "bs0") == ("uav0", "uav0")
+    assert hops(3.0, "uav0", "uav1", "bs0") == ("uav2", "uav2") and hops(3.0, "uav2", "uav1", "bs0") == ("bs0", "bs0")
+    assert hops(3.0, "bs0", "bs0", "uav1") == ("uav2", "uav2") and hops(3.0, "uav0", "bs0", "uav1") == ("uav1", "uav1")
+    assert hops(2.005, "uav1", "uav1", "bs0") == ("bs0", "uav0")  # installing: either
+    assert hops(4.005, "uav1", "uav1", "bs0") == ("uav0", "bs0")  # removing: either
+    assert hops(3.0, "uav0", "uav0", "bs0") == hops(1.0, "uav0", "uav0", "bs0")  # another source: the table
+    assert hops(3.0, "uav1", "uav1", "bs0", with_src=False) == ("bs0", "bs0")
+
+
 def test_follow_run_reads_captures_and_forwarding(tmp_path):
     rd = RunDir(tmp_path)
     (tmp_path / "pcap").mkdir()

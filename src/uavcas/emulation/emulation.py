@@ -335,7 +335,8 @@ class Emulation:
 
     def _log_forwarding(self, t_begin: float, window: int) -> None:
         self.forwarding_log.append(ForwardingEpoch(t_begin_unix=t_begin, t_unix=time.time(), window=window,
-                                                   next_hop=self.forwarding.next_hop))
+                                                   next_hop=self.forwarding.next_hop,
+                                                   detours={d.key: list(d.hops) for d in self.forwarding.detours}))
 
     # processes and hooks -------------------------------------------------------------------
     def ns(self, node: str) -> str:

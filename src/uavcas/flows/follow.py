@@ -77,7 +77,10 @@ class Timeline:
 
     `next_hop[e, i, d]` is the node index a frame for node d leaves node i's switch towards in
     epoch e (-1: none); epoch e holds from `t_unix[e]` on, and during `[t_begin_unix[e],
-    t_unix[e])` the previous table may still hold for some destinations.
+    t_unix[e])` the previous table may still hold for some destinations. `detour_hop[(e, s, d)]`
+    overrides it for frames from node s to node d in epoch e (a wormhole detour: the victim's
+    traffic with its base station on alias MACs, both ways): node i -> the next switch on the
+    detour, -1 off it.
     """
 
     def __init__(self, nodes: Sequence[str], ips: Sequence[str], epochs: Sequence["ForwardingEpoch"],
@@ -93,6 +96,15 @@ class Timeline:
             for sw, table in ep.next_hop.items():
                 for dst, nh in table.items():
                     self.next_hop[e, index[sw], index[dst]] = index[nh]
+        self.detour_hop: dict[tuple[int, int, int], np.ndarray] = {}
+        for e, ep in enumerate(epochs):
+            for pair, hops in ep.detours.items():
+                victim, bs = pair.split(">")
+                for path in (hops, hops[::-1]):
+                    nh = np.full(n, -1, dtype=np.int32)
+                    for a, b in zip(path, path[1:]):
+                        nh[index[a]] = index[b]
+                    self.detour_hop[(e, index[path[0]], index[path[-1]])] = nh
         self.t_unix = np.array([e.t_unix for e in epochs], dtype=np.float64)
         self.t_begin_unix = np.array([e.t_begin_unix for e in epochs], dtype=np.float64)
         self.window = np.array([e.window for e in epochs], dtype=np.int32)
@@ -141,9 +153,12 @@ class Timeline:
     def window_at(self, t_unix: np.ndarray) -> np.ndarray:
         return self.window[self.epoch_at(t_unix)]
 
-    def hops(self, t_unix: np.ndarray, node: np.ndarray, dst: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def hops(self, t_unix: np.ndarray, node: np.ndarray, dst: np.ndarray,
+             src: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
         """(next hop in force, next hop of the table being installed) at each time; equal outside
-        a change-over. -1 where the node or destination is unknown or has no way there."""
+        a change-over. -1 where the node or destination is unknown or has no way there. With
+        `src` (node index of each frame's source, -1: none), a wormhole detour in force for the
+        source and destination overrides the table (`detour_hop`)."""
         e = self.epoch_at(t_unix)
         ok = (node >= 0) & (dst >= 0)
         ni, di = np.where(ok, node, 0), np.where(ok, dst, 0)
@@ -151,6 +166,19 @@ class Timeline:
         e2 = np.minimum(e + 1, self.next_hop.shape[0] - 1)
         switching = (t_unix >= self.t_begin_unix[e2]) & (t_unix < self.t_unix[e2])
         nxt = np.where(ok & switching, self.next_hop[e2, ni, di], now)
+        if src is not None and self.detour_hop:
+            now, nxt = self._detoured(e, e2, switching, ok, ni, di, src, now, nxt)
+        return now, nxt
+
+    def _detoured(self, e, e2, switching, ok, ni, di, src, now, nxt) -> tuple[np.ndarray, np.ndarray]:
+        """`hops` where a detour carries the frame: its next switch on the detour (a detour's
+        frames leave only along it: off it, -1)."""
+        now, nxt = now.copy(), nxt.copy()
+        for (ep, s, d), nh in self.detour_hop.items():
+            on = ok & (src == s) & (di == d)
+            now = np.where(on & (e == ep), nh[ni], now)
+            nxt = np.where(on & (e2 == ep) & switching, nh[ni], nxt)
+            nxt = np.where(on & (e == ep) & ~switching, nh[ni], nxt)
         return now, nxt
 
 
@@ -241,6 +269,7 @@ def follow(table: PacketTable, timeline: Timeline, max_hop_s: float = MAX_HOP_S,
     point_node = np.array([index.get(node_of_point(p) or "", -1) for p in table.points] or [-1], dtype=np.int32)
     node = point_node[point] if n else np.zeros(0, dtype=np.int32)
     dst = timeline.node_of_ip(table["dst_hi"], table["dst_lo"]) if n else np.zeros(0, dtype=np.int32)
+    src = timeline.node_of_ip(table["src_hi"], table["src_lo"]) if n else np.zeros(0, dtype=np.int32)
     window = timeline.window_at(ts) if n else np.zeros(0, dtype=np.int32)
 
     keys = [np.asarray(table[c]) for c in KEY_COLUMNS]
@@ -251,8 +280,8 @@ def follow(table: PacketTable, timeline: Timeline, max_hop_s: float = MAX_HOP_S,
         for k in keys:
             ks = k[order]
             new_group[1:] |= ks[1:] != ks[:-1]
-    order, t_order = _forwarding_order(order, new_group, ts, np.asarray(table["proto"]), node, dst, timeline)
-    t_s, nd, ds = ts[order], node[order], dst[order]
+    order, t_order = _forwarding_order(order, new_group, ts, np.asarray(table["proto"]), node, dst, src, timeline)
+    t_s, nd, ds, sr = ts[order], node[order], dst[order], src[order]
     gap = np.diff(t_s, prepend=-np.inf)
     new_seg = new_group | (gap > max_hop_s)
     seg = np.cumsum(new_seg) - 1
@@ -264,7 +293,7 @@ def follow(table: PacketTable, timeline: Timeline, max_hop_s: float = MAX_HOP_S,
         dup = (seg[by_point][1:] == seg[by_point][:-1]) & (point[order][by_point][1:] == point[order][by_point][:-1])
         suspect[seg[by_point][1:][dup]] = True
         step = ~new_seg[1:]
-        now, nxt = timeline.hops(t_s[:-1], nd[:-1], ds[:-1])
+        now, nxt = timeline.hops(t_s[:-1], nd[:-1], ds[:-1], sr[:-1])
         known = (nd[:-1] >= 0) & (ds[:-1] >= 0)
         off_path = step & known & (now != nd[1:]) & (nxt != nd[1:])
         suspect[seg[1:][off_path]] = True
@@ -279,16 +308,17 @@ def follow(table: PacketTable, timeline: Timeline, max_hop_s: float = MAX_HOP_S,
         t_via = np.concatenate([[-np.inf], t_s[:-1]]) if n else np.zeros(0)
         load = Load(t_s, nd, np.where(slow, -2, via), t_via, np.asarray(table["frame_len"])[order],
                     len(timeline.nodes))
-        now, nxt = timeline.hops(t_s[rows], nd[rows], ds[rows])
+        now, nxt = timeline.hops(t_s[rows], nd[rows], ds[rows], sr[rows])
         chain[rows], revisit_sorted = match(seg[rows], t_s[rows], nd[rows], window[order][rows], now, nxt,
                                             timeline.links, load, max_hop_s, int(seg[-1]) + 1, capacity)
         revisit[order[rows]] = revisit_sorted
-    return _assemble(order, chain, revisit, ts, t_order, point, node, dst, window, table.points, point_node,
+    return _assemble(order, chain, revisit, ts, t_order, point, node, dst, src, window, table.points, point_node,
                      timeline)
 
 
 def _forwarding_order(order: np.ndarray, new_group: np.ndarray, ts: np.ndarray, proto: np.ndarray,
-                      node: np.ndarray, dst: np.ndarray, timeline: Timeline) -> tuple[np.ndarray, np.ndarray]:
+                      node: np.ndarray, dst: np.ndarray, src: np.ndarray,
+                      timeline: Timeline) -> tuple[np.ndarray, np.ndarray]:
     """`order` (rows by identity, then time) with each adjacent pair of one packet's observations
     that is stamped out of forwarding order swapped (module docstring), and the times to order
     rows by from here on (`ts` with the two stamps of each swapped pair exchanged)."""
@@ -302,8 +332,8 @@ def _forwarding_order(order: np.ndarray, new_group: np.ndarray, ts: np.ndarray, 
     if k.shape[0] == 0:
         return order, t_order
     ra, rb = a[k], b[k]
-    now_a, nxt_a = timeline.hops(ts[ra], node[ra], dst[ra])
-    now_b, nxt_b = timeline.hops(ts[rb], node[rb], dst[rb])
+    now_a, nxt_a = timeline.hops(ts[ra], node[ra], dst[ra], src[ra])
+    now_b, nxt_b = timeline.hops(ts[rb], node[rb], dst[rb], src[rb])
     forward = (now_a == node[rb]) | (nxt_a == node[rb])
     backward = (now_b == node[ra]) | (nxt_b == node[ra])
     k = k[backward & ~forward]
@@ -315,7 +345,7 @@ def _forwarding_order(order: np.ndarray, new_group: np.ndarray, ts: np.ndarray, 
     return order, t_order
 
 
-def _assemble(order, chain, revisit, ts, t_order, point, node, dst, window, points, point_node,
+def _assemble(order, chain, revisit, ts, t_order, point, node, dst, src, window, points, point_node,
               timeline) -> Followed:
     n = ts.shape[0]
     chain_row = np.empty(n, dtype=np.int64)
@@ -341,7 +371,7 @@ def _assemble(order, chain, revisit, ts, t_order, point, node, dst, window, poin
     last = order_ph[offsets[1:] - 1] if n_pid else np.zeros(0, dtype=np.int64)
     dst_node = dst[last]
     delivered = (dst_node >= 0) & (node[last] == dst_node)
-    now, _ = timeline.hops(ts[last], node[last], dst_node)
+    now, _ = timeline.hops(ts[last], node[last], dst_node, src[last])
     node_point = np.full(len(timeline.nodes), -1, dtype=np.int16)
     for k, nd in enumerate(point_node[: len(points)]):
         if nd >= 0:
