@@ -145,24 +145,34 @@ def test_a_saturated_link_is_paced_by_the_delay_stage(impl, monkeypatch):
     assert 8.0 + 14 * 4.2 < r["delays_ms"]["median"] and r["delays_ms"]["max"] < 8.0 + 2 * 17 * 4.2, r
 
 
-def test_rewriting_the_detours_loses_no_frame_the_delay_stage_holds():
-    """The wormhole's nft table is rewritten while a saturated path holds a full queue in the
-    delay stage: every frame lost is one the pacer dropped at its queue tail. Deleting the
-    table's base chain (as before) unregistered a netfilter hook, and the kernel then dropped
-    every frame queued in the namespace's NFQUEUE, which the pacer had charged link time for."""
+def test_attack_tables_coming_and_going_lose_no_frame_the_delay_stage_holds():
+    """The wormhole's detour table is rewritten, and blackhole tables start and stop, while a
+    saturated path holds a full queue in the delay stage: every frame lost is one the pacer
+    dropped at its queue tail. Deleting a base chain (as both did before) unregistered a
+    netfilter hook, and the kernel then dropped every frame queued in the namespace's NFQUEUE,
+    which the pacer had charged link time for."""
     import threading
 
+    from uavcas.attacks import blackhole
     from uavcas.emulation.controller import Detour
 
     with Emulation(_plan(rate_mbps=2.0), prefix=new_prefix()) as emu:
         emu.apply_window(0)
-        # a detour of traffic this test never sends (uav1 <-> bs0 via uav0), toggled on and off
-        detour, done, rewrites = Detour("uav1", "uav0", "bs0", ("uav1", "uav0", "bs0")), threading.Event(), []
+        # a detour and a blackhole of traffic this test never sends (uav1 <-> bs0 via uav0; uav1's
+        # address, dropped at uav1's switch, which relays uav0 -> bs0), each toggled on and off
+        detour, done, changes = Detour("uav1", "uav0", "bs0", ("uav1", "uav0", "bs0")), threading.Event(), []
+        ip = dict(zip(["uav0", "uav1", "bs0"], ["10.66.0.1", "10.66.0.2", "10.66.0.3"]))
 
         def toggle() -> None:
             time.sleep(0.3)
             while not done.is_set():
-                rewrites.append(emu.fabric.apply_detours([detour] if len(rewrites) % 2 == 0 else []))
+                k = len(changes)
+                changes.append(emu.fabric.apply_detours([detour] if k % 2 == 0 else []))
+                table = blackhole.table_name(f"test-{k // 2}")
+                if k % 2 == 0:
+                    blackhole.drop_on(emu.fabric_ns, table, blackhole.switch_ports(1), ip["uav1"])
+                else:
+                    blackhole.drop_off(emu.fabric_ns, table)
                 time.sleep(0.15)
 
         t = threading.Thread(target=toggle)
@@ -173,7 +183,7 @@ def test_rewriting_the_detours_loses_no_frame_the_delay_stage_holds():
             done.set()
             t.join()
         got = nfqdelay.request(emu.shaper.ctl_path, {"op": "get"})
-    assert sum(rewrites) >= 8, rewrites
+    assert sum(changes) >= 8, changes
     drops = sum(v[4] for v in got["pacing"].values())
     # 800 sent; the path's two paced ports dropped `drops` at their tails, and nothing else was lost
     assert drops > 100 and abs(round(r["loss"] * 800) - drops) <= 2, (r["loss"] * 800, drops, got["pacing"])

@@ -8,9 +8,11 @@
   another ethertype and is never matched, so neighbours keep resolving; other nodes' transit
   through the same switch is untouched. Priority -20: before the shaper's loss table (-10) and
   before br_netfilter hands frames to iptables/NFQUEUE (0), so dropped frames cost no delay
-  work. One atomic `nft -f`, deleted at stop (its drop count is logged). The start is logged
-  once the table is in force and the stop just before it is deleted, so [start, stop) is
-  exactly when the drop held;
+  work. One atomic `nft -f`; at stop its drop count is logged and its rules are flushed, the
+  table and its empty chain staying (deleting a base chain unregisters a netfilter hook, and the
+  kernel then drops every frame the delay stage holds in the namespace's NFQUEUE, frames whose
+  link time its pacer had charged). The start is logged once the table is in force and the stop
+  just before its rules go, so [start, stop) is exactly when the drop held;
 - truth (effect `blackhole`, label source "blackhole-drops"): a packet to or from a victim whose
   transmission was last seen at the victim's switch, at a time inside [start, stop): the rule
   dropped it there (seen before the victim's switch and not after it). Its other observations,
@@ -61,7 +63,8 @@ def drop_on(fabric_ns: str, table: str, ports: list[str], victim_ip: str) -> Non
 
 
 def drop_off(fabric_ns: str, table: str) -> int:
-    """Delete the table; returns how many frames it dropped (both rules)."""
+    """Flush the table's rules (the table and its base chain stay: module docstring); returns how
+    many frames it dropped (both rules)."""
     dropped = 0
     r = kernel.run(["ip", "netns", "exec", fabric_ns, "nft", "-j", "list", "table", "bridge", table], check=False)
     if r.returncode == 0:
@@ -69,7 +72,7 @@ def drop_off(fabric_ns: str, table: str) -> int:
             for expr in item.get("rule", {}).get("expr", []):
                 if isinstance(expr, dict) and "counter" in expr:
                     dropped += int(expr["counter"].get("packets", 0))
-        kernel.run(["ip", "netns", "exec", fabric_ns, "nft", "delete", "table", "bridge", table])
+        kernel.run(["ip", "netns", "exec", fabric_ns, "nft", "flush", "chain", "bridge", table, "fw"])
     return dropped
 
 
