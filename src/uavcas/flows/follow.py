@@ -80,7 +80,7 @@ class Timeline:
     t_unix[e])` the previous table may still hold for some destinations. `detour_hop[(e, s, d)]`
     overrides it for frames from node s to node d in epoch e (a wormhole detour: the victim's
     traffic with its base station on alias MACs, both ways): node i -> the next switch on the
-    detour, -1 off it.
+    detour, -1 off it (where the table holds: a frame sent before the detour, still on its way).
     """
 
     def __init__(self, nodes: Sequence[str], ips: Sequence[str], epochs: Sequence["ForwardingEpoch"],
@@ -98,8 +98,7 @@ class Timeline:
                     self.next_hop[e, index[sw], index[dst]] = index[nh]
         self.detour_hop: dict[tuple[int, int, int], np.ndarray] = {}
         for e, ep in enumerate(epochs):
-            for pair, hops in ep.detours.items():
-                victim, bs = pair.split(">")
+            for hops in ep.detours.values():
                 for path in (hops, hops[::-1]):
                     nh = np.full(n, -1, dtype=np.int32)
                     for a, b in zip(path, path[1:]):
@@ -171,11 +170,12 @@ class Timeline:
         return now, nxt
 
     def _detoured(self, e, e2, switching, ok, ni, di, src, now, nxt) -> tuple[np.ndarray, np.ndarray]:
-        """`hops` where a detour carries the frame: its next switch on the detour (a detour's
-        frames leave only along it: off it, -1)."""
+        """`hops` where a detour carries the frame: its next switch on the detour. Off the detour
+        the table holds (a frame sent before the detour went in, still on its way, has the real
+        MAC and follows the table)."""
         now, nxt = now.copy(), nxt.copy()
         for (ep, s, d), nh in self.detour_hop.items():
-            on = ok & (src == s) & (di == d)
+            on = ok & (src == s) & (di == d) & (nh[ni] >= 0)
             now = np.where(on & (e == ep), nh[ni], now)
             nxt = np.where(on & (e2 == ep) & switching, nh[ni], nxt)
             nxt = np.where(on & (e == ep) & ~switching, nh[ni], nxt)
