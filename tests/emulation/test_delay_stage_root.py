@@ -156,12 +156,12 @@ def test_attack_tables_coming_and_going_lose_no_frame_the_delay_stage_holds():
     from uavcas.attacks import blackhole
     from uavcas.emulation.controller import Detour
 
-    with Emulation(_plan(rate_mbps=2.0), prefix=new_prefix()) as emu:
+    p = _plan(rate_mbps=2.0)
+    with Emulation(p, prefix=new_prefix()) as emu:
         emu.apply_window(0)
         # a detour and a blackhole of traffic this test never sends (uav1 <-> bs0 via uav0; uav1's
         # address, dropped at uav1's switch, which relays uav0 -> bs0), each toggled on and off
         detour, done, changes = Detour("uav1", "uav0", "bs0", ("uav1", "uav0", "bs0")), threading.Event(), []
-        ip = dict(zip(["uav0", "uav1", "bs0"], ["10.66.0.1", "10.66.0.2", "10.66.0.3"]))
 
         def toggle() -> None:
             time.sleep(0.3)
@@ -170,7 +170,7 @@ def test_attack_tables_coming_and_going_lose_no_frame_the_delay_stage_holds():
                 changes.append(emu.fabric.apply_detours([detour] if k % 2 == 0 else []))
                 table = blackhole.table_name(f"test-{k // 2}")
                 if k % 2 == 0:
-                    blackhole.drop_on(emu.fabric_ns, table, blackhole.switch_ports(1), ip["uav1"])
+                    blackhole.drop_on(emu.fabric_ns, table, blackhole.switch_ports(1), p.node("uav1").ip)
                 else:
                     blackhole.drop_off(emu.fabric_ns, table)
                 time.sleep(0.15)

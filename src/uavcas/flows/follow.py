@@ -175,10 +175,10 @@ class Timeline:
         MAC and follows the table)."""
         now, nxt = now.copy(), nxt.copy()
         for (ep, s, d), nh in self.detour_hop.items():
-            on = ok & (src == s) & (di == d) & (nh[ni] >= 0)
-            now = np.where(on & (e == ep), nh[ni], now)
-            nxt = np.where(on & (e2 == ep) & switching, nh[ni], nxt)
-            nxt = np.where(on & (e == ep) & ~switching, nh[ni], nxt)
+            hop = nh[ni]
+            on = ok & (src == s) & (di == d) & (hop >= 0)
+            now = np.where(on & (e == ep), hop, now)
+            nxt = np.where(on & (((e2 == ep) & switching) | ((e == ep) & ~switching)), hop, nxt)
         return now, nxt
 
 

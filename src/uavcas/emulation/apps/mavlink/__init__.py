@@ -35,9 +35,9 @@ default MAVLink timeout), at most `mission_retries` / `command_retries` times (t
 messages was heard 2 s after its REQUEST_DATA_STREAM is requested again, alone, at most
 `mission_retries` times (each group is its own datagram, and a loaded link can lose any one).
 Times are plan times from the run's t0 (time_boot_ms = ms since t0), which an endpoint started
-before t0 reads from a file the runner writes at t0 (`write_t0`). Both ends stop at their deadline or on SIGTERM and
-log JSON lines to `log_path`: one line per mission upload, command and ack as they happen, and a
-final `summary` line with sent/received message counts per type.
+before t0 reads from a file the runner writes at t0 (`write_t0`). Both ends stop at their
+deadline or on SIGTERM and log JSON lines to `log_path`: one line per mission upload, command and
+ack as they happen, and a final `summary` line with sent/received message counts per type.
 
 Signing (`signing`, `UavSpec.signing` / `GcsSpec.signing`, the run option `--mavlink-signing`):
 MAVLink 2 message signing with the run's key on both ends: every frame sent is signed, every

@@ -102,10 +102,11 @@ def run_gcs(spec: GcsSpec) -> dict:
                 else:
                     st["cmd_tries"] += 1
                     _send_command(peer, m, src, st)
-            if (_streams_missing(spec, st) and st["streams_at"] is not None
-                    and now >= st["streams_at"] + stream_wait_s and st["stream_tries"] < spec.retry.mission_retries):
+            missing = _streams_missing(spec, st)
+            if (missing and st["streams_at"] is not None and now >= st["streams_at"] + stream_wait_s
+                    and st["stream_tries"] < spec.retry.mission_retries):
                 st["stream_tries"] += 1
-                _request_streams(peer, m, spec, src, st, only=_streams_missing(spec, st))
+                _request_streams(peer, m, spec, src, st, only=missing)
     summary = {"node": spec.name, "sysid": spec.sysid, "sent": dict(sent), "received": dict(received),
                "received_by_uav": {k: dict(v) for k, v in received_by.items()},
                "uploaded": sorted(targets[s].name for s, st in state.items() if st["uploaded"])}
