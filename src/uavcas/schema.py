@@ -127,7 +127,8 @@ EPISODE_STATS: tuple[str, ...] = ("mean", "max")
 EPISODE_ROUTE_FEATURES: tuple[str, ...] = (
     "ctx_pkt_route_lonely_frac", "ctx_pkt_path_len_shift", "ctx_pkt_delay_shift_ms", "ctx_pkt_route_lonely_max",
     "ctx_pkt_path_len_shift_peer_max", "ctx_pkt_delay_shift_peer_max_ms", "ctx_pkt_off_own_route_frac",
-    "ctx_pkt_off_own_route_max")
+    "ctx_pkt_off_own_route_max", "ctx_pkt_passing_off_route_frac", "ctx_pkt_passing_off_route_max",
+    "ctx_pkt_lonely_off_route_frac", "ctx_pkt_lonely_off_route_max")
 EPISODE_CONTEXT_FEATURES: tuple[str, ...] = tuple(
     f"{c}_{s}" for c in CONTEXT_FEATURES for s in EPISODE_STATS) + EPISODE_ROUTE_FEATURES
 EPISODE_COUNT_COLUMNS: tuple[str, ...] = ("packets",)  # the host's packets in the window (truth's denominator)

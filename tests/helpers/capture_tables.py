@@ -8,8 +8,8 @@ import numpy as np
 from uavcas.flows.packets import COLUMNS, QUOTE_COLUMNS, PacketTable, address_to_words, empty_columns
 
 T0 = 1_600_000_000.0  # a multiple of the 5 s window: window k is [T0 + 5k, T0 + 5k + 5)
-IPS = {"a": "10.0.0.1", "b": "10.0.0.2", "r": "10.0.0.3", "x": "10.0.0.4"}
-POINTS = ("s-a", "s-b", "s-r", "s-x")
+IPS = {"a": "10.0.0.1", "b": "10.0.0.2", "r": "10.0.0.3", "x": "10.0.0.4", "bs0": "10.0.0.5", "bs1": "10.0.0.6"}
+POINTS = ("s-a", "s-b", "s-r", "s-x", "s-bs0", "s-bs1")  # s-bs<k>: a base station's switch (docs/formats.md)
 HOP_S = 0.001
 _DTYPES = {"ts_ns": np.int64, "ip_len": np.uint32, "frame_len": np.uint32, "cap_len": np.uint32, "ip_version": np.uint8,
            "src_hi": np.uint64, "src_lo": np.uint64, "dst_hi": np.uint64, "dst_lo": np.uint64, "sport": np.uint16,

@@ -124,8 +124,9 @@ _CTX_FLOW: dict[str, tuple[str, str]] = {
                              "share of data packets whose TCP seq lies below the highest sent before (stale copies)"),
     "ctx_rtt_ms": ("ms", "first SYN entering the network to the first SYN-ACK's last observation (-1: no handshake)"),
     "ctx_route_lonely_frac": ("ratio", "share of the flow's packets whose directed host pair's last route change "
-                                       "(switch sequence, 1 s bins) came while < 20 % of the network's pairs "
-                                       "changed (that bin or the one before)"),
+                                       "(switch sequence, 1 s bins) came while < 20 % of the network's pairs, "
+                                       "or only pairs joining the same two home switches, changed (that bin or "
+                                       "the one before)"),
     "ctx_path_len_shift_max": ("switches", "over the windows the flow's packets crossed, the largest mean of (switches "
                                            "that saw a packet less the median of its directed pair's earlier windows)"),
     "ctx_delay_shift_max_ms": ("ms", "likewise for first-to-last observation time, against the pair's earlier median "
@@ -137,9 +138,17 @@ _CTX_FLOW: dict[str, tuple[str, str]] = {
     "ctx_pkt_path_len_shift_peer_max": ("switches", "the largest mean path shift over the node's peers' packets"),
     "ctx_pkt_delay_shift_peer_max_ms": ("ms", "the largest mean one-way delay shift over the node's peers' packets"),
     "ctx_pkt_off_own_route_frac": ("ratio", "share of the episode's packets that a switch sent another way than "
-                                            "it sent the other kind of traffic (its own or passing) to the same "
-                                            "destination in the same 1 s bin (of those where both were seen)"),
+                                            "the nearest packet (within 0.5 s) of the other kind (its own or passing "
+                                            "traffic) to the same destination, else toward any base station if the "
+                                            "destination is at one (of those where one was seen)"),
     "ctx_pkt_off_own_route_max": ("ratio", "the largest such share over the node's peers (the other end's address)"),
+    "ctx_pkt_passing_off_route_frac": ("ratio", "likewise, counted only at the switches where the packet was passing "
+                                                "traffic (not its source's home)"),
+    "ctx_pkt_passing_off_route_max": ("ratio", "the largest such share over the node's peers"),
+    "ctx_pkt_lonely_off_route_frac": ("ratio", "share of the episode's packets both sent off the other kind's way "
+                                               "(as ctx_pkt_off_own_route_frac) and on a lonely route (as "
+                                               "ctx_pkt_route_lonely_frac)"),
+    "ctx_pkt_lonely_off_route_max": ("ratio", "the largest such share over the node's peers"),
     "ctx_pkt_path_len_shift": ("switches", "mean over the episode's packets of switches that saw it less its directed "
                                            "pair's earlier median"),
     "ctx_pkt_delay_shift_ms": ("ms", "mean over the episode's packets of first-to-last observation time less its "

@@ -16,14 +16,17 @@ looks at every transmission when it crossed the network:
   captures do not know), so many pairs change together; a detour installed for one victim
   changes a few pairs at a moment when the rest of the network keeps its routes. A change is
   *lonely* when the share of the network's pairs that changed in its bin or the bin before is
-  below `LONELY_SHARE`.
+  below `LONELY_SHARE`, or when all of those pairs join the same two home switches (a detour in a
+  small swarm: its 2 pairs are a large share of few).
 * per transmission: `lonely` (1 when its pair's last route change, at or before its bin, was
   lonely; 0 otherwise or before any change), `path_shift` (switches that saw it less the median
   over the pair's earlier context windows of their mean path length) and `delay_shift_ms`
   (first-to-last observation time less the median of the earlier windows' median delay; NaN
-  when one switch saw it or the pair has no earlier window) and `off_own` (`off_own_route`: a
+  when one switch saw it or the pair has no earlier window), `off_own` (`off_own_route`: a
   switch it crossed sent it another way than it sent the other kind, its own or passing traffic,
-  to the same destination).
+  to the same destination or, failing that, toward the base stations), `off_passing` (the same,
+  counted only where it was passing traffic) and `lonely_off` (off its switches' own routes while
+  on a lonely route).
 
 Measured (1 s bins): a plan window's re-planning changed 25-100 % of the pairs seen in a 10-UAV
 and two 6-UAV runs; a wormhole's start changed 1 of 19 pairs (5 %) in the first and 2 of 12
@@ -45,6 +48,8 @@ attack log); addresses only group packets.
 
 from __future__ import annotations
 
+import re
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -59,6 +64,9 @@ if TYPE_CHECKING:
 _NS = 1_000_000_000
 ROUTE_BIN_S = 1.0  # short against a plan window (5 s), long against a stream's packet spacing
 LONELY_SHARE = 0.2  # re-planned windows changed >= 25 % of pairs in the runs measured; one detour 5-17 %
+# the other kind's packets at a switch: streams send every 10-200 ms, and a plan window (5 s) is far longer
+OWN_MATCH_S = 0.5
+BS_POINT = re.compile(r"s-bs\d+")  # a base station's switch's capture point (docs/formats.md)
 
 
 def earlier_median(tab: pd.DataFrame, metric: str) -> pd.Series:
@@ -102,55 +110,96 @@ def route_codes(routes: np.ndarray) -> np.ndarray:
     return terms.sum(axis=1, dtype=np.uint64)
 
 
-def off_own_route(routes: np.ndarray, t: "Transmissions", bin_: np.ndarray) -> np.ndarray:
-    """Per transmission: 1.0 when a switch it crossed sent it to another next switch than the one
-    that switch sent the other kind of traffic to the same destination in the same bin (its own
-    traffic against passing traffic, each kind's most frequent next switch, ties to the lower
-    index), 0.0 when every such comparison agrees, NaN when none can be made. Planned routes share
-    their suffixes (a relay forwards a passing packet as it forwards its own); a wormhole's detour
-    takes only the victim's traffic with its base station another way: at the attacker's switch
-    the victim's packets pass straight to the base station that the attacker's own reach another
-    way, and at the victim's and the base station's switches their own packets to each other
-    leave another way than the ones they relay."""
+def base_station_points(points: Sequence[str]) -> np.ndarray:
+    """Per capture point: True for a base station's switch (named s-bs<k>, docs/formats.md)."""
+    return np.array([BS_POINT.fullmatch(name) is not None for name in points], dtype=bool)
+
+
+def off_own_route(routes: np.ndarray, t: "Transmissions", base_station: np.ndarray | None = None,
+                  match_s: float = OWN_MATCH_S) -> tuple[np.ndarray, np.ndarray]:
+    """Per transmission, (any, passing): 1.0 when a switch it crossed sent it to another next switch
+    than the nearest packet in time (within `match_s`) of the other kind that the switch sent
+    toward the same destination, its own traffic against passing traffic; 0.0 when every such
+    comparison agrees, NaN when none can be made. `any` counts it at every switch it crossed,
+    `passing` only where it was passing traffic.
+
+    Planned routes share their suffixes (a relay forwards a passing packet as it forwards its
+    own); a wormhole's detour takes only the victim's traffic with its base station another way:
+    at the attacker's switch the victim's packets pass straight to the base station that the
+    attacker's own reach another way, and at the victim's and the base station's switches their
+    own packets to each other leave another way than the ones they relay.
+
+    Where the switch sent nothing of the other kind to that destination in time, and the
+    destination is at a base station (`base_station`: per capture point, `base_station_points`),
+    the comparison is with the other kind's traffic toward any base station: the base stations
+    are wired to each other, and a UAV reaches them all through its uplink. An attacker's own
+    telemetry goes to its own base station, rarely to the victim's: compared by exact destination
+    only, the detours of the medium campaign's wormhole runs were mostly not comparable (docs/
+    measurements.md, stop 30). The nearest packet rather than a bin's most frequent next switch:
+    a re-planned network's bin holds both its old and its new routes."""
     n_tx = routes.shape[0]
-    out = np.full(n_tx, np.nan)
+    any_, passing = np.full(n_tx, np.nan), np.full(n_tx, np.nan)
     if n_tx == 0 or routes.shape[1] < 2:
-        return out
+        return any_, passing
+    # the destination's home switch; for an address that never sent, the switch its packet reached last
+    dst_at = np.where(t.home[t.dst] >= 0, t.home[t.dst], routes[np.arange(n_tx), t.n_points - 1])
+    to_bs = np.zeros(n_tx, dtype=bool) if base_station is None else base_station[dst_at]
     hops = []
     for i in range(routes.shape[1] - 1):
         tx = np.flatnonzero(routes[:, i + 1] >= 0)
         if not tx.shape[0]:
             break
-        # own: the source's first switch is its home; transit: any later switch (a packet entering
+        # own: the source's first switch is its home; passing: any later switch (a packet entering
         # away from its source's home, a spoofed one, is neither at its first switch)
         kind = np.ones(tx.shape[0], dtype=np.int64) if i else np.where(routes[tx, 0] == t.home[t.src[tx]], 0, -1)
-        hops.append(pd.DataFrame({"tx": tx, "b": bin_[tx], "x": routes[tx, i], "d": t.dst[tx],
-                                  "n": routes[tx, i + 1], "kind": kind}))
+        hops.append(pd.DataFrame({"tx": tx, "ts": t.t_ns[tx], "x": routes[tx, i], "d": t.dst[tx],
+                                  "to_bs": to_bs[tx], "n": routes[tx, i + 1], "kind": kind}))
     h = pd.concat(hops, ignore_index=True)
-    h = h[h["kind"] >= 0]
-    keys = ["b", "x", "d", "kind"]
-    modal = modal_by(h, keys, "n").set_index(keys)["n"]
-    other = modal.reindex(pd.MultiIndex.from_arrays([h["b"], h["x"], h["d"], 1 - h["kind"]])).to_numpy()
-    ok = np.isfinite(other)
-    # a disagreement outweighs an agreement of the same packet; fmax lets a comparison replace NaN
-    np.fmax.at(out, h["tx"].to_numpy()[ok], (h["n"].to_numpy()[ok] != other[ok]).astype(np.float64))
-    return out
+    h = h[h["kind"] >= 0].sort_values("ts", kind="stable")
+    tol = int(round(match_s * _NS))
+    for k in (0, 1):
+        mine, other = h[h["kind"] == k], h[h["kind"] != k].rename(columns={"n": "n_other"})
+        if mine.empty or other.empty:
+            continue
+        got = pd.merge_asof(mine, other[["ts", "x", "d", "n_other"]], on="ts", by=["x", "d"],
+                            direction="nearest", tolerance=tol)["n_other"].to_numpy(dtype=np.float64, copy=True)
+        miss = np.isnan(got) & mine["to_bs"].to_numpy()
+        if miss.any():
+            toward = other[other["to_bs"]]
+            if not toward.empty:
+                got[miss] = pd.merge_asof(mine[miss], toward[["ts", "x", "n_other"]], on="ts", by="x",
+                                          direction="nearest", tolerance=tol)["n_other"].to_numpy()
+        ok = np.isfinite(got)
+        tx, off = mine["tx"].to_numpy()[ok], (mine["n"].to_numpy()[ok] != got[ok]).astype(np.float64)
+        # a disagreement outweighs an agreement of the same packet; fmax lets a comparison replace NaN
+        np.fmax.at(any_, tx, off)
+        if k == 1:
+            np.fmax.at(passing, tx, off)
+    return any_, passing
 
 
 @dataclass(frozen=True)
 class RouteShifts:
     """Per transmission (float64; NaN where undefined): `lonely`, `path_shift`, `delay_shift_ms`,
-    `off_own` (`off_own_route`)."""
+    `off_own` and `off_passing` (`off_own_route`'s two), `lonely_off` (`off_own` where the
+    transmission is on a lonely route, 0 where it is not: a detour's own signature, its pair
+    moved alone and onto hops the switches' other traffic does not take)."""
 
     lonely: np.ndarray
     path_shift: np.ndarray
     delay_shift_ms: np.ndarray
     off_own: np.ndarray
+    off_passing: np.ndarray
+    lonely_off: np.ndarray
 
 
 def lonely_routes(pair: np.ndarray, bin_: np.ndarray, code: np.ndarray, delivered: np.ndarray,
-                  lonely_share: float = LONELY_SHARE) -> np.ndarray:
-    """Per transmission: 1.0 when its pair's last route change at or before its bin was lonely."""
+                  ends: np.ndarray | None = None, lonely_share: float = LONELY_SHARE) -> np.ndarray:
+    """Per transmission: 1.0 when its pair's last route change at or before its bin was lonely.
+    `ends` (per transmission, constant per pair): its two ends' home switches as one unordered
+    code; a change is also lonely when every pair that changed in its bin or the one before joins
+    the same two switches (one detour moves a victim's traffic with its base station both ways,
+    2 pairs or a few more, which in a 5-UAV swarm is 20 % of the pairs and more)."""
     d = pd.DataFrame({"pair": pair[delivered], "bin": bin_[delivered], "code": code[delivered]})
     if d.empty:
         return np.zeros(pair.shape[0])
@@ -158,16 +207,22 @@ def lonely_routes(pair: np.ndarray, bin_: np.ndarray, code: np.ndarray, delivere
     prev = modal.groupby("pair")["code"].shift(1)
     seen = prev.notna()
     changed = seen & (modal["code"] != prev)
+
     # the network's share of pairs changing in this bin or the one before: a re-planned network's
     # stragglers (pairs whose change fell late in a bin show it one bin later) are not lonely
-    def pairs_per_bin(rows: pd.DataFrame) -> pd.Series:
-        both = pd.concat([rows, rows.assign(bin=rows["bin"] + 1)])
-        return both.drop_duplicates().groupby("bin").size()
+    def this_or_last(rows: pd.DataFrame) -> pd.DataFrame:
+        return pd.concat([rows, rows.assign(bin=rows["bin"] + 1)]).drop_duplicates()
 
-    moved = pairs_per_bin(modal.loc[changed, ["pair", "bin"]])
-    known = pairs_per_bin(modal.loc[seen, ["pair", "bin"]])
+    moved = this_or_last(modal.loc[changed, ["pair", "bin"]]).groupby("bin").size()
+    known = this_or_last(modal.loc[seen, ["pair", "bin"]]).groupby("bin").size()
     share = (moved.reindex(known.index, fill_value=0) / known).reindex(modal["bin"]).to_numpy()
     lonely_change = changed & (share < lonely_share)
+    if ends is not None:
+        end_of = pd.Series(ends).groupby(pair).first()
+        moved_ends = this_or_last(pd.DataFrame({"bin": modal.loc[changed, "bin"],
+                                                "ends": end_of.reindex(modal.loc[changed, "pair"]).to_numpy()}))
+        one_link = (moved_ends.groupby("bin")["ends"].nunique() == 1).reindex(modal["bin"]).fillna(False).to_numpy()
+        lonely_change |= changed & one_link
     last = pd.Series(np.where(changed, lonely_change.astype(np.float64), np.nan))
     state = last.groupby(modal["pair"]).ffill().fillna(0.0)
     # every transmission takes the state of its pair's last bin with a delivered one, at or before its own
@@ -183,13 +238,14 @@ def route_shifts(p: "PacketTable", t: "Transmissions", window_s: float, bin_s: f
     """Each transmission against its directed host pair's routes (module docstring)."""
     if not t.n_points.shape[0]:
         empty = np.zeros(0)
-        return RouteShifts(empty, empty, empty, empty)
+        return RouteShifts(empty, empty, empty, empty, empty, empty)
     n_addr = int(max(t.src.max(), t.dst.max())) + 1
     pair = t.src * n_addr + t.dst
     routes = route_matrix(p, t)
     code = route_codes(routes).astype(np.int64)  # the same bits as int64: pandas groups them exactly
     bin_ = t.t_ns // int(round(bin_s * _NS))
-    lonely = lonely_routes(pair, bin_, code, t.reached)
+    homes = np.sort(np.stack([t.home[t.src], t.home[t.dst]], 1), axis=1) + 1  # -1 (never sent) -> 0
+    lonely = lonely_routes(pair, bin_, code, t.reached, ends=homes[:, 0] * (len(p.points) + 1) + homes[:, 1])
 
     win = t.t_ns // int(round(window_s * _NS))
     path = t.n_points.astype(np.float64)
@@ -201,7 +257,9 @@ def route_shifts(p: "PacketTable", t: "Transmissions", window_s: float, bin_s: f
     tab["base_delay"] = earlier_median(tab, "delay")
     base = tab.set_index(["key", "win"])[["base_path", "base_delay"]].reindex(
         pd.MultiIndex.from_arrays([pair, win])).to_numpy()
-    return RouteShifts(lonely, path - base[:, 0], delay - base[:, 1], off_own_route(routes, t, bin_))
+    off, passing = off_own_route(routes, t, base_station_points(p.points))
+    return RouteShifts(lonely, path - base[:, 0], delay - base[:, 1], off, passing,
+                       np.where(np.isfinite(off), off * lonely, np.nan))
 
 
 def _nanmean_by(group: np.ndarray, value: np.ndarray, n: int) -> np.ndarray:
@@ -243,14 +301,17 @@ def episode_route_context(group: np.ndarray, rows_tx: np.ndarray, rows_peer: np.
     none is defined."""
     out = {name: np.nan_to_num(_nanmean_by(group, value[rows_tx], n)) for name, value in (
         ("ctx_pkt_route_lonely_frac", shifts.lonely), ("ctx_pkt_path_len_shift", shifts.path_shift),
-        ("ctx_pkt_delay_shift_ms", shifts.delay_shift_ms), ("ctx_pkt_off_own_route_frac", shifts.off_own))}
+        ("ctx_pkt_delay_shift_ms", shifts.delay_shift_ms), ("ctx_pkt_off_own_route_frac", shifts.off_own),
+        ("ctx_pkt_passing_off_route_frac", shifts.off_passing), ("ctx_pkt_lonely_off_route_frac", shifts.lonely_off))}
     # per peer, then the largest: a base station's episode holds every UAV's packets, and a
     # wormhole detours one victim's; averaged over all peers its shift shrinks by their number
     pairs, inv = np.unique(np.stack([group, rows_peer], 1).reshape(-1, 2), axis=0, return_inverse=True)
     for name, value in (("ctx_pkt_route_lonely_max", shifts.lonely),
                         ("ctx_pkt_path_len_shift_peer_max", shifts.path_shift),
                         ("ctx_pkt_delay_shift_peer_max_ms", shifts.delay_shift_ms),
-                        ("ctx_pkt_off_own_route_max", shifts.off_own)):
+                        ("ctx_pkt_off_own_route_max", shifts.off_own),
+                        ("ctx_pkt_passing_off_route_max", shifts.off_passing),
+                        ("ctx_pkt_lonely_off_route_max", shifts.lonely_off)):
         per_peer = np.nan_to_num(_nanmean_by(inv.reshape(-1), value[rows_tx], pairs.shape[0]))
         best = np.full(n, -np.inf)
         np.maximum.at(best, pairs[:, 0], per_peer)

@@ -26,10 +26,12 @@ Rules (`host_window_frame`):
   A flow is summarised once, in its first window, even when its packets continue into later
   windows (those packets do count in the later episodes' packet features).
 - Route context (with the context columns): `ctx_pkt_route_lonely_frac`, `ctx_pkt_path_len_shift`,
-  `ctx_pkt_delay_shift_ms`, `ctx_pkt_off_own_route_frac`, the means over the episode's packets of
-  their transmission's route measures (`flows.routes`; 0 where none is defined), and the largest
-  of each over one peer's packets (`ctx_pkt_route_lonely_max`, `ctx_pkt_path_len_shift_peer_max`,
-  `ctx_pkt_delay_shift_peer_max_ms`, `ctx_pkt_off_own_route_max`). Unlike the flow summaries they
+  `ctx_pkt_delay_shift_ms`, `ctx_pkt_off_own_route_frac`, `ctx_pkt_passing_off_route_frac`,
+  `ctx_pkt_lonely_off_route_frac`, the means over the episode's packets of their transmission's
+  route measures (`flows.routes`; 0 where none is defined), and the largest of each over one
+  peer's packets (`ctx_pkt_route_lonely_max`, `ctx_pkt_path_len_shift_peer_max`,
+  `ctx_pkt_delay_shift_peer_max_ms`, `ctx_pkt_off_own_route_max`, `ctx_pkt_passing_off_route_max`,
+  `ctx_pkt_lonely_off_route_max`). Unlike the flow summaries they
   see a stream that began in an earlier window.
 - NaN/inf: a flow feature that is inf (a rate over a zero duration) or NaN is left out of the mean
   and max; a summary over no finite value (no flow starts in the window, for instance) is NaN,
