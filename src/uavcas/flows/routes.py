@@ -39,7 +39,9 @@ disagreed for every detoured one in 7 of the 11 plan windows holding some (0-16 
 and for 0-39 % of the Benign ones by window: in the wormhole's windows the Benign packets the
 victim's and the base station's switches relay disagree with their own detoured ones. In the
 `wormhole` run 4 only 1.6 % of the detoured transmissions could be compared (no other traffic
-crossed the switches on the detour toward the same destination), so the column is silent there.
+crossed the switches on the detour toward the same destination), so the column was silent there;
+compared toward any base station, all 10 of that run's disagreeing (window, switch) cells are a
+wormhole's (stop 30).
 
 Windows and bins are the context's: `floor(t / length)` of the capture clock, a transmission in
 the one of its first observation. Nothing but the captures is read (no plan, forwarding table or
