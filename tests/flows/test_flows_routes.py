@@ -162,6 +162,16 @@ def test_episode_route_columns_take_the_largest_peer_mean_even_when_negative():
     assert twice["ctx_pkt_path_len_shift_peer_max"] == pytest.approx([1.0])
 
 
+def offs_by_sport(obs: list[dict]) -> dict[int, tuple[np.ndarray, np.ndarray]]:
+    """`off_own_route`'s (any, passing) per transmission, grouped by the packets' source port."""
+    p = table(obs)
+    t = transmissions(p)
+    off, passing = off_own_route(route_matrix(p, t), t, base_station_points(p.points))
+    sport = np.zeros(t.n_points.shape[0], dtype=np.int64)
+    sport[t.tx] = np.asarray(p["sport"])
+    return {int(s): (off[sport == s], passing[sport == s]) for s in np.unique(sport)}
+
+
 def test_a_relay_that_forwards_a_victim_away_from_its_own_route_is_seen():
     """r passes a's packets to b straight on while r's own packets to b go through x (a wormhole at
     r): both kinds disagree at r. x passes r's packets to b as it sends its own (a planned relay):
@@ -175,23 +185,9 @@ def test_a_relay_that_forwards_a_victim_away_from_its_own_route_is_seen():
         obs += send(t0 + 0.005, ["r", "x", "b"], "r", "b", sport=2, dport=1, proto=17, id=200 + k)
         obs += send(t0 + 0.010, ["x", "b"], "x", "b", sport=3, dport=1, proto=17, id=300 + k)
         obs += send(t0 + 0.015, ["a", "r", "x"], "a", "x", sport=4, dport=1, proto=17, id=400 + k)
-    p = table(obs)
-    t = transmissions(p)
-    off, passing = off_own_route(route_matrix(p, t), t)
-    sport = np.zeros(t.n_points.shape[0], dtype=np.int64)
-    sport[t.tx] = np.asarray(p["sport"])
-    by = {int(s): off[sport == s] for s in np.unique(sport)}
+    by = {sport: off for sport, (off, _) in offs_by_sport(obs).items()}
     assert by[1].shape == (20,) and np.all(by[1] == 1.0) and np.all(by[2] == 1.0)
     assert np.all(by[3] == 0.0) and np.isnan(by[4]).all()
-
-
-def offs_by_sport(obs: list[dict]) -> dict[int, tuple[np.ndarray, np.ndarray]]:
-    p = table(obs)
-    t = transmissions(p)
-    off, passing = off_own_route(route_matrix(p, t), t, base_station_points(p.points))
-    sport = np.zeros(t.n_points.shape[0], dtype=np.int64)
-    sport[t.tx] = np.asarray(p["sport"])
-    return {int(s): (off[sport == s], passing[sport == s]) for s in np.unique(sport)}
 
 
 def test_an_attacker_with_no_own_traffic_to_the_victims_base_station_is_compared_through_its_uplink():

@@ -58,6 +58,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 import pandas as pd
 
+from .follow import node_of_point
+
 if TYPE_CHECKING:
     from .assemble import Flows
     from .packets import PacketTable
@@ -68,7 +70,7 @@ ROUTE_BIN_S = 1.0  # short against a plan window (5 s), long against a stream's 
 LONELY_SHARE = 0.2  # re-planned windows changed >= 25 % of pairs in the runs measured; one detour 5-17 %
 # the other kind's packets at a switch: streams send every 10-200 ms, and a plan window (5 s) is far longer
 OWN_MATCH_S = 0.5
-BS_POINT = re.compile(r"s-bs\d+")  # a base station's switch's capture point (docs/formats.md)
+BS_NODE = re.compile(r"bs\d+")  # a base station's node name (`twin.plan`), its switch's point s-bs<k>
 
 
 def earlier_median(tab: pd.DataFrame, metric: str) -> pd.Series:
@@ -114,10 +116,10 @@ def route_codes(routes: np.ndarray) -> np.ndarray:
 
 def base_station_points(points: Sequence[str]) -> np.ndarray:
     """Per capture point: True for a base station's switch (named s-bs<k>, docs/formats.md)."""
-    return np.array([BS_POINT.fullmatch(name) is not None for name in points], dtype=bool)
+    return np.array([BS_NODE.fullmatch(node_of_point(name) or "") is not None for name in points], dtype=bool)
 
 
-def off_own_route(routes: np.ndarray, t: "Transmissions", base_station: np.ndarray | None = None,
+def off_own_route(routes: np.ndarray, t: "Transmissions", base_station: np.ndarray,
                   match_s: float = OWN_MATCH_S) -> tuple[np.ndarray, np.ndarray]:
     """Per transmission, (any, passing): 1.0 when a switch it crossed sent it to another next switch
     than the nearest packet in time (within `match_s`) of the other kind that the switch sent
@@ -145,7 +147,7 @@ def off_own_route(routes: np.ndarray, t: "Transmissions", base_station: np.ndarr
         return any_, passing
     # the destination's home switch; for an address that never sent, the switch its packet reached last
     dst_at = np.where(t.home[t.dst] >= 0, t.home[t.dst], routes[np.arange(n_tx), t.n_points - 1])
-    to_bs = np.zeros(n_tx, dtype=bool) if base_station is None else base_station[dst_at]
+    to_bs = base_station[dst_at]
     hops = []
     for i in range(routes.shape[1] - 1):
         tx = np.flatnonzero(routes[:, i + 1] >= 0)
@@ -260,8 +262,8 @@ def route_shifts(p: "PacketTable", t: "Transmissions", window_s: float, bin_s: f
     base = tab.set_index(["key", "win"])[["base_path", "base_delay"]].reindex(
         pd.MultiIndex.from_arrays([pair, win])).to_numpy()
     off, passing = off_own_route(routes, t, base_station_points(p.points))
-    return RouteShifts(lonely, path - base[:, 0], delay - base[:, 1], off, passing,
-                       np.where(np.isfinite(off), off * lonely, np.nan))
+    # lonely is 0 or 1 everywhere: the product is NaN exactly where no comparison was made
+    return RouteShifts(lonely, path - base[:, 0], delay - base[:, 1], off, passing, off * lonely)
 
 
 def _nanmean_by(group: np.ndarray, value: np.ndarray, n: int) -> np.ndarray:
