@@ -182,13 +182,23 @@ def seed_margins(seeds: pd.DataFrame, view: str) -> pd.DataFrame:
     return pd.DataFrame(out)
 
 
+def rows_runs(c: pd.DataFrame, cls: str) -> tuple[int, int]:
+    """A class's rows and the runs holding them in one view's class table (0, 0 where absent)."""
+    return (int(c.loc[cls, "rows"]), int(c.loc[cls, "runs"])) if cls in c.index else (0, 0)
+
+
+def at_bar(rows: int, runs: int) -> bool:
+    """The issue's bar for a class: >= MIN_ROWS rows from >= MIN_RUNS runs."""
+    return rows >= MIN_ROWS and runs >= MIN_RUNS
+
+
 def checks(lb: pd.DataFrame, seeds: pd.DataFrame, classes: dict[str, pd.DataFrame]) -> list[list[str]]:
     rows = []
     if "window-host" in classes:
         c = classes["window-host"]
         for cls in PAPER_CLASSES + NEW_FAMILY_CLASSES:
-            n, r = (int(c.loc[cls, "rows"]), int(c.loc[cls, "runs"])) if cls in c.index else (0, 0)
-            ok = n >= MIN_ROWS and r >= MIN_RUNS
+            n, r = rows_runs(c, cls)
+            ok = at_bar(n, r)
             rows.append([f"window-host rows of {cls} (>= {MIN_ROWS} from >= {MIN_RUNS} runs)", f"{n} rows, {r} runs",
                          "met" if ok else "**not met**"])
     for view in VIEWS:
@@ -414,12 +424,7 @@ def composition_bullet(classes: dict[str, pd.DataFrame]) -> list[str]:
     runs), counted from the class tables, since a 5-tuple flow holds two attacks' effects only where both
     reach one connection (a flood's flows that a wormhole detours, a replayed session that a blackhole drops)."""
     comps = [c for c in PAPER_CLASSES if "+" in c]
-
-    def held(view: str) -> int:
-        c = classes[view]
-        return sum(1 for x in comps if x in c.index and c.loc[x, "rows"] >= MIN_ROWS and c.loc[x, "runs"] >= MIN_RUNS)
-
-    counts = "; ".join(f"{VIEWS[v]}: {held(v)}" for v in classes if v in VIEWS)
+    counts = "; ".join(f"{VIEWS[v]}: {sum(at_bar(*rows_runs(c, x)) for x in comps)}" for v, c in classes.items())
     return [f"- **The window-host view** is new: it is where both attacks of a composition meet, on the victim in a "
             f"window. Of the paper's {len(comps)} compositions, those holding >= {MIN_ROWS} rows from >= {MIN_RUNS} "
             f"runs: {counts}. A 5-tuple flow holds two attacks' effects only where both reach one connection."]
