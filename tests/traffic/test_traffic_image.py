@@ -1,6 +1,6 @@
-"""The image app (no root): each HTTP client on its own
-named stream of the plan's seed (`uavcas.seeding`), the same on a rerun, unrelated between
-clients; the image app's files, configs, scripts and log parser."""
+"""The image app (no root): each HTTP client on its own named stream of the plan's seed
+(`uavcas.seeding`), the same on a rerun, unrelated between clients; its files, nginx config,
+client scripts and log parser."""
 
 from __future__ import annotations
 
