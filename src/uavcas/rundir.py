@@ -142,8 +142,9 @@ class RunInfo(_Strict):
     capture: list[CaptureRecord]  # per switch
     capture_drops: int | None
     packets_captured: int
-    http_clients: list[dict[str, Any]]  # per BS client: uavcas.emulation.apps.client results
-    # MAVLink and video outcomes (apps.traffic.BenignTraffic.streams_summary); None: image payload
+    http_clients: list[dict[str, Any]]  # per BS client: the image app's results (uavcas.traffic.apps.image)
+    # per traffic app with a section (mavlink, video), its outcome by app name
+    # (uavcas.traffic.benign.BenignTraffic.streams_summary); None: no app of the payload has one (image)
     streams: dict[str, Any] | None = None
     delay_daemon: dict[str, Any] | None
     attack_errors: list[str]

@@ -18,7 +18,8 @@ from typing import Any, Protocol
 from pydantic import BaseModel, ConfigDict, Field, SerializeAsAny, ValidationInfo, field_validator
 
 from uavcas.channel.pathloss import PathlossName
-from uavcas.vocabulary import BENIGN_TOKEN, FAMILIES, Mission, Payload
+from uavcas.traffic.payloads import DEFAULT_PAYLOAD, PayloadName
+from uavcas.vocabulary import BENIGN_TOKEN, FAMILIES, Mission
 
 # The key under which the plan reader puts its `SpecReader` into pydantic's validation context.
 SPEC_READER = "spec_reader"
@@ -94,7 +95,7 @@ class Scenario(BaseModel):
     attacks: tuple[SerializeAsAny[SpecBase], ...] = ()
     n_uav: int = Field(ge=1, le=250)
     n_bs: int = Field(ge=1, le=16)
-    payload: Payload = "image"
+    payload: PayloadName = DEFAULT_PAYLOAD  # a row of the payload table (uavcas.traffic.payloads)
     pathloss: PathlossName = "logdist"  # a name of the path-loss registry
     modulation: str = "adaptive"  # "adaptive" or a fixed level "mcs0".."mcs6"
     mission: Mission = "random"

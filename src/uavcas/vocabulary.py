@@ -27,11 +27,8 @@ FAMILY_CLASS: dict[str, str] = {
 BENIGN = "Benign"
 BENIGN_TOKEN = "benign"  # the scenario's attacks field of a run without attacks
 
-# image: the paper's HTTP image fetches; telemetry: MAVLink v2 alone; video: MAVLink + H.264 over
-# RTP; mixed: MAVLink + video + images (uavcas.emulation.apps.traffic)
-Payload = Literal["image", "telemetry", "video", "mixed"]
-PAYLOADS: tuple[str, ...] = get_args(Payload)
-MAVLINK_PAYLOADS: tuple[str, ...] = ("telemetry", "video", "mixed")  # the payloads that carry MAVLink
+# Payloads are not listed here: each is a composition of traffic apps, one table in
+# uavcas.traffic.payloads (the codec's Scenario.payload is checked against it).
 # Path-loss models are not listed here: their names are the registry's (uavcas.channel.pathloss),
 # one module per model; the codec's Scenario.pathloss is checked against it.
 Mission = Literal["spiral", "grid", "hover_transit", "random"]

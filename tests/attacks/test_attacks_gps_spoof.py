@@ -78,8 +78,8 @@ def test_composition_plans_keep_the_other_familys_attackers():
 
 
 def test_executor_logs_exactly_the_times_it_publishes(tmp_path):
-    from uavcas.emulation.apps.mavlink.gps import Spoofing, control_path
     from uavcas.emulation.attacks import AttackExecutor
+    from uavcas.traffic.mavlink.gps import Spoofing, control_path
 
     p = plan(CFG.format(drift=3, payload="telemetry"), seed=14, windows=4)
     (att,) = p.attacks

@@ -65,7 +65,7 @@ def test_plan_is_seeded_and_routes_the_attacker_to_the_victim():
 
 
 def test_signing_key_is_32_bytes_and_deterministic():
-    from uavcas.emulation.apps.mavlink import signing_key, signing_spec
+    from uavcas.traffic.mavlink import signing_key, signing_spec
 
     k = signing_key(7, "mavlink_inject=rtl" + REST)
     assert len(k) == 32 and k == signing_key(7, "mavlink_inject=rtl" + REST)

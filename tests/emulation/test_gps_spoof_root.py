@@ -17,10 +17,10 @@ import math
 import numpy as np
 import pytest
 
-from uavcas.emulation.apps.mavlink import read_log
 from uavcas.events import AttackStart, AttackStop, read_attack_records
 from uavcas.rundir import RunDir
 from uavcas.testing.audited import run_audited
+from uavcas.traffic.mavlink import read_log
 
 pytestmark = [pytest.mark.root, pytest.mark.slow]
 CFG = "gps_spoof=3-6-2-telemetry-logdist-adaptive-random-30-95"

@@ -18,9 +18,9 @@ import json
 
 import pytest
 
-from uavcas.emulation.apps.mavlink import read_log
 from uavcas.rundir import RunDir
 from uavcas.testing.audited import run_audited
+from uavcas.traffic.mavlink import read_log
 
 pytestmark = [pytest.mark.root, pytest.mark.slow]
 CFG = "mavlink_inject=rtl-6-2-telemetry-logdist-adaptive-random-30-95"

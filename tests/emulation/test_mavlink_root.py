@@ -17,9 +17,9 @@ from collections import Counter
 
 import pytest
 
-from uavcas.emulation.apps.mavlink import read_log
 from uavcas.rundir import RunDir
 from uavcas.testing.audited import run_audited
+from uavcas.traffic.mavlink import read_log
 from uavcas.twin.track import Track, geodetic_to_local
 
 pytestmark = [pytest.mark.root, pytest.mark.slow]
@@ -131,8 +131,8 @@ def test_positions_in_the_bs_captures_are_the_plans_track(run):
 
 
 def test_streams_at_their_configured_rates_in_the_capture_table(run):
-    from uavcas.emulation.apps.mavlink import StreamRates
     from uavcas.mavlink_capture import mavlink_table, message_counts
+    from uavcas.traffic.mavlink import StreamRates
 
     plan, t0 = run.read_plan(), run.read_info().t0_unix
     rates = StreamRates()
@@ -160,8 +160,8 @@ def test_streams_at_their_configured_rates_in_the_capture_table(run):
 def test_video_reaches_the_bs_at_its_bitrate_where_the_path_has_room(runs):
     import numpy as np
 
-    from uavcas.emulation.apps.client import assignments
     from uavcas.flows.packets import addresses_to_str, read_packets
+    from uavcas.traffic.image.client import assignments
 
     run = runs["video"]
     plan, info = run.read_plan(), run.read_info()

@@ -1,6 +1,6 @@
-"""The MAVLink endpoints (`uavcas.emulation.apps.mavlink`) as processes on 127.0.0.1, with a UDP
+"""The MAVLink endpoints (`uavcas.traffic.mavlink`) as processes on 127.0.0.1, with a UDP
 relay between them that records every datagram both ways: shared by the endpoint, GPS-spoofing
-and injection tests of tests/emulation/apps."""
+and injection tests (tests/traffic, tests/emulation/apps)."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ import sys
 import threading
 import time
 
-from uavcas.emulation.apps import mavlink as mv
+from uavcas.traffic import mavlink as mv
 
 
 class Relay(threading.Thread):
@@ -65,7 +65,7 @@ def run_endpoints(tmp_path, gspec, uspec, relay: Relay, at_t0=lambda t0: None) -
     (as in a run), then t0 is published and `at_t0(t0)` runs meanwhile. Returns t0."""
     (tmp_path / "g.json").write_text(gspec.model_dump_json())
     (tmp_path / "u.json").write_text(uspec.model_dump_json())
-    run = [sys.executable, "-m", "uavcas.emulation.apps.mavlink"]
+    run = [sys.executable, "-m", "uavcas.traffic.mavlink"]
     procs = [subprocess.Popen(run + [role, str(tmp_path / f"{role[0]}.json")], stdout=subprocess.PIPE,
                               stderr=subprocess.PIPE, text=True) for role in ("gcs", "uav")]
     try:

@@ -23,9 +23,9 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from uavcas.emulation.apps.client import parse_log
 from uavcas.extract import extract
 from uavcas.rundir import RunDir
+from uavcas.traffic.image.client import parse_log
 
 pytestmark = [pytest.mark.root, pytest.mark.slow]
 SEED = 14

@@ -26,7 +26,7 @@ from typing import TYPE_CHECKING, Any, ClassVar, Protocol
 import numpy as np
 
 from uavcas.scenario_model import ScenarioError, SpecBase
-from uavcas.vocabulary import PAYLOADS
+from uavcas.traffic.payloads import PAYLOAD_NAMES
 
 if TYPE_CHECKING:
     from uavcas.emulation.apps.procs import Proc
@@ -175,7 +175,7 @@ class AttackFamily(ABC):
     exclusive_group: ClassVar[str | None] = None
     detours_traffic: ClassVar[bool] = False  # the plan detours victim <-> BS through the attacker
     # the scenario payloads whose traffic the attack acts on (the codec refuses the others), and why
-    payloads: ClassVar[tuple[str, ...]] = PAYLOADS
+    payloads: ClassVar[tuple[str, ...]] = PAYLOAD_NAMES
     payloads_why: ClassVar[str] = ""
 
     # codec -------------------------------------------------------------------------------------

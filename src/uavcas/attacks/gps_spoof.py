@@ -15,7 +15,7 @@
   position at the attack's planned start, recorded in the plan as `lure_bearing_deg` and
   `lure_distance_m` (the area's scale: 1 km);
 - executor: no network change. `start` publishes the spoofer to the victim's autopilot
-  (`emulation.apps.mavlink.gps`: a control file in the run's apps directory, written atomically
+  (`traffic.mavlink.gps`: a control file in the run's apps directory, written atomically
   with a start time LEAD_S ahead, logged as the start), `stop` publishes the stop the same way.
   From its logged start the victim's GLOBAL_POSITION_INT and GPS_RAW_INT report the true track
   plus an offset growing at drift_mps along the lure's bearing (capped at its distance), with the
@@ -27,7 +27,7 @@
   `uavcas.flows.decode`) from a victim IP whose transmission's first observation (at the victim's
   switch, the capture nearest its sending) lies inside [start, stop). Its other observations carry
   the same effect. Packet-exact: the autopilot decides each report's spoofing at its sending with
-  the logged times (see `emulation.apps.mavlink.gps`), and the victim's other messages, or its
+  the logged times (see `traffic.mavlink.gps`), and the victim's other messages, or its
   reports outside the window, stay benign;
 - provoked: nothing (the default hook). The ground station answers no position report, and
   what a spoofed report changes in a real GCS (a map) sends no packet here.
@@ -43,9 +43,9 @@ import numpy as np
 from pydantic import Field
 from pymavlink.dialects.v20 import common
 
-from uavcas.emulation.apps.mavlink.gps import POSITION_MESSAGES, Spoofing, control_path, publish
 from uavcas.scenario_model import ScenarioError, SpecBase
-from uavcas.vocabulary import MAVLINK_PAYLOADS
+from uavcas.traffic.apps import MAVLINK_PAYLOADS
+from uavcas.traffic.mavlink.gps import POSITION_MESSAGES, Spoofing, control_path, publish
 
 from .base import AttackExecutor, AttackFamily, ScheduleDraw, TruthContext
 from .registry import register

@@ -14,15 +14,15 @@
   and waiting for its go file: COMMAND_LONG frames packed by pymavlink with the victim's ground
   station's system id and component id (MAV_COMP_ID_MISSIONPLANNER, 190), targeting the
   victim's autopilot, MAVLink 2 and unsigned (the attacker has no key), from one ephemeral UDP
-  port to the autopilot's fixed port (`apps.mavlink.specs.UAV_PORT`). The start is logged
+  port to the autopilot's fixed port (`traffic.mavlink.specs.UAV_PORT`). The start is logged
   before the go file is written (no frame leaves before it); `halt` signals the injector, whose
   handler exits at once (after the frame being sent, if any); the stop is logged, off the
   schedule's thread, at the time it had exited, with `crossed_unix` when its last frame can have
   crossed the network (the flood's `quiet_after_s` over the attacker -> victim path), the frames
   sent and the COMMAND_ACKs received. The victim's autopilot
-  (`apps.mavlink.commands`) accepts and acknowledges RTL / LAND (its HEARTBEAT's custom_mode
+  (`traffic.mavlink.commands`) accepts and acknowledges RTL / LAND (its HEARTBEAT's custom_mode
   becomes 6 / 9) and DO_CHANGE_SPEED, unless the run signs MAVLink (`--mavlink-signing`,
-  `apps.mavlink.signing`): then it drops the unsigned frames unanswered;
+  `traffic.mavlink.signing`): then it drops the unsigned frames unanswered;
 - truth (effect `mavlink_inject`, label source "mavlink-injections"): a UDP packet from an
   attacker's IP to a victim's IP and the autopilot's MAVLink port, captured inside
   [start, crossed) of the attack (every observation of its transmission). Benign MAVLink flows between a UAV and
@@ -48,10 +48,10 @@ from pydantic import Field
 
 from uavcas.emulation.apps.flood import quiet_after_s
 from uavcas.emulation.apps.mavinject import read_log
-from uavcas.emulation.apps.mavlink.specs import UAV_PORT
 from uavcas.emulation.apps.procs import spawn, wait_for
 from uavcas.scenario_model import ScenarioError, SpecBase, choice, int_field
-from uavcas.vocabulary import MAVLINK_PAYLOADS
+from uavcas.traffic.apps import MAVLINK_PAYLOADS
+from uavcas.traffic.mavlink.specs import UAV_PORT
 
 from .answers import ANSWER_WITHIN_S, icmp_errors_quoting, udp_answers
 from .base import AttackExecutor, AttackFamily, TruthContext
@@ -64,7 +64,7 @@ if TYPE_CHECKING:  # types only: the twin's and labels' package __init__s load t
 
 COMMANDS: tuple[str, ...] = ("rtl", "land", "speed")
 DEFAULT_SPEED_MPS = 20  # ArduCopter WPNAV_SPEED's upper bound, 2000 cm/s
-DEFAULT_RATE_HZ = 2  # the ground station's command retry period, 0.5 s (apps.mavlink.specs.RetrySpec)
+DEFAULT_RATE_HZ = 2  # the ground station's command retry period, 0.5 s (traffic.mavlink.specs.RetrySpec)
 DEFAULT_COUNT = 0  # no limit: the whole attack
 READY_S = 30.0  # the injector's start-up (Python + pymavlink in a busy namespace) must finish within this
 _KEYS = {"mps": "speed_mps", "hz": "rate_hz", "n": "count"}

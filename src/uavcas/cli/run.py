@@ -16,7 +16,7 @@ from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 from uavcas.emulation.preflight import preflight, probe_kernel
 from uavcas.emulation.runner import RunOptions, realize
 from uavcas.events import AttackLogged, AttackRate, RunDone, SetupDone, WindowApplied
-from uavcas.vocabulary import MAVLINK_PAYLOADS
+from uavcas.traffic.apps import MAVLINK_PAYLOADS
 
 from .audit import fidelity_line
 from .common import (

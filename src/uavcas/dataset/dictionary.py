@@ -20,6 +20,7 @@ from uavcas import vocabulary as v
 from uavcas.channel.pathloss import names as pathloss_names
 from uavcas.flows.standards import DEFAULT_STANDARD
 from uavcas.flows.standards import standard as feature_standard
+from uavcas.traffic.payloads import PAYLOAD_NAMES
 
 NO_UNIT = "-"
 
@@ -60,7 +61,7 @@ _AXES: dict[str, tuple[str, str]] = {
     "attacks": (NO_UNIT, "the scenario's attacks field: family tokens with their parameters, or benign"),
     "n_uav": ("UAVs", "UAVs in the swarm"),
     "n_bs": ("base stations", "base stations (ground control) of the swarm"),
-    "payload": (NO_UNIT, f"the benign traffic: one of {', '.join(v.PAYLOADS)}"),
+    "payload": (NO_UNIT, f"the benign traffic: one of {', '.join(PAYLOAD_NAMES)}"),
     "pathloss": (NO_UNIT, f"the air-to-ground path-loss model: one of {', '.join(pathloss_names())}"),
     "modulation": (NO_UNIT, "802.11a/g MCS choice: adaptive, or a fixed level mcs0..mcs6"),
     "mission": (NO_UNIT, f"the UAVs' mission: one of {', '.join(v.MISSIONS)}"),

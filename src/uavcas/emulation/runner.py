@@ -1,11 +1,11 @@
 """`realize(plan, out_dir) -> RunArtifacts`: play a Plan in real time on real Linux stacks.
 
 Order of a run (t0 = wall-clock time of plan t = 0, written to run.json):
-  namespaces + fabric + shaper (Emulation) -> one tcpdump per switch -> nginx on every UAV (payload
-  image/mixed) ->
+  namespaces + fabric + shaper (Emulation) -> one tcpdump per switch -> the servers of the payload's
+  traffic apps (`uavcas.traffic`: MAVLink endpoints, video sinks, nginx on every UAV) ->
   attack processes prepared (idle: replayers, floods behind their gates) -> window 0 applied ->
-  t0 -> benign clients (MAVLink ground stations then autopilots for telemetry/mixed, BS curl loops
-  for image/mixed: `apps.traffic`) -> the schedule: window k at t0 + k * window_s, each attack's start/stop at
+  t0 -> the apps' clients (MAVLink endpoints released, video senders, BS curl loops, in the
+  payload's order: `traffic.benign`) -> the schedule: window k at t0 + k * window_s, each attack's start/stop at
   t0 + start_s/stop_s (and a family's calibration times) -> end at t0 + duration -> attacks,
   clients and servers stopped -> captures stopped (SIGINT: flushed, drop counters read) ->
   namespaces removed.
@@ -36,12 +36,13 @@ from uavcas.attacks import family
 from uavcas.events import AttackLogged, Progress, RunDone, SetupDone, WindowApplied, attack_log_text
 from uavcas.fidelity import record_audit_error, write_fidelity
 from uavcas.rundir import CaptureRecord, RunDir, RunInfo
+from uavcas.traffic.base import AppOptions
+from uavcas.traffic.benign import BenignTraffic
+from uavcas.traffic.video import BITRATE_KBPS
 from uavcas.versions import package_versions
 
 from .apps import capture
-from .apps.traffic import BenignTraffic
 from .apps.versions import tool_versions
-from .apps.video import BITRATE_KBPS
 from .attacks import AttackExecutor
 from .emulation import Emulation
 from .naming import new_prefix
@@ -61,8 +62,8 @@ class RunOptions:
     prefix: str | None = None  # namespace prefix (default: a fresh random one)
     think_mean_s: float = 0.5  # mean pause between a BS's image fetches
     n_images: int = 24
-    video_kbps: int = BITRATE_KBPS  # H.264 bitrate of each UAV's video (payload video and mixed; apps/video.py)
-    mavlink_signing: bool = False  # MAVLink 2 signing between GCS and UAV endpoints (apps/mavlink/signing.py)
+    video_kbps: int = BITRATE_KBPS  # H.264 bitrate of each UAV's video (the video app; traffic/video.py)
+    mavlink_signing: bool = False  # MAVLink 2 signing between GCS and UAV endpoints (traffic/mavlink/signing.py)
     keep_logs: bool = True  # copy tool logs (curl results, stderr) to OUT/logs
     urgent: bool = True  # window changes and attack actions at real-time priority (emulation.priority)
     softirq_boost: bool = True  # the kernel's softirq threads at real-time priority during the run
@@ -201,8 +202,9 @@ def _play(st: _State, opt: RunOptions, notify: Callable[[Progress], None]) -> No
     t = time.time()
     st.captures = capture.start_all(emu, [n.name for n in plan.nodes], RunDir(st.out).pcap_dir, work / "logs",
                                     dur + 120)
-    st.traffic = BenignTraffic(emu, plan, work, dur, think_mean_s=opt.think_mean_s, n_images=opt.n_images,
-                               video_kbps=opt.video_kbps, mavlink_signing=opt.mavlink_signing)
+    st.traffic = BenignTraffic(emu, plan, work, dur, options=AppOptions(
+        think_mean_s=opt.think_mean_s, n_images=opt.n_images, video_kbps=opt.video_kbps,
+        mavlink_signing=opt.mavlink_signing))
     st.traffic.start_servers()
     st.executor = AttackExecutor(emu, plan, work, dur, on_event=lambda r: notify(AttackLogged(record=r)))
     st.executor.on_reshape = st.sampler.window_applied  # a mid-window reshape starts a counter segment
@@ -353,7 +355,7 @@ def _delay_stats(emu: Emulation) -> dict | None:
 
 
 def _stop_traffic(st: _State) -> None:
-    st.clients = [c.to_dict() for c in st.traffic.stop()]
+    st.clients = st.traffic.stop()
     st.streams = st.traffic.streams_summary()
 
 
@@ -391,6 +393,6 @@ def _write_outputs(st: _State) -> None:
         wind_down_errors=st.wind_down_errors,
         profile=st.plan.profile, profile_sha256=st.plan.profile_sha256,
         # whether the run's MAVLink was signed (never the key): off when no payload carries MAVLink
-        mavlink_signing=bool(st.traffic and st.traffic.mavlink_on and st.traffic.signing is not None),
+        mavlink_signing=bool(st.traffic and st.traffic.mavlink_signed),
     )
     atomic_write_text(rd.run_json, st.info.to_json())

@@ -15,7 +15,8 @@ from __future__ import annotations
 from uavcas.attacks import family
 from uavcas.channel.pathloss import names as pathloss_names
 from uavcas.scenario_model import MCS_LEVEL, Scenario, ScenarioError, choice, int_field
-from uavcas.vocabulary import BENIGN_TOKEN, FAMILIES, FIELD_NAMES, MISSIONS, PAYLOADS
+from uavcas.traffic.payloads import PAYLOAD_NAMES
+from uavcas.vocabulary import BENIGN_TOKEN, FAMILIES, FIELD_NAMES, MISSIONS
 
 __all__ = ["FIELD_NAMES", "Scenario", "ScenarioError", "attacks_of", "canonical", "parse"]
 
@@ -76,7 +77,7 @@ def parse(text: str) -> Scenario:
         need = family(a.family).min_uavs
         if n_uav < need:
             raise ScenarioError(f"field 'n_uav': {a.family} needs at least {need} UAVs (attackers + victim)")
-    payload = choice("payload", raw["payload"], PAYLOADS)
+    payload = choice("payload", raw["payload"], PAYLOAD_NAMES)
     for a in attacks:  # a family acts only on the traffic of some payloads (AttackFamily.payloads)
         fam = family(a.family)
         if payload not in fam.payloads:

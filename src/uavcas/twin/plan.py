@@ -32,6 +32,7 @@ from uavcas.channel import Channel, LinkChain
 from uavcas.mobility import Area, make_mission
 from uavcas.scenario import Scenario, parse
 from uavcas.topology.routing import Topology, nearest_neighbour_topology, route, with_wormholes
+from uavcas.traffic.apps import MAVLINK_PAYLOADS
 
 from .interference import window_interference
 from .model import Attack, Link, Node, Plan, Route, Window, WormholeOverride, mavlink_sysid
@@ -53,7 +54,7 @@ def node_mac(index: int) -> str:
 
 
 def _nodes(scenario: Scenario) -> list[Node]:
-    if scenario.payload != "image" and scenario.n_uav + scenario.n_bs > 255:
+    if scenario.payload in MAVLINK_PAYLOADS and scenario.n_uav + scenario.n_bs > 255:
         raise ValueError(f"{scenario.n_uav} UAVs + {scenario.n_bs} BSs exceed the 255 MAVLink system ids "
                          f"a {scenario.payload!r} payload needs")
     nodes = []

@@ -16,10 +16,10 @@ import time
 import pytest
 
 from helpers.mavlink_relay import Relay, free_port, stop_all, wait_all
-from uavcas.emulation.apps import mavlink as mv
 from uavcas.emulation.apps.mavinject import read_log as read_injector_log
-from uavcas.emulation.apps.mavlink.commands import COPTER_MODE_RTL
-from uavcas.emulation.apps.mavlink.specs import COPTER_MODE_AUTO
+from uavcas.traffic import mavlink as mv
+from uavcas.traffic.mavlink.commands import COPTER_MODE_RTL
+from uavcas.traffic.mavlink.specs import COPTER_MODE_AUTO
 from uavcas.twin.plan import plan
 
 pytestmark = pytest.mark.slow
@@ -59,7 +59,7 @@ def test_forged_rtl_is_accepted_without_signing_and_dropped_with_it(tmp_path, si
     (tmp_path / "g.json").write_text(gspec.model_dump_json())
     (tmp_path / "u.json").write_text(uspec.model_dump_json())
     go, ilog = tmp_path / "go", tmp_path / "inject.jsonl"
-    run = [sys.executable, "-m", "uavcas.emulation.apps.mavlink"]
+    run = [sys.executable, "-m", "uavcas.traffic.mavlink"]
     inject = [sys.executable, "-m", "uavcas.emulation.apps.mavinject", "--victim-ip", "127.0.0.1", "--port",
               str(uav_port), "--target-sysid", str(p.node(victim).sysid), "--gcs-sysid", str(p.node(bs).sysid),
               "--command", "rtl", "--rate-hz", "4", "--count", str(FORGED), "--go", str(go), "--log", str(ilog),
@@ -105,7 +105,7 @@ def test_a_command_signed_with_another_key_is_rejected():
     """Wrongly signed = unsigned for the autopilot: pymavlink's check fails, the frame is BAD_DATA."""
     from pymavlink.dialects.v20 import common as m
 
-    from uavcas.emulation.apps.mavlink.signing import SigningSpec, new_signing_state
+    from uavcas.traffic.mavlink.signing import SigningSpec, new_signing_state
 
     run_key, other = mv.signing_spec(1, "cfg-a"), SigningSpec(key_hex="ab" * 32)
     out = []

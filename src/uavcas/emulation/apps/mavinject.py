@@ -35,7 +35,7 @@ from pathlib import Path
 
 from pymavlink.dialects.v20 import common as m
 
-from .mavlink.specs import COMPONENT_AUTOPILOT, COMPONENT_GCS, UAV_PORT
+from uavcas.traffic.mavlink.specs import COMPONENT_AUTOPILOT, COMPONENT_GCS, UAV_PORT
 
 READY = "ready"
 GO_POLL_S = 0.001

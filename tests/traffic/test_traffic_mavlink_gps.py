@@ -1,4 +1,4 @@
-"""The GPS receiver model (apps/mavlink/gps.py): the spoofer's offset, the control file, the timing rule.
+"""The GPS receiver model (traffic/mavlink/gps.py): the spoofer's offset, the control file, the timing rule.
 
 Hand-computed cases: bearing 30 degrees, 3 m/s, so after 10 s the offset is 30 m along the
 bearing: east 30 sin 30 = 15 m, north 30 cos 30 = 25.981 m.
@@ -12,7 +12,7 @@ import time
 
 import pytest
 
-from uavcas.emulation.apps.mavlink.gps import (
+from uavcas.traffic.mavlink.gps import (
     GUARD_S,
     LEAD_S,
     GpsReceiver,
@@ -116,8 +116,8 @@ def test_autopilot_reports_the_spoofers_drift_between_the_logged_times(tmp_path)
     plan's gps_spoof attack mid-run: the reports decided inside the logged [start, stop) carry the
     drift, the others the track, and the autopilot counts them."""
     from helpers.mavlink_relay import Relay, free_port, parse_each, run_endpoints
-    from uavcas.emulation.apps import mavlink as mv
     from uavcas.emulation.attacks import AttackExecutor
+    from uavcas.traffic import mavlink as mv
     from uavcas.twin.plan import plan
     from uavcas.twin.track import geodetic_to_local
 

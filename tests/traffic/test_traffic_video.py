@@ -15,8 +15,11 @@ from pathlib import Path
 
 import pytest
 
-from uavcas.emulation.apps import video
-from uavcas.emulation.apps.video import VideoSpec
+from uavcas.traffic import video
+from uavcas.traffic.apps.video import VideoApp
+from uavcas.traffic.base import AppContext
+from uavcas.traffic.video import VideoSpec
+from uavcas.twin.plan import plan
 
 SRC = Path(video.__file__).resolve().parents[3]  # this checkout's src/, for the sink subprocesses
 
@@ -97,7 +100,7 @@ def test_sender_argv_is_seeded_and_carries_the_settings(tmp_path):
 def test_sink_argv(tmp_path):
     s = _spec(tmp_path, port=5701, duration_s=10)
     argv = video.sink_argv(s, python="/venv/bin/python")
-    assert argv == ["/venv/bin/python", "-m", "uavcas.emulation.apps.video", "sink", "--bind", "127.0.0.1",
+    assert argv == ["/venv/bin/python", "-m", "uavcas.traffic.video", "sink", "--bind", "127.0.0.1",
                     "--port", "5701", "--seconds", "13", "--log", str(tmp_path / "sink.jsonl"), "--payload-type", "96"]
     assert video.sink_argv(s, python="py", seconds=4.5)[argv.index("--seconds") + 1] == "4.5"
 
@@ -171,7 +174,7 @@ def test_read_sink_log(tmp_path):
 
 
 def _start_sink(args: list[str]) -> subprocess.Popen:
-    return subprocess.Popen([sys.executable, "-m", "uavcas.emulation.apps.video", "sink", *args], env=_env(),
+    return subprocess.Popen([sys.executable, "-m", "uavcas.traffic.video", "sink", *args], env=_env(),
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
 
 
@@ -310,13 +313,21 @@ def test_stream_rate_at_the_sink(tmp_path):
     assert spec.duration_s - 1.0 <= s.active_s <= spec.duration_s + 1.0
 
 
+def test_video_seeds_repeat_per_plan_seed_and_differ_per_stream(tmp_path):
+    p = plan("benign-4-2-video-logdist-adaptive-random-30-95", seed=7, windows=1)
+    t = VideoApp(AppContext(None, p, tmp_path, 5.0))
+    seeds = [t.spec("bs0", k).seed for k in range(4)]
+    assert seeds == [VideoApp(AppContext(None, p, tmp_path, 5.0)).spec("bs0", k).seed for k in range(4)]
+    assert len(set(seeds)) == 4
+    other = VideoApp(AppContext(None, plan("benign-4-2-video-logdist-adaptive-random-30-95", seed=8, windows=1),
+                                tmp_path, 5.0))
+    assert seeds != [other.spec("bs0", k).seed for k in range(4)]
+
+
 def test_the_runs_video_seeds_fit_ffmpeg_whatever_the_plan_seed(tmp_path):
     # campaign runs carry seeds up to 2**32 - 1; ffmpeg's noise seed is a C int
-    from uavcas.emulation.apps.traffic import BenignTraffic
-    from uavcas.twin.plan import plan
-
     p = plan("benign-4-2-video-logdist-adaptive-random-30-95", seed=2**32 - 1, windows=1)
-    t = BenignTraffic(None, p, tmp_path, 5.0)
-    seeds = [t._video_spec("bs0", k).seed for k in range(4)]
+    t = VideoApp(AppContext(None, p, tmp_path, 5.0))
+    seeds = [t.spec("bs0", k).seed for k in range(4)]
     assert all(0 <= s <= video.MAX_SEED for s in seeds) and len(set(seeds)) == 4
-    assert seeds == [BenignTraffic(None, p, tmp_path, 5.0)._video_spec("bs0", k).seed for k in range(4)]
+    assert seeds == [VideoApp(AppContext(None, p, tmp_path, 5.0)).spec("bs0", k).seed for k in range(4)]

@@ -1,4 +1,4 @@
-"""python -m uavcas.emulation.apps.mavlink {uav|gcs} SPEC.json: one endpoint, until its deadline."""
+"""python -m uavcas.traffic.mavlink {uav|gcs} SPEC.json: one endpoint, until its deadline."""
 
 from __future__ import annotations
 
@@ -13,7 +13,7 @@ from .specs import GcsSpec, UavSpec
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(prog="python -m uavcas.emulation.apps.mavlink")
+    ap = argparse.ArgumentParser(prog="python -m uavcas.traffic.mavlink")
     ap.add_argument("role", choices=("uav", "gcs"))
     ap.add_argument("spec", type=Path, help="the endpoint's spec (JSON)")
     a = ap.parse_args(argv)

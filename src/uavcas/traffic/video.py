@@ -8,7 +8,7 @@ spends real bits instead of padding) with libx264 at a constant bitrate, paced i
 fragments, payload type 96) to the BS. Bounded by its own `-t` and the `timeout` the core wraps
 around every tool. No audio, no display, no network beyond the destination.
 
-Sink: a small Python UDP receiver (`python -m uavcas.emulation.apps.video sink ...`) rather than
+Sink: a small Python UDP receiver (`python -m uavcas.traffic.video sink ...`) rather than
 an ffmpeg receiver: ffmpeg needs an SDP file to receive plain RTP, would decode (CPU per BS for
 nothing) and reports no per-second byte counts, whereas the sink's counts are exact, one JSON
 line per 1 s bin of the epoch clock (bins without traffic included, so an outage shows as zeros),
@@ -21,7 +21,7 @@ No RTCP: companion-computer video pipelines (gstreamer `rtph264pay ! udpsink por
 ArduPilot wiki's video streaming recipes) send bare RTP, and ffmpeg's default RTCP sender
 reports would go to port + 1, where nothing listens (`-rtpflags skip_rtcp`).
 
-Run: python -m uavcas.emulation.apps.video sink --bind IP --port 5600 --seconds S --log F
+Run: python -m uavcas.traffic.video sink --bind IP --port 5600 --seconds S --log F
 """
 
 from __future__ import annotations
@@ -175,7 +175,7 @@ def file_argv(spec: VideoSpec, out_path: Path, seconds: float) -> list[str]:
 def sink_argv(spec: VideoSpec, python: str = sys.executable, seconds: float | None = None) -> list[str]:
     """The BS side: this module's sink on dst_ip:port, by default for duration_s + SINK_SLACK_S."""
     secs = spec.duration_s + SINK_SLACK_S if seconds is None else seconds
-    return [python, "-m", "uavcas.emulation.apps.video", "sink", "--bind", spec.dst_ip,
+    return [python, "-m", "uavcas.traffic.video", "sink", "--bind", spec.dst_ip,
             "--port", str(spec.port), "--seconds", f"{secs:g}", "--log", str(spec.log_path),
             "--payload-type", str(PAYLOAD_TYPE)]
 

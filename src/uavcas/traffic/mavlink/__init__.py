@@ -49,7 +49,7 @@ the autopilot's state), `signing` (MAVLink 2 signing and the run's key), `gps` (
 receiver: true fixes, or a spoofer's that the `gps_spoof` attack publishes at run time), `ground`
 (the GCS end).
 
-Run: python -m uavcas.emulation.apps.mavlink {uav|gcs} SPEC.json
+Run: python -m uavcas.traffic.mavlink {uav|gcs} SPEC.json
 """
 
 from . import gps

@@ -1,4 +1,4 @@
-"""The MAVLink endpoints (apps/mavlink/) talking over UDP on 127.0.0.1, no namespaces.
+"""The MAVLink endpoints (traffic/mavlink/) talking over UDP on 127.0.0.1, no namespaces.
 
 A relay between the two records every datagram both ways, so the test checks the bytes on the
 wire: each one is one MAVLink 2 frame that pymavlink parses with a valid CRC.
@@ -11,7 +11,7 @@ from collections import Counter
 import pytest
 
 from helpers.mavlink_relay import Relay, bs0_uav0_specs, free_port, parse_each, run_endpoints, type_of
-from uavcas.emulation.apps import mavlink as mv
+from uavcas.traffic import mavlink as mv
 from uavcas.twin.plan import plan
 from uavcas.twin.track import Track, geodetic_to_local
 
