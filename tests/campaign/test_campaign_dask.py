@@ -30,7 +30,7 @@ import pytest
 import uavcas
 from helpers.campaign_runs import cli, free_port, services, write_manifest
 from uavcas.emulation import kernel
-from uavcas.emulation.naming import RUN_ROOT
+from uavcas.network.naming import RUN_ROOT
 
 pytestmark = [pytest.mark.root, pytest.mark.slow]
 

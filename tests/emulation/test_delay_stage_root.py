@@ -14,8 +14,9 @@ from pathlib import Path
 import pytest
 
 from uavcas.diagnostics import selftest
-from uavcas.emulation import kernel, new_prefix, nfqdelay
+from uavcas.emulation import kernel, nfqdelay
 from uavcas.emulation.emulation import Emulation
+from uavcas.network.naming import new_prefix
 from uavcas.twin import model
 
 pytestmark = pytest.mark.root
@@ -154,7 +155,7 @@ def test_attack_tables_coming_and_going_lose_no_frame_the_delay_stage_holds():
     import threading
 
     from uavcas.attacks import blackhole
-    from uavcas.emulation.controller import Detour
+    from uavcas.network.forwarding import Detour
 
     p = _plan(rate_mbps=2.0)
     with Emulation(p, prefix=new_prefix()) as emu:

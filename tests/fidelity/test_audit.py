@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 from helpers.fidsynth import T0, Traffic, build, plan, run_info
-from uavcas.emulation.shaping import queue_limit_pkts
 from uavcas.fidelity import Tolerances, audit, read_fidelity, write_fidelity
 from uavcas.fidelity.model import SCHEMA_VERSION
+from uavcas.network.queues import queue_limit_pkts
 from uavcas.rundir import RunDir, WindowApply
 
 

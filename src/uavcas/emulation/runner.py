@@ -35,6 +35,7 @@ from uavcas.atomic import atomic_write_text
 from uavcas.attacks import family
 from uavcas.events import AttackLogged, Progress, RunDone, SetupDone, WindowApplied, attack_log_text
 from uavcas.fidelity import record_audit_error, write_fidelity
+from uavcas.network.naming import new_prefix
 from uavcas.rundir import CaptureRecord, RunDir, RunInfo
 from uavcas.versions import package_versions
 
@@ -44,7 +45,6 @@ from .apps.versions import tool_versions
 from .apps.video import BITRATE_KBPS
 from .attacks import AttackExecutor
 from .emulation import Emulation
-from .naming import new_prefix
 from .preflight import prepare_out_dir
 from .priority import CONTROL_RT_PRIORITY, SOFTIRQ_RT_PRIORITY, softirq_boost, urgent
 from .sampling import WindowSampler
