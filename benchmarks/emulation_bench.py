@@ -19,7 +19,7 @@ from uavcas.atomic import atomic_write_text
 from uavcas.diagnostics import selftest
 from uavcas.emulation import kernel
 from uavcas.emulation.emulation import Emulation
-from uavcas.emulation.naming import new_prefix
+from uavcas.network.naming import new_prefix
 from uavcas.testing.handmade_plans import link, nn_plan, nodes, plan, random_plan, window
 
 

@@ -110,6 +110,7 @@ def main() -> None:
     ap.add_argument("--json", type=Path)
     args = ap.parse_args()
     from uavcas.emulation.runner import realize
+    from uavcas.fidelity import audit_run
     from uavcas.twin.plan import plan
 
     results = []
@@ -119,6 +120,8 @@ def main() -> None:
         p = plan(config, seed=args.seed, windows=args.windows)
         t = time.monotonic()
         art = realize(p, args.out / f"{fam}-{args.pathloss}-{args.mission}-{args.tx_dbm}")
+        if art.exit_status == 0:  # each run audited, as `uavcas run` does (the runner does not)
+            art.run_info = audit_run(art.out_dir)
         wall = time.monotonic() - t
         info = art.run_info
         res = {"family": fam, "config": config, "exit_status": art.exit_status, "wall_s": round(wall, 2),

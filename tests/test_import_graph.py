@@ -13,6 +13,14 @@
    runs `a/__init__` and `a/b/__init__` first, unless the importer is inside them). A cycle here
    is an ImportError (or a half-initialised module) depending on which module is imported first.
 
+Layering (issue 40): the offline stages (`OFFLINE`: everything that reads a run or a dataset
+without the kernel) import neither the kernel package `uavcas.emulation` nor the report package
+`uavcas.report`, by any import statement (module level, function level or TYPE_CHECKING): the pure
+network model they share with the emulator is `uavcas.network`, and the one matplotlib setup is
+`uavcas.figure`. Those two are leaves (`LEAVES`), and the network model is pure (no subprocess, no
+kernel interface). Every top-level package is on one side, so a new package is classified in one
+line (`OFFLINE` or `KERNEL_SIDE`).
+
 And no import hides in a function (issue 26) but a deferred optional heavy dependency: `torch`
 (the `dl` extra) and dask's `distributed`, or a project module that imports one of them at module
 level (`uavcas.ids.nets`), each with a comment on its line or the line above saying why. The one
@@ -341,3 +349,95 @@ def test_no_cycle_in_what_runs_on_import():
     found = cycles(on_import=True)
     assert not found, "cycles among the imports src/uavcas runs on import (package __init__s included):\n" \
         + "\n".join(found)
+
+
+
+# layering (issue 40) -------------------------------------------------------------------------------------------
+KERNEL = "emulation"  # the kernel package: namespaces, tc/nft, processes; only the kernel side imports it
+REPORT = "report"  # the dataset report page; nothing offline builds on it
+OFFLINE = (  # read runs, plans and datasets without the kernel ("__init__": the root package's own)
+    "__init__", "analysis", "atomic", "calibration", "channel", "dataset", "events", "extract", "fidelity", "figure",
+    "flows", "ids", "labels", "mavlink_capture", "mobility", "network", "report", "rundir", "scenario",
+    "scenario_model", "schema", "seeding", "stats", "topology", "twin", "versions", "vocabulary",
+)  # fmt: skip
+KERNEL_SIDE = (  # may import the kernel package: they run, drive or check emulations
+    "__main__", "attacks", "campaign", "cli", "diagnostics", "emulation", "testing",
+    "traffic",  # the benign traffic apps (issue 40 moves them out of emulation/apps)
+)  # fmt: skip
+LEAVES = {"network": (), "figure": ("atomic",)}  # package -> the only other uavcas packages it may import
+PURE = {"network": ("subprocess", "ctypes", "socket", "select", "fcntl", "signal", "pyroute2")}  # no kernel access
+
+
+def _top(module: str) -> str:
+    """The top-level package (or module) of uavcas a module belongs to."""
+    parts = module.split(".")
+    return parts[1] if len(parts) > 1 else "__init__"
+
+
+def layering(src: Path = SRC, root: str = ROOT, offline: tuple[str, ...] = OFFLINE,
+             kernel_side: tuple[str, ...] = KERNEL_SIDE, leaves: dict[str, tuple[str, ...]] = LEAVES,
+             pure: dict[str, tuple[str, ...]] = PURE) -> list[str]:
+    """One line per import that breaks the layering, with its file:line (every import statement)."""
+    bad = []
+    for e in edges(src, root):
+        a, b = _top(e.src), _top(e.dst)
+        if a == b:
+            continue
+        if a in offline and b == KERNEL:
+            bad.append(f"{e.where}: {e.src} imports {e.dst} (an offline stage imports the kernel package)")
+        if a in offline and b == REPORT:
+            bad.append(f"{e.where}: {e.src} imports {e.dst} (an offline stage imports the report package)")
+        if a in leaves and b not in leaves[a]:
+            allowed = f"only {', '.join(leaves[a])}" if leaves[a] else "nothing"
+            bad.append(f"{e.where}: {e.src} imports {e.dst} (a leaf: {a} imports {allowed} of uavcas)")
+    mods = _modules(src, root)
+    for module, path in mods.items():
+        if _top(module) not in pure:
+            continue
+        tree = ast.parse(path.read_text(encoding="utf-8"), filename=str(path))
+        for node in ast.walk(tree):
+            for t in (_targets(module, mods, node) if isinstance(node, (ast.Import, ast.ImportFrom)) else ()):
+                if t.split(".")[0] in pure[_top(module)]:
+                    bad.append(f"{path.relative_to(src)}:{node.lineno}: {module} imports {t} (the network model is "
+                               "pure: no processes, no kernel interface)")
+    for top in sorted({_top(m) for m in mods} - set(offline) - set(kernel_side)):
+        bad.append(f"{root}.{top}: in neither OFFLINE nor KERNEL_SIDE (tests/test_import_graph.py): classify it")
+    return sorted(set(bad))
+
+
+def test_the_layering_check_names_each_offending_import(tmp_path):
+    src = _tree(tmp_path, {
+        "pkg/__init__.py": "",
+        "pkg/emulation/__init__.py": "",
+        "pkg/emulation/kernel.py": "import subprocess\nfrom pkg.network import names\n",
+        "pkg/network/__init__.py": "",
+        "pkg/network/names.py": "import os\n",
+        "pkg/network/bad.py": "import subprocess\nfrom pkg.atomic import w\n",
+        "pkg/atomic.py": "",
+        "pkg/figure.py": "from pkg.atomic import w\n",
+        "pkg/report/__init__.py": "from pkg.figure import plt\n",
+        "pkg/report/page.py": "from pkg.flows import x\n",
+        "pkg/flows/__init__.py": "x = 1\n",
+        "pkg/flows/ok.py": "from pkg.network.names import n\nfrom pkg.figure import plt\n",
+        "pkg/flows/late.py": "def f():\n    from pkg.emulation import kernel\n",
+        "pkg/flows/typed.py": "from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n    import pkg.report.page\n",
+        "pkg/cli.py": "import pkg.emulation.kernel\nimport pkg.report\n",
+        "pkg/newpkg/__init__.py": "",
+    })
+    found = layering(src, "pkg", offline=("__init__", "atomic", "figure", "flows", "network", "report"),
+                     kernel_side=("cli", "emulation"), leaves={"network": (), "figure": ("atomic",)},
+                     pure={"network": ("subprocess",)})
+    assert found == [
+        "pkg.newpkg: in neither OFFLINE nor KERNEL_SIDE (tests/test_import_graph.py): classify it",
+        "pkg/flows/late.py:2: pkg.flows.late imports pkg.emulation.kernel (an offline stage imports the kernel "
+        "package)",
+        "pkg/flows/typed.py:3: pkg.flows.typed imports pkg.report.page (an offline stage imports the report package)",
+        "pkg/network/bad.py:1: pkg.network.bad imports subprocess (the network model is pure: no processes, no "
+        "kernel interface)",
+        "pkg/network/bad.py:2: pkg.network.bad imports pkg.atomic (a leaf: network imports nothing of uavcas)",
+    ]
+
+
+def test_offline_stages_import_neither_the_kernel_package_nor_the_report():
+    found = layering()
+    assert not found, f"{len(found)} imports break the layering of src/uavcas:\n" + "\n".join(found)

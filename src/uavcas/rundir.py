@@ -97,7 +97,7 @@ class ForwardingEpoch(_Strict):
 
     `detours["victim>bs"]`: the switches a wormhole detour carries the victim's frames to bs
     through (victim first), and bs's frames back in reverse, on alias MACs outside `next_hop`
-    (`emulation.controller`); absent in runs made before detours were logged.
+    (`network.forwarding`); absent in runs made before detours were logged.
     """
 
     t_begin_unix: float

@@ -31,7 +31,7 @@ import uavcas
 from helpers.campaign_runs import cli, free_port, services, write_manifest
 from helpers.root_campaigns import WINDOW_S
 from uavcas.emulation import kernel
-from uavcas.emulation.naming import RUN_ROOT
+from uavcas.network.naming import RUN_ROOT
 
 pytestmark = [pytest.mark.root, pytest.mark.slow]
 

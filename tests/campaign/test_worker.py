@@ -4,8 +4,13 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import pytest
+
+from helpers.fakerun import realize_stub
+from uavcas.campaign import worker
 from uavcas.campaign.retry import Retries
 from uavcas.campaign.worker import WorkerRequest, WorkerResult, realize_in_child
+from uavcas.rundir import RunDir
 
 
 @dataclass
@@ -39,3 +44,19 @@ def test_a_child_over_its_limit_is_stopped(tmp_path):
     # an invalid scenario, so even a child that got further than its start-up would create nothing
     res = realize_in_child(_req(tmp_path, "benign-3-1-image-logdist-adaptive-ellipse-30-95"), limit_s=0.01)
     assert not res.ok and res.exit_status == 124 and "did not finish" in res.error
+
+
+@pytest.mark.parametrize("exit_status", [0, 1])
+def test_the_worker_audits_a_run_that_finished_and_only_that(tmp_path, monkeypatch, exit_status):
+    """The runner does not audit: the worker does after it, and the campaign's fidelity policy
+    reads the verdict it leaves in run.json."""
+    monkeypatch.setattr(worker, "preflight", lambda p, out: None)
+    monkeypatch.setattr(worker, "probe_kernel", lambda: (None, None))
+    monkeypatch.setattr(worker, "realize", realize_stub(exit_status))
+    res = worker.realize_request(_req(tmp_path, "benign-3-1-image-logdist-adaptive-random-30-95"))
+    rd = RunDir(tmp_path / "r")
+    assert res.ok == (exit_status == 0) and res.exit_status == exit_status
+    if exit_status == 0:
+        assert rd.fidelity_json.exists() and rd.read_info().fidelity.verdict == "pass"
+    else:
+        assert not rd.fidelity_json.exists() and rd.read_info().fidelity is None

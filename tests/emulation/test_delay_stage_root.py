@@ -14,8 +14,9 @@ from pathlib import Path
 import pytest
 
 from uavcas.diagnostics import selftest
-from uavcas.emulation import kernel, new_prefix, nfqdelay
+from uavcas.emulation import kernel, nfqdelay
 from uavcas.emulation.emulation import Emulation
+from uavcas.network.naming import new_prefix
 from uavcas.twin import model
 
 pytestmark = pytest.mark.root
@@ -87,7 +88,7 @@ def test_control_protocol(impl, tmp_path):
 
 def test_a_real_run_is_audited(tmp_path):
     from uavcas.emulation.runner import RunOptions, realize
-    from uavcas.fidelity import read_fidelity
+    from uavcas.fidelity import audit_run, read_fidelity
     from uavcas.rundir import RunDir
 
     p = _plan(delay_ms=2.0)
@@ -96,7 +97,9 @@ def test_a_real_run_is_audited(tmp_path):
     art = realize(p, tmp_path / "r", RunOptions(n_images=4))
     assert art.exit_status == 0, art.exit_reason
     rd = RunDir(art.out_dir)
-    info = rd.read_info()
+    assert not rd.fidelity_json.exists() and rd.read_info().fidelity is None  # the runner does not audit
+    info = audit_run(rd.root)  # its callers do: `uavcas run`, the campaign worker
+    assert info == rd.read_info()
     f = read_fidelity(rd.root)
     assert f is not None and info.fidelity is not None and info.fidelity.verdict == f.verdict
     assert info.fidelity.delay_error_p99_ms == f.delay_error_p99_ms
@@ -154,7 +157,7 @@ def test_attack_tables_coming_and_going_lose_no_frame_the_delay_stage_holds():
     import threading
 
     from uavcas.attacks import blackhole
-    from uavcas.emulation.controller import Detour
+    from uavcas.network.forwarding import Detour
 
     p = _plan(rate_mbps=2.0)
     with Emulation(p, prefix=new_prefix()) as emu:

@@ -10,10 +10,10 @@ import re
 
 import pytest
 
-from uavcas.emulation.controller import Detour, compute
 from uavcas.emulation.fabric import Fabric, update_order
 from uavcas.emulation.hosts import HostSpec
-from uavcas.emulation.naming import Naming
+from uavcas.network.forwarding import Detour, compute
+from uavcas.network.naming import Naming
 
 FDB_LINE = re.compile(r"fdb (replace|del) (\S+) dev (\S+) master(?: static)?")
 

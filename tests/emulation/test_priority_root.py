@@ -7,7 +7,8 @@ import subprocess
 
 import pytest
 
-from uavcas.emulation import cleanup, new_prefix, priority
+from uavcas.emulation import cleanup, priority
+from uavcas.network.naming import new_prefix
 
 pytestmark = pytest.mark.root
 

@@ -21,8 +21,8 @@ from uavcas.diagnostics import selftest
 from uavcas.diagnostics.checks import HopConfig, loss_check
 from uavcas.emulation import cleanup, kernel
 from uavcas.emulation.emulation import Emulation
-from uavcas.emulation.naming import Naming, new_prefix
 from uavcas.emulation.probe import CGROUP_ROOT
+from uavcas.network.naming import Naming, new_prefix
 from uavcas.testing.handmade_plans import link, nodes, plan, window
 
 pytestmark = pytest.mark.root

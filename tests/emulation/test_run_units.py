@@ -13,10 +13,10 @@ from uavcas.attacks.blackhole import switch_ports
 from uavcas.cli import app
 from uavcas.emulation import preflight as preflight_mod
 from uavcas.emulation.attacks import AttackExecutor
-from uavcas.emulation.controller import Detour
-from uavcas.emulation.naming import check_prefix
 from uavcas.emulation.preflight import prepare_out_dir
 from uavcas.emulation.runner import schedule
+from uavcas.network.forwarding import Detour
+from uavcas.network.naming import check_prefix
 
 CONFIG = "dos=1000-5-2-image-logdist-adaptive-random-30-95"
 
@@ -92,7 +92,8 @@ def test_out_dir_that_merely_holds_a_run_file_name_is_refused_and_untouched(tmp_
 
 
 def test_out_dir_of_a_live_run_or_of_two_runs_is_refused(tmp_path, monkeypatch):
-    from uavcas.emulation import cleanup, naming
+    from uavcas.emulation import cleanup
+    from uavcas.network import naming
 
     monkeypatch.setattr(naming, "RUN_ROOT", tmp_path / "registry")
     out = tmp_path / "r"

@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 from helpers.fidsynth import T0, Traffic, build, plan, run_info
-from uavcas.emulation.shaping import queue_limit_pkts
-from uavcas.fidelity import Tolerances, audit, read_fidelity, write_fidelity
+from uavcas.fidelity import Tolerances, audit, audit_run, read_fidelity, write_fidelity
 from uavcas.fidelity.model import SCHEMA_VERSION
+from uavcas.network.queues import queue_limit_pkts
 from uavcas.rundir import RunDir, WindowApply
 
 
@@ -182,6 +182,17 @@ def test_write_fidelity_writes_the_file_and_the_run_json_summary(tmp_path):
     s = RunDir(rd.root).read_info().fidelity
     assert s.verdict == f.verdict == "pass" and s.delay_error_p99_ms == f.delay_error_p99_ms
     assert read_fidelity(tmp_path / "nowhere") is None
+
+
+def test_audit_run_writes_the_audit_or_records_why_it_could_not(tmp_path):
+    rd = build(tmp_path / "ok", plan(), _steady(n=80))
+    info = audit_run(rd.root)
+    assert info == RunDir(rd.root).read_info() and info.fidelity.verdict == read_fidelity(rd.root).verdict == "pass"
+    broken = build(tmp_path / "broken", plan(), _steady(n=80))
+    broken.forwarding_jsonl.write_text("not a record\n")
+    info = audit_run(broken.root)  # the audit fails; the run stays, with the error in run.json
+    assert info.fidelity.verdict == "error" and "forwarding.jsonl:1" in info.fidelity.error
+    assert not broken.fidelity_json.exists() and info.exit_status == 0
 
 
 def test_one_set_of_tolerances_for_every_swarm_size(tmp_path):

@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 
 from helpers.fidsynth import link, plan
-from uavcas.emulation.shaping import netem_limit_pkts, queue_limit_pkts
 from uavcas.fidelity.inforce import port_shaping
 from uavcas.flows.follow import Timeline
+from uavcas.network.queues import netem_limit_pkts, queue_limit_pkts
 from uavcas.rundir import ForwardingEpoch
 from uavcas.twin.model import Window
 

@@ -134,7 +134,7 @@ def test_logged_forwarding_overrides_the_plan():
 def test_a_logged_wormhole_detour_gives_the_victims_frames_their_next_hops_and_only_them():
     # The table sends uav1 <-> bs0 over their direct link; the detour carries uav1's frames to
     # bs0 (and bs0's back) through uav0 and uav2 on alias MACs, outside the table
-    # (emulation.controller). A medium run's audit, reading the table alone, chained detoured
+    # (network.forwarding). A medium run's audit, reading the table alone, chained detoured
     # frames from the first switch straight to the last and left the middle ones orphaned.
     path = ["uav1", "uav0", "uav2", "bs0"]
     tl = Timeline.from_epochs(PLAN, [

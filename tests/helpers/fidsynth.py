@@ -15,8 +15,8 @@ from pathlib import Path
 
 import numpy as np
 
-from uavcas.emulation.controller import compute
 from uavcas.fidelity import fifo
+from uavcas.network.forwarding import compute
 from uavcas.rundir import ForwardingEpoch, RunDir, RunInfo
 from uavcas.twin.model import Link, Node, Plan, Route, Window
 

@@ -9,9 +9,9 @@ from __future__ import annotations
 import numpy as np
 
 from helpers.pcapgen import T0
-from uavcas.emulation.controller import compute
 from uavcas.flows.follow import Timeline
 from uavcas.flows.packets import COLUMNS, QUOTE_COLUMNS, PacketTable, address_to_words, empty_columns
+from uavcas.network.forwarding import compute
 from uavcas.twin.model import Link, Node, Plan, Route, Window
 
 NAMES = ["uav0", "uav1", "uav2", "bs0"]

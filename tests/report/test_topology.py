@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from uavcas.report.figure import plt
+from uavcas.figure import plt
 from uavcas.report.topology import attack_start_figure, disconnected_uavs, draw_window, window_at
 from uavcas.twin.model import Route
 from uavcas.twin.plan import plan as make_plan

@@ -11,8 +11,8 @@ from sklearn.preprocessing import StandardScaler
 
 from uavcas import seeding
 from uavcas.atomic import atomic_write_text
+from uavcas.figure import plt, save_png
 from uavcas.flows.standards import DEFAULT_STANDARD, feature_columns
-from uavcas.report.figure import plt, save_png
 
 from .diversity import class_order
 

@@ -30,10 +30,10 @@ from uavcas.traffic.payloads import PAYLOAD_NAMES
 
 if TYPE_CHECKING:
     from uavcas.emulation.apps.procs import Proc
-    from uavcas.emulation.controller import Detour
     from uavcas.events import AttackRecord
     from uavcas.flows.packets import PacketTable
     from uavcas.labels.attacklog import AttackLog, AttackWindow
+    from uavcas.network.forwarding import Detour
     from uavcas.twin.model import Attack, LinkOverride, Plan, Window
 
 
@@ -239,7 +239,7 @@ class AttackFamily(ABC):
         pass
 
     def overrides(self, ex: "AttackExecutor", attack: "Attack", window: "Window") -> list["Detour"]:
-        """Forwarding detours (`emulation.controller.Detour`) while the attack is active."""
+        """Forwarding detours (`network.forwarding.Detour`) while the attack is active."""
         return []
 
     def shaping_overrides(self, ex: "AttackExecutor", attack: "Attack", window: "Window") -> list["LinkOverride"]:

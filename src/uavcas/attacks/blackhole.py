@@ -30,7 +30,7 @@ from typing import TYPE_CHECKING, Any, Literal
 import numpy as np
 
 from uavcas.emulation import kernel
-from uavcas.emulation.naming import Naming
+from uavcas.network.naming import Naming
 from uavcas.scenario_model import SpecBase
 
 from .base import AttackExecutor, AttackFamily, ScheduleDraw, TruthContext

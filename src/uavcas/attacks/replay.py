@@ -44,9 +44,9 @@ from pydantic import Field
 
 from uavcas.emulation import kernel
 from uavcas.emulation.apps.procs import spawn, wait_for
-from uavcas.emulation.naming import Naming
 from uavcas.flows.packets import address_to_words
 from uavcas.labels.attacklog import AttackLog
+from uavcas.network.naming import Naming
 from uavcas.scenario_model import ScenarioError, SpecBase, choice, int_field
 from uavcas.vocabulary import SEQ_MODES, SeqMode
 

@@ -10,7 +10,7 @@
 - executor: at start the current window is re-applied with the detour: both directions of the
   victim <-> BS traffic (the victim's MAC as source or destination) take the detour's hops
   through the attacker's switch, and nothing else does (alias destination MACs, see
-  `emulation.controller`); at stop it is re-applied without. The detour's links are the plan's,
+  `network.forwarding`); at stop it is re-applied without. The detour's links are the plan's,
   shaped like any other;
 - truth (effect `wormhole`, label source "wormhole-detour"): a packet to or from a victim seen at
   the attacker's switch inside [start, stop), in a window where the plan has the detour: it was
@@ -24,7 +24,7 @@ from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
-from uavcas.emulation.controller import Detour
+from uavcas.network.forwarding import Detour
 from uavcas.scenario_model import SpecBase
 
 from .base import AttackExecutor, AttackFamily, ScheduleDraw, TruthContext

@@ -8,7 +8,7 @@ import numpy as np
 from matplotlib.ticker import NullFormatter
 
 from uavcas import seeding
-from uavcas.report.figure import plt, save_png
+from uavcas.figure import plt, save_png
 
 from .layer1_pathloss import Layer1Result
 from .layer2_mobility import Layer2Result, sim_track

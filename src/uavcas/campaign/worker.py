@@ -29,6 +29,7 @@ from pydantic import BaseModel, ConfigDict, ValidationError
 from uavcas.atomic import atomic_write_text
 from uavcas.emulation.preflight import preflight, probe_kernel
 from uavcas.emulation.runner import RunOptions, realize
+from uavcas.fidelity import audit_run
 from uavcas.twin.plan import plan
 
 TERM_GRACE_S = 30.0  # after SIGTERM, the child's teardown gets this long before SIGKILL
@@ -58,7 +59,8 @@ class WorkerResult(BaseModel):
 
 
 def realize_request(req: WorkerRequest) -> WorkerResult:
-    """Plan, check and realise one scenario into `req.out_dir` (in this process; needs root)."""
+    """Plan, check, realise and audit one scenario into `req.out_dir` (in this process; needs root).
+    The audit's verdict in run.json is what the campaign's fidelity policy reads (`task.execute_entry`)."""
     p = plan(req.config, seed=req.seed, windows=req.windows, window_s=req.window_s, profile=req.profile,
              episodes=req.episodes)
     out = Path(req.out_dir)
@@ -69,6 +71,8 @@ def realize_request(req: WorkerRequest) -> WorkerResult:
     if reason:
         return WorkerResult(ok=False, exit_status=2, error=reason)
     art = realize(p, out, RunOptions(mavlink_signing=req.mavlink_signing), features=feats)
+    if art.exit_status == 0:  # stage 2b, as `uavcas run` makes it: fidelity.json and its summary in run.json
+        audit_run(art.out_dir)
     return WorkerResult(ok=art.exit_status == 0, exit_status=art.exit_status,
                         error="" if art.exit_status == 0 else f"run exited {art.exit_status}: {art.exit_reason}")
 

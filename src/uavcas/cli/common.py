@@ -15,12 +15,12 @@ from uavcas.atomic import UnsafeOutput, atomic_path, atomic_write_bytes, atomic_
 from uavcas.dataset.external import ExternalFormatError
 from uavcas.dataset.store import DatasetError
 from uavcas.dataset.uavcas_csv import CsvFormatError
-from uavcas.emulation.naming import check_prefix as check
 from uavcas.flows import CaptureError
 from uavcas.flows.assemble import VIEWS
 from uavcas.flows.standards import DEFAULT_STANDARD, names, standards
 from uavcas.flows.termination import TERMINATIONS
 from uavcas.labels import LabelError
+from uavcas.network.naming import check_prefix as check
 from uavcas.scenario import ScenarioError
 from uavcas.schema import EPISODE_VIEW
 from uavcas.twin.plan import plan as make_plan
@@ -110,7 +110,7 @@ def prefix_option(help: str) -> Any:
 
 
 def prefix_or_fail(prefix: str | None) -> str | None:
-    """A `--prefix` the emulation can use (`uavcas.emulation.naming`), or a one-line error (exit 2)."""
+    """A `--prefix` the emulation can use (`uavcas.network.naming`), or a one-line error (exit 2)."""
     if prefix is not None:
         try:
             check(prefix)

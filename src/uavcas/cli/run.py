@@ -16,6 +16,7 @@ from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 from uavcas.emulation.preflight import preflight, probe_kernel
 from uavcas.emulation.runner import RunOptions, realize
 from uavcas.events import AttackLogged, AttackRate, RunDone, SetupDone, WindowApplied
+from uavcas.fidelity import audit_run
 from uavcas.traffic.apps import MAVLINK_PAYLOADS
 
 from .audit import fidelity_line
@@ -72,7 +73,7 @@ def run_cmd(
         raise fail(reason)
 
 
-    opts = RunOptions(prefix=prefix, think_mean_s=think_s, audit=audit, mavlink_signing=mavlink_signing,
+    opts = RunOptions(prefix=prefix, think_mean_s=think_s, mavlink_signing=mavlink_signing,
                       **({"video_kbps": video_kbps} if video_kbps is not None else {}))
     console.print(f"[bold]{p.config}[/] seed={seed}: {len(p.nodes)} nodes, {len(p.windows)} windows x "
                   f"{p.window_s:g} s, shaper {feats.shaper} -> {out}", highlight=False)
@@ -109,6 +110,8 @@ def run_cmd(
         started = time.time()
         try:
             art = realize(p, out, opts, on_event=on_event, features=feats)
+            if audit and art.exit_status == 0:  # stage 2b: fidelity.json and its summary in run.json
+                art.run_info = audit_run(art.out_dir)
         except KeyboardInterrupt:
             raise fail("interrupted; everything the run created was removed", code=130) from None
         except Exception as e:

@@ -17,8 +17,8 @@ from pathlib import Path
 
 from uavcas.atomic import atomic_write_text
 from uavcas.emulation.emulation import Emulation
-from uavcas.emulation.naming import new_prefix
 from uavcas.emulation.probe import Features, probe
+from uavcas.network.naming import new_prefix
 from uavcas.twin import model as m
 
 from . import selftest

@@ -34,9 +34,9 @@ from typing import TYPE_CHECKING, Any
 
 from uavcas.attacks import family
 from uavcas.events import AttackRecord, AttackStart, AttackStop, read_attack_records
+from uavcas.network.forwarding import Detour
 
 from .apps.procs import Proc
-from .controller import Detour
 
 if TYPE_CHECKING:
     from uavcas.twin.model import Attack, Plan, Window

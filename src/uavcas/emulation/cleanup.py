@@ -22,8 +22,9 @@ import time
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
+from uavcas.network.naming import RUN_ROOT, Naming, check_prefix
+
 from . import kernel
-from .naming import RUN_ROOT, Naming, check_prefix
 
 
 @dataclass

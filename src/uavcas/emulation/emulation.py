@@ -25,13 +25,13 @@ from typing import TYPE_CHECKING, Literal
 if TYPE_CHECKING:  # only typed against the plan: importing uavcas.twin pulls the whole planner
     from uavcas.twin.model import Link, LinkOverride, Plan
 
+from uavcas.network.forwarding import Detour, Forwarding, compute
+from uavcas.network.naming import Naming, new_prefix
 from uavcas.rundir import ForwardingEpoch
 
 from . import cleanup, kernel
-from .controller import Detour, Forwarding, compute
 from .fabric import Fabric, LinkKey, SwitchPorts, key
 from .hosts import IPV6_OFF, Hosts, HostSpec
-from .naming import Naming, new_prefix
 from .probe import Features, probe
 from .shaping import Shape, Shaper, ShapingRecord, make_shaper
 
@@ -198,7 +198,7 @@ class Emulation:
                     overrides: Sequence["LinkOverride"] = ()) -> WindowReport:
         """Make `links` (and only them) active with their shaping (`overrides`: directions shaped
         otherwise, see `shapes`), then forwarding for them, with the given wormhole detours
-        diverting (`controller`).
+        diverting (`uavcas.network.forwarding`).
 
         With `keep_links_up` set, links that leave the window stay up (no forwarding entry
         points at them, so no frame reaches them; taking a port down waits for an RCU grace

@@ -5,7 +5,7 @@ namespace); `l<i>-<j>` is its port to switch j (peer `l<j>-<i>`), whose egress s
 direction i -> j. Switch-to-switch veths are created *down* with learning and all flooding off
 and their qdiscs in place (configuring ports before they come up is what keeps a bridge mesh
 from melting into a broadcast storm, EMULATION-NOTES section 8), then toggled per window at
-both ends. Forwarding is only the static FDB from `controller`; no STP (its 2 s+ forward delay
+both ends. Forwarding is only the static FDB from `uavcas.network.forwarding`; no STP (its 2 s+ forward delay
 cannot follow 5 s windows).
 
 Every step is one batched call per tool: `ip -batch`, `bridge -batch`, `tc -batch`, `nft -f`.
@@ -19,10 +19,11 @@ import time
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 
+from uavcas.network.forwarding import Detour, Forwarding
+from uavcas.network.naming import Naming
+
 from . import kernel
-from .controller import Detour, Forwarding
 from .hosts import HostSpec
-from .naming import Naming
 from .shaping import Shaper
 
 LinkKey = tuple[int, int]  # (i, j) with i < j: an undirected switch-to-switch link
@@ -197,7 +198,7 @@ class Fabric:
                 want[(i, self.alias_mac(alias))] = Naming.link_port(i, self.by_name[nh].index)
         return want
 
-    # wormhole detours (see controller) -------------------------------------------------------
+    # wormhole detours (see uavcas.network.forwarding) ------------------------------------------
     def alias_mac(self, alias: str) -> str:
         """MAC of alias 'a>b' (frames from a to b on a detour): locally administered, 02:77:..."""
         a, b = (self.by_name[x].index for x in alias.split(">"))

@@ -18,8 +18,9 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
+from uavcas.network.naming import Naming
+
 from . import kernel
-from .naming import Naming
 from .probe import CGROUP_ROOT
 
 IPV6_OFF = {"net.ipv6.conf.all.disable_ipv6": 1, "net.ipv6.conf.default.disable_ipv6": 1,

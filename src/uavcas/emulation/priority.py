@@ -36,9 +36,9 @@ from contextlib import contextmanager
 from pathlib import Path
 
 from uavcas.atomic import atomic_write_text
+from uavcas.network.naming import RUN_ROOT
 
 from . import cleanup
-from .naming import RUN_ROOT
 
 DELAY_RT_PRIORITY = 10
 SOFTIRQ_RT_PRIORITY = 9

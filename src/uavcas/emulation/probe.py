@@ -14,8 +14,9 @@ import subprocess
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
+from uavcas.network.naming import new_prefix
+
 from . import kernel
-from .naming import new_prefix
 
 CGROUP_ROOT = Path("/sys/fs/cgroup")
 

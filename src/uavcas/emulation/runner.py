@@ -16,6 +16,9 @@ sessions so Ctrl-C reaches only us and we stop them in order. After kill -9, `ua
 removes the run by its registry entry. The run directory's small files (attacks.jsonl,
 shaping.jsonl, run.json: `uavcas.rundir.RunDir`) are written atomically in every case, run.json last, with the exit
 status (0 ok, 130 SIGINT, 128+n other signals, 1 error).
+
+The runner does not audit the run: its callers do, after it returns (`uavcas.fidelity.audit_run`,
+stage 2b: `uavcas run` and the campaign worker), so this package does not import the audit.
 """
 
 from __future__ import annotations
@@ -34,7 +37,7 @@ from typing import TYPE_CHECKING
 from uavcas.atomic import atomic_write_text
 from uavcas.attacks import family
 from uavcas.events import AttackLogged, Progress, RunDone, SetupDone, WindowApplied, attack_log_text
-from uavcas.fidelity import record_audit_error, write_fidelity
+from uavcas.network.naming import new_prefix
 from uavcas.rundir import CaptureRecord, RunDir, RunInfo
 from uavcas.traffic.base import AppOptions
 from uavcas.traffic.benign import BenignTraffic
@@ -45,7 +48,6 @@ from .apps import capture
 from .apps.versions import tool_versions
 from .attacks import AttackExecutor
 from .emulation import Emulation
-from .naming import new_prefix
 from .preflight import prepare_out_dir
 from .priority import CONTROL_RT_PRIORITY, SOFTIRQ_RT_PRIORITY, softirq_boost, urgent
 from .sampling import WindowSampler
@@ -67,7 +69,6 @@ class RunOptions:
     keep_logs: bool = True  # copy tool logs (curl results, stderr) to OUT/logs
     urgent: bool = True  # window changes and attack actions at real-time priority (emulation.priority)
     softirq_boost: bool = True  # the kernel's softirq threads at real-time priority during the run
-    audit: bool = True  # audit a finished run's fidelity (uavcas.fidelity): fidelity.json + run.json summary
 
 
 @dataclass
@@ -141,18 +142,7 @@ def realize(plan: "Plan", out_dir: str | Path, options: RunOptions = RunOptions(
     finally:
         _write_outputs(st)
         notify(RunDone(exit_status=st.exit_status, reason=st.exit_reason))
-    if st.exit_status == 0 and options.audit:
-        _audit(st)
     return st.artifacts()
-
-
-def _audit(st: _State) -> None:
-    """The run's fidelity audit (default tolerances for its swarm); a failure to audit is recorded."""
-    try:
-        write_fidelity(st.out)
-    except Exception as e:  # the run itself succeeded: keep it, and say the audit could not be made
-        record_audit_error(st.out, f"{type(e).__name__}: {e}")
-    st.info = RunDir(st.out).read_info()
 
 
 class _State:

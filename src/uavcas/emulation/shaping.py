@@ -27,7 +27,6 @@ them at every window change and logs the deltas per window in shaping.jsonl.
 from __future__ import annotations
 
 import json
-import math
 import select
 import subprocess
 import sys
@@ -37,14 +36,14 @@ from collections.abc import Iterable, Sequence
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
+from uavcas.network.queues import MTU_FRAME_B, netem_limit_pkts, queue_limit_pkts
+
 from . import kernel, nfqdelay
 from .counters import NFT_TABLE, PortCounters, read_link_drops, read_nft_counters, read_qdisc_counters
 from .pacing import Pacing
 from .readback import read_htb_classes, read_nft_losses
 
 LOSS_SCALE = 1_000_000  # loss resolution: 1e-6
-QUEUE_MS = 50.0  # pfifo sized to ~50 ms at the link rate: no bufferbloat, room for TCP
-MTU_FRAME_B = 1514  # the largest Ethernet frame the fabric carries (1500 B MTU): queues and HTB quanta in its units
 DEFAULT_RATE_MBPS = 1000.0
 PACE_BURST_B = 1600  # the delay stage's bucket: one frame, the depth of tc's default HTB class (the link as before)
 
@@ -109,16 +108,6 @@ def shaping_jsonl(records: Iterable[ShapingRecord]) -> str:
     return "".join(json.dumps(r.to_dict(), sort_keys=True) + "\n" for r in records)
 
 
-def queue_limit_pkts(rate_mbps: float) -> int:
-    return max(16, min(2000, math.ceil(rate_mbps * 1e6 * QUEUE_MS / 1000 / (MTU_FRAME_B * 8))))
-
-
-def full_queue_s(rate_mbps: float) -> float:
-    """How long a full queue (`queue_limit_pkts` MTU frames) takes to drain at `rate_mbps`: the
-    longest a frame can wait in a port's queue."""
-    return queue_limit_pkts(rate_mbps) * MTU_FRAME_B * 8 / (rate_mbps * 1e6)
-
-
 def rate_bit(rate_mbps: float) -> int:
     return max(8, round(rate_mbps * 1e6))
 
@@ -141,11 +130,6 @@ def pacing(rate_mbps: float) -> Pacing:
 
 def pfifo_line(verb: str, port: str, rate_mbps: float) -> str:
     return f"qdisc {verb} dev {port} parent 1:1 handle 10: pfifo limit {queue_limit_pkts(rate_mbps)}"
-
-
-def netem_limit_pkts(rate_mbps: float, delay_ms: float) -> int:
-    """netem's limit also holds the packets "on the wire" during the delay: add rate x delay."""
-    return queue_limit_pkts(rate_mbps) + math.ceil(rate_mbps * 1e6 * delay_ms / 1000 / (MTU_FRAME_B * 8))
 
 
 def netem_line(verb: str, port: str, delay_ms: float, loss: float, rate_mbps: float) -> str:

@@ -22,8 +22,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from uavcas.emulation.shaping import netem_limit_pkts, queue_limit_pkts
 from uavcas.flows.follow import Timeline
+from uavcas.network.queues import netem_limit_pkts, queue_limit_pkts
 from uavcas.twin.model import Plan
 
 
@@ -44,7 +44,7 @@ class PortShaping:
         return np.searchsorted(self.t_s, t_s, side="right") - 1
 
     def queue_limit_pkts(self, k: np.ndarray, netem: bool = False) -> np.ndarray:
-        """The queue limit of settings k, as the shaper sized it from the rate (`emulation.shaping`):
+        """The queue limit of settings k, as the shaper sized it from the rate (`network.queues`):
         the pfifo's, or with netem, netem's own (it also holds the frames in their delay)."""
         if netem:
             return np.array([netem_limit_pkts(float(r), float(d)) for r, d in zip(self.rate_mbps[k], self.delay_ms[k])],

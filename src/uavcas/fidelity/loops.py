@@ -1,7 +1,7 @@
 """Which packets that came back to a switch looped, and which were re-routed in flight.
 
 A switch forwards a frame by the table in force when the frame reaches it (the plan's
-semantics: one static table per window, `emulation.controller`). A frame queued on a link under
+semantics: one static table per window, `network.forwarding`). A frame queued on a link under
 the old table can leave the link after a window change, and the new table can send it back
 through a switch it had crossed. In a 20-UAV DDoS run, flood SYNs queued 34 ms on
 uav8 -> uav18 reached uav18 after the change and went uav18 -> uav6 -> uav8 -> bs1; in a 100-UAV

@@ -1,4 +1,7 @@
-"""fidelity.json beside a run, and its summary in run.json."""
+"""fidelity.json beside a run, and its summary in run.json.
+
+`audit_run` is stage 2b as the run command and the campaign worker make it, after `realize`: the
+runner itself does not audit, so the kernel package does not import this one."""
 
 from __future__ import annotations
 
@@ -6,7 +9,7 @@ from pathlib import Path
 
 from uavcas.atomic import atomic_write_text
 from uavcas.flows.packets import PacketTable
-from uavcas.rundir import FidelitySummary, RunDir, RunDirError
+from uavcas.rundir import FidelitySummary, RunDir, RunDirError, RunInfo
 
 from .audit import audit
 from .model import Fidelity, Tolerances, summary
@@ -20,6 +23,17 @@ def write_fidelity(run_dir: str | Path, tolerances: Tolerances | None = None,
     atomic_write_text(rd.fidelity_json, f.to_json())
     _set_summary(rd, summary(f))
     return f
+
+
+def audit_run(run_dir: str | Path) -> RunInfo | None:
+    """Audit a run that finished (default tolerances for its swarm): `write_fidelity`, or, where the
+    audit cannot be made, the error in run.json (verdict "error"); the run itself is kept either
+    way. Returns the run.json it leaves (None where there is none)."""
+    try:
+        write_fidelity(run_dir)
+    except Exception as e:  # the run itself succeeded: keep it, and say the audit could not be made
+        record_audit_error(run_dir, f"{type(e).__name__}: {e}")
+    return RunDir(Path(run_dir)).read_info()
 
 
 def record_audit_error(run_dir: str | Path, error: str) -> None:

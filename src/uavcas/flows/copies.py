@@ -38,7 +38,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from uavcas.emulation.shaping import MTU_FRAME_B, full_queue_s
+from uavcas.network.queues import MTU_FRAME_B, full_queue_s
 from uavcas.twin.model import Plan
 
 EARLY_S = 0.001  # a step may be this much shorter than the planned delay (pcap stamps, timer slack)

@@ -49,7 +49,7 @@ from pathlib import Path
 
 import numpy as np
 
-from uavcas.emulation.controller import compute
+from uavcas.network.forwarding import compute
 from uavcas.rundir import ForwardingEpoch, RunDir, RunDirError
 from uavcas.twin.model import Plan
 

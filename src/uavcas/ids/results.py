@@ -20,7 +20,7 @@ import numpy as np
 import pandas as pd
 
 from uavcas.atomic import atomic_write_text
-from uavcas.report.figure import plt, save_png
+from uavcas.figure import plt, save_png
 
 from .leaderboard import leaderboard_markdown, summarize
 from .protocols import ProtocolResult

@@ -1,2 +1,2 @@
-"""report: the dataset report page and topology figures; `figure` is the one place matplotlib is
-set up (no display, atomic PNGs) for every package that draws."""
+"""report: the dataset report page and its figures (topology, fidelity, distributions); they draw
+through `uavcas.figure`, the one place matplotlib is set up for every package that draws."""

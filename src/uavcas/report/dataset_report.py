@@ -24,6 +24,7 @@ from uavcas.dataset.dictionary import describe
 from uavcas.dataset.parquet import read_flows
 from uavcas.dataset.runs import class_table, dataset_runs
 from uavcas.dataset.store import card_standard, read_card
+from uavcas.figure import png_data_uri
 from uavcas.labels.label import rule_summary
 from uavcas.schema import CLASSES
 from uavcas.twin.load import read_plan
@@ -31,7 +32,6 @@ from uavcas.twin.load import read_plan
 from .distributions import SHOWN_EPISODE_FEATURES, SHOWN_FEATURES, counts_frame, feature_figure
 from .fidelity import COLUMNS as FIDELITY_HELP
 from .fidelity import fidelity_figure, fidelity_frame, read_run_fidelity
-from .figure import png_data_uri
 from .topology import attack_start_figure
 
 TEMPLATE = "report.html.j2"

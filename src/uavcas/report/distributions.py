@@ -14,7 +14,7 @@ import numpy as np
 import pandas as pd
 from matplotlib.ticker import FuncFormatter, LogLocator
 
-from .figure import plt, png_data_uri
+from uavcas.figure import plt, png_data_uri
 
 # Features shown per class: time structure, volume and size, the ones the paper's figures use.
 SHOWN_FEATURES = ("Flow IAT Mean", "Flow Packets/s", "Flow Duration", "Packet Length Mean", "Total Fwd Packets",

@@ -16,8 +16,7 @@ import numpy as np
 import pandas as pd
 
 from uavcas.fidelity.model import Fidelity
-
-from .figure import plt, png_data_uri
+from uavcas.figure import plt, png_data_uri
 
 # column of the per-run table -> the sentence that explains it (shown under the table); the
 # words follow uavcas.fidelity.audit, .losses and .fifo

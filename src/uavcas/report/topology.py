@@ -9,9 +9,8 @@ from pathlib import Path
 from matplotlib.collections import LineCollection
 from matplotlib.lines import Line2D
 
+from uavcas.figure import plt, save_png
 from uavcas.twin.model import Attack, Plan, Window
-
-from .figure import plt, save_png
 
 N_MCS = 7  # 802.11a/g MCS 0..6 (uavcas.channel.mcs)
 BACKHAUL_COLOUR = "0.45"

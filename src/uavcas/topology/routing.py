@@ -26,7 +26,7 @@ tries, so over one hop it fails with probability (1 - (1 - p)^2)^2, 3.6 % at p =
 
 A wormhole adds a detour: the victim's usable link to the attacker, then the attacker's best usable
 path to the victim's BS not through the victim (its direct link to a BS allowed). Detour links are
-marked so forwarding uses them only for the victim's own traffic (`emulation.controller`).
+marked so forwarding uses them only for the victim's own traffic (`network.forwarding`).
 
 Everything is ordered by node index and ties break towards the lower index, so the result never
 depends on set or hash order.

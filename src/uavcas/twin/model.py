@@ -100,7 +100,7 @@ class Link(_Frozen):
     loss: float = Field(ge=0.0, le=1.0)
     los: bool | None = None  # sampled LOS state where the path-loss model has one (3GPP)
     # A wormhole's detour link: up and shaped like any other, but forwarding uses it only for the
-    # victim's own traffic while the attack is active (emulation.controller).
+    # victim's own traffic while the attack is active (network.forwarding).
     detour: bool = False
 
 

@@ -41,7 +41,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-from uavcas.emulation.shaping import full_queue_s
+from uavcas.network.queues import full_queue_s
 
 from .procs import Proc, spawn, wait_for
 
@@ -100,7 +100,7 @@ def parse_counters(nft_json: str) -> dict[str, int]:
 
 def quiet_after_s(hops: Sequence[tuple[float, float]]) -> float:
     """Longest time a packet can spend on a path of (delay_ms, rate_mbps) hops: each hop's delay
-    plus a full queue drained at its rate (`shaping.full_queue_s`)."""
+    plus a full queue drained at its rate (`network.queues.full_queue_s`)."""
     return QUIET_SLACK_S + sum(d / 1000 + full_queue_s(r) for d, r in hops)
 
 

@@ -1,7 +1,9 @@
 """The one place matplotlib is set up: no display (Agg), PNGs written atomically.
 
 Modules that draw import `plt` from here, so the backend is chosen before any figure exists
-(headless machines, CI and the campaign workers have no display to open).
+(headless machines, CI and the campaign workers have no display to open). A leaf: it imports
+nothing of uavcas but `atomic` (itself a leaf, the one home of file output), so the report, the
+IDS benchmark, analysis and calibration all draw through it without importing each other.
 """
 
 from __future__ import annotations

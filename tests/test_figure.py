@@ -7,7 +7,7 @@ import struct
 import matplotlib
 import pytest
 
-from uavcas.report.figure import plt, save_png
+from uavcas.figure import plt, save_png
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 
