@@ -20,6 +20,7 @@ from .base import (
     ScenarioError,
     ScheduleDraw,
     SpecBase,
+    SyntheticPackets,
     TruthContext,
 )
 from .registry import families, family, register
@@ -37,4 +38,4 @@ if _missing:
 SPECS: tuple[type[SpecBase], ...] = tuple(dict.fromkeys(f.spec for f in families()))
 
 __all__ = ["AttackExecutor", "AttackFamily", "Emitter", "EmitterContext", "SPECS", "ScenarioError", "ScheduleDraw",
-           "SpecBase", "TruthContext", "families", "family", "register"]
+           "SpecBase", "SyntheticPackets", "TruthContext", "families", "family", "register"]

@@ -77,8 +77,6 @@ class GpsSpoof(AttackFamily):
     name = "gps_spoof"
     spec = GpsSpoofSpec
     usage = "gps_spoof=<drift_mps>"
-    label_source = "gps-spoof-reports"
-    effect = "gps_spoof"
     truth_rule = ("a MAVLink GLOBAL_POSITION_INT or GPS_RAW_INT datagram from the victim first seen (at its own "
                   "switch) inside [start, stop): a position report of its spoofed GPS receiver")
     provoked_rule = "nothing (the ground station answers no position report)"

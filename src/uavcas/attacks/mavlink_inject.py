@@ -93,8 +93,6 @@ class MavlinkInject(AttackFamily):
     name = "mavlink_inject"
     spec = MavlinkInjectSpec
     usage = "mavlink_inject=<rtl|land|speed>[,mps=<m/s>][,hz=<Hz>][,n=<count>]"
-    label_source = "mavlink-injections"
-    effect = "mavlink_inject"
     truth_rule = ("a UDP packet from an attacker to a victim's MAVLink port (the autopilot's, 14550) captured "
                   "inside [start, stop) (a forged COMMAND_LONG)")
     provoked_rule = ("the victim's answers to a forged frame (its COMMAND_ACKs) on the frame's UDP 5-tuple reversed, "

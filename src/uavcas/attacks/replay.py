@@ -61,7 +61,7 @@ from .answers import (
     payload_len,
     tcp_flags_are,
 )
-from .base import AttackExecutor, AttackFamily, TruthContext
+from .base import AttackExecutor, AttackFamily, SyntheticPackets, TruthContext
 from .registry import register
 
 if TYPE_CHECKING:  # types only: the twin's and labels' package __init__s load this registry
@@ -118,8 +118,6 @@ class Replay(AttackFamily):
     name = "replay"
     spec = ReplaySpec
     usage = "replay=<buf>,<ms>,<pps>,<ttl>,<mode>"
-    label_source = "replay-injections"
-    effect = "replay"
     truth_rule = ("a packet matching an inject record (addresses, protocol, ports, IP id, TTL, TCP seq) within "
                   f"{MATCH_TOLERANCE_S:g} s of it (an injected copy; without a seq, as UDP, the nearest one)")
     provoked_rule = ("answers to an injected copy on its 5-tuple reversed: the SYN-ACK with ack = its seq + 1 (a "
@@ -231,6 +229,20 @@ class Replay(AttackFamily):
                | icmp_errors_quoting(p, made, exact=True)
                | dup_acks(p, made, ctx.followed.hop == 0))
         return ctx.spread(hit) & ~made
+
+    def synthetic_change(self, rng: np.random.Generator, packets: SyntheticPackets, made: bool) -> SyntheticPackets:
+        """Copies of 15 % of the flow's packets (at least one), each 10-500 us after its original
+        (near-zero gaps), in time order."""
+        t, size, d, flags = packets
+        k = max(1, int(0.15 * len(t)))
+        pick = np.sort(rng.choice(len(t), k, replace=False))
+        t2 = t[pick] + rng.uniform(1e-5, 5e-4, k)
+        order = np.argsort(np.concatenate([t, t2]), kind="stable")
+
+        def cat(a: np.ndarray, copies: np.ndarray) -> np.ndarray:
+            return np.concatenate([a, copies])[order]
+
+        return cat(t, t2), cat(size, size[pick]), cat(d, d[pick]), cat(flags, flags[pick])
 
 
 def dup_acks(p, copies: np.ndarray, first: np.ndarray, within_s: float = DUP_ACK_WITHIN_S) -> np.ndarray:
