@@ -25,7 +25,7 @@ from .base import (
 )
 from .registry import families, family, register
 
-_INFRA = {"answers", "base", "registry"}  # shared code, no family
+_INFRA = {"answers", "base", "registry", "tools"}  # shared code and the families' tools, no family
 for _m in pkgutil.iter_modules(__path__):
     if _m.name not in _INFRA:
         importlib.import_module(f"{__name__}.{_m.name}")

@@ -3,7 +3,7 @@
 - token `dos=<interval_us>` / `ddos=<interval_us>`: hping3's inter-packet interval, 1000 us ~
   1,000 SYN/s nominal per attacker;
 - schedule: DoS takes one attacker; DDoS 2 up to a third of the swarm (at most 4);
-- executor: one `emulation.apps.flood.Flood` per attacker: one hping3 (-S to the victim's
+- executor: one `attacks.tools.flood.Flood` per attacker: one hping3 (-S to the victim's
   HTTP port) for the whole attack, started before t0 behind a closed gate and paced from
   outside at the nominal rate (see that module); the start is logged when the gates are open
   and before the first SYN, the stop when the gates closed (no SYN leaves after it), with
@@ -33,13 +33,13 @@ from typing import TYPE_CHECKING, Any, ClassVar, Literal
 import numpy as np
 from pydantic import Field
 
-from uavcas.emulation.apps.flood import Flood, close_all, collect_all, quiet_after_s, start_all
 from uavcas.events import AttackRate
 from uavcas.scenario_model import ScenarioError, SpecBase, int_field
 
 from .answers import ANSWER_WITHIN_S, TCP_ACK, TCP_RST, TCP_SYN, answers, icmp_errors_quoting, tcp_flags_are
 from .base import AttackExecutor, AttackFamily, ScheduleDraw, SyntheticPackets, TruthContext
 from .registry import register
+from .tools.flood import Flood, close_all, collect_all, quiet_after_s, start_all
 
 if TYPE_CHECKING:  # types only: the twin's and labels' package __init__s load this registry
     from uavcas.labels.attacklog import AttackWindow

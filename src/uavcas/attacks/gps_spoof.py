@@ -15,8 +15,9 @@
   position at the attack's planned start, recorded in the plan as `lure_bearing_deg` and
   `lure_distance_m` (the area's scale: 1 km);
 - executor: no network change. `start` publishes the spoofer to the victim's autopilot
-  (`emulation.apps.mavlink.gps`: a control file in the run's apps directory, written atomically
-  with a start time LEAD_S ahead, logged as the start), `stop` publishes the stop the same way.
+  (`attacks.tools.gps_spoofer`: a control file in the run's apps directory that the autopilot's
+  receiver reads, `emulation.apps.mavlink.gps`, written atomically with a start time LEAD_S
+  ahead, logged as the start), `stop` publishes the stop the same way.
   From its logged start the victim's GLOBAL_POSITION_INT and GPS_RAW_INT report the true track
   plus an offset growing at drift_mps along the lure's bearing (capped at its distance), with the
   matching velocity and course; after its logged stop the receiver re-acquires the true signal.
@@ -43,12 +44,13 @@ import numpy as np
 from pydantic import Field
 from pymavlink.dialects.v20 import common
 
-from uavcas.emulation.apps.mavlink.gps import POSITION_MESSAGES, Spoofing, control_path, publish
+from uavcas.emulation.apps.mavlink.gps import POSITION_MESSAGES, Spoofing, control_path
 from uavcas.scenario_model import ScenarioError, SpecBase
 from uavcas.vocabulary import MAVLINK_PAYLOADS
 
 from .base import AttackExecutor, AttackFamily, ScheduleDraw, TruthContext
 from .registry import register
+from .tools.gps_spoofer import publish
 
 if TYPE_CHECKING:  # types only: the twin's and labels' package __init__s load this registry
     from uavcas.labels.attacklog import AttackWindow

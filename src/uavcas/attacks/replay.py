@@ -2,7 +2,7 @@
 
 - token `replay=<buffer>,<delay_ms>,<pps>,<ttl_dec>,<inc|rand|zero>`;
 - schedule: one attacker;
-- executor: the replayer process (`emulation.apps.replayer`) is started before t0 (scapy takes a
+- executor: the replayer process (`attacks.tools.replayer`) is started before t0 (scapy takes a
   second to import) and sees nothing of the victim until `start` mirrors the victim's host port
   to the attacker's: tc act_mirred copies every IPv4 frame the victim sends (ingress of its host
   port) and receives (egress) out of the attacker's host port, so the attacker's `eth0` sees the
@@ -154,7 +154,7 @@ class Replay(AttackFamily):
             log = ex.log_dir / f"inject-{attack.attack_id}-{attacker}.jsonl"
             log.parent.mkdir(parents=True, exist_ok=True)
             log.write_text("")
-            argv = [sys.executable, "-m", "uavcas.emulation.apps.replayer", "--iface", Naming.HOST_IF,
+            argv = [sys.executable, "-m", "uavcas.attacks.tools", "replayer", "--iface", Naming.HOST_IF,
                     "--victim", ex.ip(attack.victims[0]), "--attacker-ip", ex.ip(attacker),
                     "--buffer", str(s.buffer_pkts), "--delay-ms", str(float(s.delay_ms)),
                     "--rate-pps", str(float(s.rate_pps)), "--ttl-dec", str(s.ttl_dec),

@@ -6,7 +6,7 @@ hping3 with corrected intervals ran away on a late schedule (1,000 -> 2,500 pps)
 restart reused source ports (one "flow" spanning separate bursts). Instead:
 
 * hping3 is started once per attacker *before* t0 (`prepare`), with `-i 3600`: it never sends
-  on its own. A pacer (`python -m uavcas.emulation.apps.flood pace`, one per hping3) sends it
+  on its own. A pacer (`python -m uavcas.attacks.tools flood pace`, one per hping3) sends it
   SIGALRM at absolute deadlines t_go + k / pps: each signal is one SYN. A standard signal does
   not queue, so the pacer signals only when the previous one was consumed (the pidfd's
   process no longer has SIGALRM pending) and catches up after a late wake-up, never faster
@@ -41,9 +41,8 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
+from uavcas.emulation.apps.procs import Proc, spawn, wait_for
 from uavcas.emulation.shaping import full_queue_s
-
-from .procs import Proc, spawn, wait_for
 
 PACE_FLOOR_US = 100  # at most 10,000 SYN/s per attacker: each SYN costs hping3 + pacer a wake-up
 HPING_IDLE_S = 3600  # hping3's own interval: longer than any run, so only the pacer makes it send
@@ -179,7 +178,7 @@ class Flood:
         with open(err_path, "wb") as err:
             # --ns only names the run (`ps` shows whose pacer it is); it exits with its runner
             # (stdin EOF) or its hping3 (pidfd)
-            pacer = subprocess.Popen([sys.executable, "-m", "uavcas.emulation.apps.flood", "pace", "--pid", str(pid),
+            pacer = subprocess.Popen([sys.executable, "-m", "uavcas.attacks.tools", "flood", "pace", "--pid", str(pid),
                                       "--pps", str(1e6 / self.interval_us), "--ns", self.emu.ns(self.attacker)],
                                      stdin=subprocess.PIPE,
                                      stdout=subprocess.PIPE, stderr=err, start_new_session=True)
@@ -333,7 +332,8 @@ def pace(pid: int, pps: float, commands: int = 0, out=None) -> dict:
 
 
 def main(argv: list[str] | None = None) -> None:
-    ap = argparse.ArgumentParser(description="SIGALRM pacer for one hping3 (see uavcas.emulation.apps.flood)")
+    ap = argparse.ArgumentParser(prog="python -m uavcas.attacks.tools flood",
+                                 description="SIGALRM pacer for one hping3 (see uavcas.attacks.tools.flood)")
     ap.add_argument("mode", choices=["pace"])
     ap.add_argument("--pid", type=int, required=True)
     ap.add_argument("--pps", type=float, required=True)
@@ -347,6 +347,3 @@ def main(argv: list[str] | None = None) -> None:
     signal.signal(signal.SIGTERM, lambda *_: sys.exit(0))
     print(json.dumps(pace(a.pid, a.pps)), flush=True)
 
-
-if __name__ == "__main__":
-    main()
