@@ -1,4 +1,4 @@
-"""The flood tool (`attacks/tools/flood.py`) without root: its rules, nft texts and the pacer."""
+"""The flood tool (`attacks/tools/flood.py`) without root: its rules, nft texts and its pacer (`pacer.py`)."""
 
 from __future__ import annotations
 
@@ -12,7 +12,7 @@ import time
 
 import pytest
 
-from uavcas.attacks.tools import flood
+from uavcas.attacks.tools import flood, pacer
 
 
 def test_flood_pacing_interval_rules_and_quiet_time():
@@ -65,7 +65,7 @@ def test_pacer_never_loses_a_signal_and_catches_up_after_a_stall():
     assert child.stdout.readline().strip() == "up"
     r, w = os.pipe()
     out = io.StringIO()
-    th = threading.Thread(target=lambda: out.write(json.dumps(flood.pace(child.pid, 500.0, r, io.StringIO()))))
+    th = threading.Thread(target=lambda: out.write(json.dumps(pacer.pace(child.pid, 500.0, r, io.StringIO()))))
     th.start()
     os.write(w, b"go\n")
     time.sleep(0.8)
@@ -80,3 +80,21 @@ def test_pacer_never_loses_a_signal_and_catches_up_after_a_stall():
     os.close(r)
     os.close(w)
 
+
+
+def test_the_pacer_starts_by_its_path_and_loads_no_uavcas_module(tmp_path):
+    """Run as the flood runs it (by its path): it says ready and, on EOF before "go", reports that
+    it sent nothing; it imports no module of uavcas (no package's start-up before t0)."""
+    child = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(30)"])
+    argv = [str(pacer.PATH), "--pid", str(child.pid), "--pps", "100"]
+    try:
+        r = subprocess.run([sys.executable, "-X", "importtime", *argv], input="", capture_output=True, text=True,
+                           timeout=30, cwd=tmp_path)
+    finally:
+        child.kill()
+        child.wait(10)
+    assert r.returncode == 0, r.stderr
+    lines = r.stdout.splitlines()
+    assert lines[0] == "ready" and json.loads(lines[-1]) == {"signals": 0, "seconds": 0.0, "max_behind": 0}
+    imported = [line.rsplit("|", 1)[-1].strip() for line in r.stderr.splitlines() if line.startswith("import time:")]
+    assert "json" in imported and not [m for m in imported if m.split(".")[0] == "uavcas"]

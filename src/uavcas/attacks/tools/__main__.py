@@ -1,7 +1,7 @@
 """`python -m uavcas.attacks.tools TOOL ARGS`: run one attack tool's process (its `main(ARGS)`).
 
-TOOL: `flood` (its pacer: `flood pace --pid P --pps R`), `replayer` or `mavinject`; bad input ends
-in one line on stderr and exit status 2.
+TOOL: `pacer` (the flood's: `pacer --pid P --pps R`, which the flood starts by its file's path),
+`replayer` or `mavinject`; bad input ends in one line on stderr and exit status 2.
 """
 
 from __future__ import annotations
@@ -9,11 +9,11 @@ from __future__ import annotations
 import sys
 from collections.abc import Callable
 
-from . import flood, mavinject, replayer
+from . import mavinject, pacer, replayer
 
 TOOLS: dict[str, Callable[[list[str]], int | None]] = {
-    "flood": flood.main,
     "mavinject": mavinject.main,
+    "pacer": pacer.main,
     "replayer": replayer.main,
 }
 
