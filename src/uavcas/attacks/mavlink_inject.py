@@ -55,6 +55,7 @@ from .answers import ANSWER_WITHIN_S, icmp_errors_quoting, udp_answers
 from .base import AttackExecutor, AttackFamily, TruthContext
 from .flood import path_hops
 from .registry import register
+from .tools import tool_path
 from .tools.flood import quiet_after_s
 from .tools.mavinject import read_log
 
@@ -142,7 +143,7 @@ class MavlinkInject(AttackFamily):
             go, log = stem.with_suffix(".go"), stem.with_suffix(".jsonl")
             go.unlink(missing_ok=True)
             log.write_text("")
-            argv = [sys.executable, "-m", "uavcas.attacks.tools", "mavinject", "--victim-ip", ex.ip(v),
+            argv = [sys.executable, str(tool_path("mavinject")), "--victim-ip", ex.ip(v),
                     "--target-sysid", str(ex.plan.node(v).sysid), "--gcs-sysid", str(gcs.sysid),
                     "--command", s.command, "--speed-mps", str(float(s.speed_mps or 0)),
                     "--rate-hz", str(float(s.rate_hz)), "--count", str(s.count), "--go", str(go),

@@ -63,6 +63,7 @@ from .answers import (
 )
 from .base import AttackExecutor, AttackFamily, SyntheticPackets, TruthContext
 from .registry import register
+from .tools import tool_path
 
 if TYPE_CHECKING:  # types only: the twin's and labels' package __init__s load this registry
     from collections.abc import Callable
@@ -154,7 +155,7 @@ class Replay(AttackFamily):
             log = ex.log_dir / f"inject-{attack.attack_id}-{attacker}.jsonl"
             log.parent.mkdir(parents=True, exist_ok=True)
             log.write_text("")
-            argv = [sys.executable, "-m", "uavcas.attacks.tools", "replayer", "--iface", Naming.HOST_IF,
+            argv = [sys.executable, str(tool_path("replayer")), "--iface", Naming.HOST_IF,
                     "--victim", ex.ip(attack.victims[0]), "--attacker-ip", ex.ip(attacker),
                     "--buffer", str(s.buffer_pkts), "--delay-ms", str(float(s.delay_ms)),
                     "--rate-pps", str(float(s.rate_pps)), "--ttl-dec", str(s.ttl_dec),

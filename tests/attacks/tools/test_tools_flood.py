@@ -12,7 +12,7 @@ import time
 
 import pytest
 
-from uavcas.attacks.tools import flood, pacer
+from uavcas.attacks.tools import flood, pacer, tool_path
 
 
 def test_flood_pacing_interval_rules_and_quiet_time():
@@ -86,7 +86,7 @@ def test_the_pacer_starts_by_its_path_and_loads_no_uavcas_module(tmp_path):
     """Run as the flood runs it (by its path): it says ready and, on EOF before "go", reports that
     it sent nothing; it imports no module of uavcas (no package's start-up before t0)."""
     child = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(30)"])
-    argv = [str(pacer.PATH), "--pid", str(child.pid), "--pps", "100"]
+    argv = [str(tool_path("pacer")), "--pid", str(child.pid), "--pps", "100"]
     try:
         r = subprocess.run([sys.executable, "-X", "importtime", *argv], input="", capture_output=True, text=True,
                            timeout=30, cwd=tmp_path)

@@ -13,7 +13,7 @@ from scapy.layers.l2 import Ether
 from uavcas import seeding
 from uavcas.attacks import family
 from uavcas.attacks.replay import ReplaySpec
-from uavcas.attacks.tools import replayer
+from uavcas.attacks.tools import replayer, tool_path
 
 
 def _frame(src="10.9.0.3", dst="10.9.0.9", ttl=64, seq=1000, ip_id=7, payload=b"x" * 100) -> bytes:
@@ -125,8 +125,8 @@ def test_the_replay_family_starts_each_replayer_on_the_plans_seed_and_its_index(
         for proc in ex.state.values():
             proc.popen.kill()
             proc.popen.wait(10)
-    assert all(argv[1:4] == ["-m", "uavcas.attacks.tools", "replayer"] for _, argv in started)
-    got = [(node, replayer.parse_args(argv[4:])) for node, argv in started]
+    assert all(argv[1] == str(tool_path("replayer")) for _, argv in started)
+    got = [(node, replayer.parse_args(argv[2:])) for node, argv in started]
     assert [(node, a.seed, a.index, a.seq_mode) for node, a in got] == [
         ("uav2", 2**32 - 1, 2, "rand"), ("uav3", 2**32 - 1, 3, "rand")]
 

@@ -7,10 +7,23 @@
                 (mavlink_inject);
 * `gps_spoofer` publishes a spoofer's [start, stop) to the victim's GPS receiver (gps_spoof).
 
-Processes start as `python -m uavcas.attacks.tools TOOL ARGS` (`__main__`; the pacer, which needs
-no package, by its file's path: `pacer.py` says why). The families import
-their tools, and `uavcas.attacks` imports every family, so `python -m uavcas.attacks.tools.TOOL`
-would load the tool twice (once as a module, once as `__main__`). This package is no family
-(`uavcas.attacks` skips it when it imports its modules); what a tool takes from the benign
-apps (`uavcas.emulation.apps`: `procs`, the MAVLink specs and GPS receiver) it imports from there.
+A tool's process starts by its file's path (`tool_path`: `python FILE ARGS`), not as `python -m
+uavcas.attacks.tools.TOOL`: a module of a package loads after its packages, and `uavcas.attacks`
+loads every family (seconds on a busy host, per attacker, before t0), and a family that imports
+its tool would have it loaded twice (once as a module, once as `__main__`). So a tool imports no
+family, only what it needs (the pacer: nothing of uavcas). This package is no family
+(`uavcas.attacks` skips it when it imports its modules); what a tool takes from the benign apps
+(`uavcas.emulation.apps`: `procs`, the MAVLink specs and GPS receiver) it imports from there.
 """
+
+from __future__ import annotations
+
+from pathlib import Path
+
+
+def tool_path(name: str) -> Path:
+    """The file of the tool `name` (a module of this package), which an executor runs by its path."""
+    path = Path(__file__).with_name(f"{name}.py")
+    if name.startswith("_") or not path.is_file():
+        raise ValueError(f"no attack tool {name!r} in {path.parent}")
+    return path

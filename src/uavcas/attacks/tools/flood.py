@@ -41,8 +41,8 @@ from pathlib import Path
 from uavcas.emulation.apps.procs import Proc, spawn, wait_for
 from uavcas.emulation.shaping import full_queue_s
 
+from . import tool_path
 from .pacer import PACE_FLOOR_US, PRIORITY_NICE
-from .pacer import PATH as PACER_PATH
 
 HPING_IDLE_S = 3600  # hping3's own interval: longer than any run, so only the pacer makes it send
 READY_TIMEOUT_S = 10.0
@@ -174,8 +174,7 @@ class Flood:
         with open(err_path, "wb") as err:
             # --ns only names the run (`ps` shows whose pacer it is); it exits with its runner
             # (stdin EOF) or its hping3 (pidfd)
-            # by its path: it needs no package (pacer.py's docstring)
-            pacer = subprocess.Popen([sys.executable, str(PACER_PATH), "--pid", str(pid),
+            pacer = subprocess.Popen([sys.executable, str(tool_path("pacer")), "--pid", str(pid),
                                       "--pps", str(1e6 / self.interval_us), "--ns", self.emu.ns(self.attacker)],
                                      stdin=subprocess.PIPE,
                                      stdout=subprocess.PIPE, stderr=err, start_new_session=True)

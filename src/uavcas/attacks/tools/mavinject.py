@@ -17,8 +17,8 @@ only between a send and its log line: SIGTERM is blocked around the pair), so wh
 has exited no frame can leave any more. Each frame sent is one JSON line of `--log` (t_unix,
 seq, confirmation), each COMMAND_ACK that came back one `ack` line.
 
-Run: python -m uavcas.attacks.tools mavinject --victim-ip IP --target-sysid N --gcs-sysid S
-       --command rtl|land|speed [--speed-mps V] --rate-hz R --count N --go PATH --log PATH --seconds T
+Run: python .../attacks/tools/mavinject.py --victim-ip IP --target-sysid N --gcs-sysid S
+     --command rtl|land|speed [--speed-mps V] --rate-hz R --count N --go PATH --log PATH --seconds T
 """
 
 from __future__ import annotations
@@ -74,7 +74,7 @@ def _wait_go(path: Path, deadline: float) -> bool:
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(prog="python -m uavcas.attacks.tools mavinject")
+    ap = argparse.ArgumentParser(prog="mavinject.py")
     ap.add_argument("--victim-ip", required=True)
     ap.add_argument("--port", type=int, default=UAV_PORT, help="the victim autopilot's UDP port")
     ap.add_argument("--target-sysid", type=int, required=True)
@@ -148,3 +148,6 @@ def read_log(path: Path) -> tuple[int, int]:
         acks += ev == "ack"
     return sent, acks
 
+
+if __name__ == "__main__":  # run by its path (uavcas.attacks.tools.tool_path)
+    sys.exit(main())

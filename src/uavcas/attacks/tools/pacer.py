@@ -3,9 +3,9 @@
 A process of its own per hping3, started by `flood.Flood.prepare` before t0; it says `ready`, waits
 for `go` on stdin, paces until `stop`, EOF or the end of hping3, and prints what it did as one
 JSON line. It imports nothing but the standard library, and the flood starts it by this file's
-path (`PATH`), not as `python -m uavcas.attacks.tools`: a module of a package is loaded after its
-packages, and `uavcas.attacks` loads every family (seconds on a busy host, per attacker, before
-t0), which a pacer needs none of. `python -m uavcas.attacks.tools pacer ARGS` runs it too.
+path (`tool_path("pacer")`, as every tool: the package's docstring says why).
+
+Run: python .../uavcas/attacks/tools/pacer.py --pid PID --pps RATE [--ns NAME]
 """
 
 from __future__ import annotations
@@ -18,9 +18,7 @@ import select
 import signal
 import sys
 import time
-from pathlib import Path
 
-PATH = Path(__file__)
 PACE_FLOOR_US = 100  # at most 10,000 SYN/s per attacker: each SYN costs hping3 + pacer a wake-up
 PRIORITY_NICE = -10  # hping3 and its pacer (see Flood.prepare)
 _SIGALRM_BIT = 1 << (signal.SIGALRM - 1)
@@ -72,7 +70,7 @@ def pace(pid: int, pps: float, commands: int = 0, out=None) -> dict:
 
 
 def main(argv: list[str] | None = None) -> None:
-    ap = argparse.ArgumentParser(prog="python -m uavcas.attacks.tools pacer",
+    ap = argparse.ArgumentParser(prog="pacer.py",
                                  description="SIGALRM pacer for one hping3 (see uavcas.attacks.tools.flood)")
     ap.add_argument("--pid", type=int, required=True)
     ap.add_argument("--pps", type=float, required=True)
@@ -87,5 +85,5 @@ def main(argv: list[str] | None = None) -> None:
     print(json.dumps(pace(a.pid, a.pps)), flush=True)
 
 
-if __name__ == "__main__":  # run by path (module docstring): no package is loaded
+if __name__ == "__main__":  # run by its path (uavcas.attacks.tools.tool_path)
     main()
