@@ -46,7 +46,7 @@ def test_ddos_needs_three_uavs():
 
 
 def test_pacing_follows_the_token_down_to_the_floor_and_needs_no_calibration():
-    from uavcas.emulation.apps.flood import PACE_FLOOR_US, pace_interval_us
+    from uavcas.attacks.tools.flood import PACE_FLOOR_US, pace_interval_us
     from uavcas.twin.model import Attack
 
     for token, interval in (("dos=1000", 1000), ("ddos=250", 250), ("dos=10", PACE_FLOOR_US)):

@@ -290,7 +290,7 @@ def test_a_dead_link_drops_everything_and_reads_back_as_loss_one():
 def test_flood_rate_holds_on_a_saturated_machine(tmp_path):
     """Paced from outside, a flood keeps its nominal rate when every core is busy (the old
     interval correction ran away to 2,500 pps when the schedule was late)."""
-    from uavcas.emulation.apps import flood
+    from uavcas.attacks.tools import flood
 
     p = plan(nodes(3), [window(0, [link("uav0", "uav1"), link("uav1", "uav2")])])
     hogs = [subprocess.Popen([sys.executable, "-c", "while True: pass"]) for _ in range(2 * os.cpu_count() + 1)]

@@ -4,9 +4,14 @@ A family (`AttackFamily` subclass, one per module of this package, registered by
 - its codec token and typed parameters (`spec`, `parse`),
 - its schedule rule (`attackers`: who attacks, given the shared victim and the swarm),
 - its executor on the kernel (`prepare`/`start`/`stop`/`calibrate`, plus routing hooks),
-- its ground-truth rules (`effect`, `effects`: which captured packets its attacks made, moved or
-  dropped; `provoked`: which packets exist only because of those, e.g. the answers to a flood
-  SYN; flows are labelled from their packets' effects, `uavcas.labels`).
+- its ground-truth rules (`effects`: which captured packets its attacks made, moved or dropped;
+  `provoked`: which packets exist only because of those, e.g. the answers to a flood SYN; flows
+  are labelled from their packets' effects, `uavcas.labels`),
+- its recipe of synthetic flows (`synthetic_packets`, `synthetic_change`; `uavcas.dataset.synthetic`),
+- its attack tool, if it runs one, beside it in `attacks/tools/` (a process the executor starts).
+
+Its words (class string, packet effect and that effect's precedence, label source) are its row of
+`uavcas.vocabulary.ROWS`, which `effect`, `label_source` and `class_name` read.
 
 Layers outside this package ask the registry (`uavcas.attacks.family(name)`) and never test a
 family name themselves. A family types against this module's protocols for what the layers above
@@ -27,6 +32,7 @@ import numpy as np
 
 from uavcas.scenario_model import ScenarioError, SpecBase
 from uavcas.traffic.payloads import PAYLOAD_NAMES
+from uavcas.vocabulary import FAMILY_ROWS, FamilyRow
 
 if TYPE_CHECKING:
     from uavcas.emulation.apps.procs import Proc
@@ -35,6 +41,11 @@ if TYPE_CHECKING:
     from uavcas.labels.attacklog import AttackLog, AttackWindow
     from uavcas.network.forwarding import Detour
     from uavcas.twin.model import Attack, LinkOverride, Plan, Window
+
+
+# One synthetic flow's packets (`uavcas.dataset.synthetic`), in time order: times (s from the flow's
+# first packet), frame sizes (B), directions (0: from the flow's initiator, 1: back to it), TCP flags.
+SyntheticPackets = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]
 
 
 class AttackExecutor(Protocol):
@@ -159,11 +170,9 @@ class Emitter:
 
 
 class AttackFamily(ABC):
-    name: ClassVar[str]  # codec token and `Attack.family`; one of vocabulary.FAMILIES
+    name: ClassVar[str]  # codec token and `Attack.family`: the token of its row in vocabulary.ROWS
     spec: ClassVar[type[SpecBase]]
     usage: ClassVar[str]  # the token's form, for error messages
-    label_source: ClassVar[str]  # label_source value of flows this family's truth rule marks
-    effect: ClassVar[str]  # the packet effect its rule gives (vocabulary.EFFECTS)
     truth_rule: ClassVar[str]  # its effect rule in words (the dataset card records it)
     # its provoked rule in words (the dataset card records it next to truth_rule)
     provoked_rule: ClassVar[str] = "nothing"
@@ -177,6 +186,25 @@ class AttackFamily(ABC):
     # the scenario payloads whose traffic the attack acts on (the codec refuses the others), and why
     payloads: ClassVar[tuple[str, ...]] = PAYLOAD_NAMES
     payloads_why: ClassVar[str] = ""
+
+    # its row of the vocabulary: the words the family does not own alone -------------------------
+    @property
+    def row(self) -> FamilyRow:
+        return FAMILY_ROWS[self.name]
+
+    @property
+    def effect(self) -> str:
+        """The packet effect its truth rule gives (vocabulary.EFFECTS)."""
+        return self.row.effect
+
+    @property
+    def label_source(self) -> str:
+        """The label_source part of flows its truth rule marks (vocabulary.LABEL_SOURCES)."""
+        return self.row.label_source
+
+    @property
+    def class_name(self) -> str:
+        return self.row.class_name
 
     # codec -------------------------------------------------------------------------------------
     def parse(self, arg: str | None, tok: str) -> SpecBase:
@@ -247,6 +275,20 @@ class AttackFamily(ABC):
         attack is active (the runner applies them with every window, `AttackExecutor.reshape`
         when they change mid-window). Default: none."""
         return []
+
+    # synthetic flows (`uavcas.dataset.synthetic`: no root, labels known by construction) -------
+    def synthetic_packets(self, rng: np.random.Generator) -> SyntheticPackets | None:
+        """The packets of a synthetic flow of a class holding this family, made by its attack in
+        place of the benign-like packets the flow would otherwise have (a flood's SYNs), drawn from
+        `rng`. Default None: the family makes no flow of its own."""
+        return None
+
+    def synthetic_change(self, rng: np.random.Generator, packets: SyntheticPackets, made: bool) -> SyntheticPackets:
+        """What this family's attack does to a synthetic flow of a class holding it, drawn from
+        `rng` (the families of the class change it in canonical order); `made`: the packets are
+        another family's `synthetic_packets`, not benign-like. Default: nothing (such a family's
+        flows are exactly benign-like: indistinguishable from Benign by construction)."""
+        return packets
 
     # ground truth ------------------------------------------------------------------------------
     @abstractmethod

@@ -33,7 +33,7 @@ from uavcas.emulation import kernel
 from uavcas.network.naming import Naming
 from uavcas.scenario_model import SpecBase
 
-from .base import AttackExecutor, AttackFamily, ScheduleDraw, TruthContext
+from .base import AttackExecutor, AttackFamily, ScheduleDraw, SyntheticPackets, TruthContext
 from .registry import register
 
 if TYPE_CHECKING:  # types only: the twin's and labels' package __init__s load this registry
@@ -86,8 +86,6 @@ class Blackhole(AttackFamily):
     name = "blackhole"
     spec = BlackholeSpec
     usage = "blackhole"
-    label_source = "blackhole-drops"
-    effect = "blackhole"
     truth_rule = ("a packet to or from the victim last seen at the victim's switch inside [start, stop) "
                   "(dropped there)")
     provoked_rule = "nothing (a peer's retransmission is dropped again, or reaches the victim after the stop)"
@@ -117,3 +115,12 @@ class Blackhole(AttackFamily):
             at = ctx.at_switch_of(ctx.node_names(w.victim_ips)) & ctx.is_last
             hit |= at & ctx.during(w.start_unix, w.stop_unix) & ctx.touching(w.victim_ips)
         return ctx.spread(hit)
+
+    def synthetic_change(self, rng: np.random.Generator, packets: SyntheticPackets, made: bool) -> SyntheticPackets:
+        """Benign-like but for the victim's answers: 80 % of the backward packets dropped (all of them
+        when another family made the flow: nothing of the victim comes back), the gaps stretched by
+        the retransmission timeouts."""
+        t, size, d, flags = packets
+        m = (d == 0) | (rng.random(len(t)) < (0.0 if made else 0.2))
+        m[0] = True
+        return t[m] * 1.3, size[m], d[m], flags[m]

@@ -3,7 +3,7 @@
 - token `dos=<interval_us>` / `ddos=<interval_us>`: hping3's inter-packet interval, 1000 us ~
   1,000 SYN/s nominal per attacker;
 - schedule: DoS takes one attacker; DDoS 2 up to a third of the swarm (at most 4);
-- executor: one `emulation.apps.flood.Flood` per attacker: one hping3 (-S to the victim's
+- executor: one `attacks.tools.flood.Flood` per attacker: one hping3 (-S to the victim's
   HTTP port) for the whole attack, started before t0 behind a closed gate and paced from
   outside at the nominal rate (see that module); the start is logged when the gates are open
   and before the first SYN, the stop when the gates closed (no SYN leaves after it), with
@@ -28,18 +28,18 @@
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import TYPE_CHECKING, Any, Literal
+from typing import TYPE_CHECKING, Any, ClassVar, Literal
 
 import numpy as np
 from pydantic import Field
 
-from uavcas.emulation.apps.flood import Flood, close_all, collect_all, quiet_after_s, start_all
 from uavcas.events import AttackRate
 from uavcas.scenario_model import ScenarioError, SpecBase, int_field
 
 from .answers import ANSWER_WITHIN_S, TCP_ACK, TCP_RST, TCP_SYN, answers, icmp_errors_quoting, tcp_flags_are
-from .base import AttackExecutor, AttackFamily, ScheduleDraw, TruthContext
+from .base import AttackExecutor, AttackFamily, ScheduleDraw, SyntheticPackets, TruthContext
 from .registry import register
+from .tools.flood import Flood, close_all, collect_all, quiet_after_s, start_all
 
 if TYPE_CHECKING:  # types only: the twin's and labels' package __init__s load this registry
     from uavcas.labels.attacklog import AttackWindow
@@ -73,8 +73,6 @@ def path_hops(ex: "AttackExecutor", src: str, dst: str) -> list[tuple[float, flo
 
 class _Flood(AttackFamily):
     spec = FloodSpec
-    label_source = "flood-packets"
-    effect = "flood"
     truth_rule = "a TCP SYN (ACK clear) from an attacker to the victim captured inside [start, stop)"
     provoked_rule = ("the victim's SYN-ACKs (retransmissions included) on a flood SYN's 5-tuple reversed with "
                      "ack = its seq + 1; the RST from the SYN's source on its 5-tuple with seq = its seq + 1; "
@@ -157,6 +155,21 @@ class _Flood(AttackFamily):
                | icmp_errors_quoting(p, syn))
         return ctx.spread(hit) & ~made
 
+    # synthetic flows ---------------------------------------------------------------------------
+    synthetic_pps: ClassVar[float] = 1000.0  # the synthetic flood's mean rate, SYN/s
+
+    def synthetic_packets(self, rng: np.random.Generator) -> SyntheticPackets:
+        """A separable SYN flood: 100-600 SYNs of 54-74 B at ~`synthetic_pps`, a few RST+ACK answers
+        (whatever other family the class holds: one flood makes the flow)."""
+        n = int(rng.integers(100, 600))
+        mean = 1.0 / self.synthetic_pps * rng.lognormal(0, 0.4)
+        t = np.concatenate([[0.0], np.cumsum(rng.exponential(mean, n - 1))])
+        d = (rng.random(n) < 0.05).astype(np.int8)  # a few RST answers
+        d[0] = 0  # the attacker's SYN opens the flow
+        size = np.where(d == 0, rng.integers(54, 75, n), 54)
+        flags = np.where(d == 0, TCP_SYN, TCP_RST | TCP_ACK).astype(np.int16)
+        return t, size, d, flags
+
 
 @register
 class DoS(_Flood):
@@ -167,6 +180,7 @@ class DoS(_Flood):
 class DDoS(_Flood):
     name = "ddos"
     min_uavs = 3  # 2 attackers + 1 victim
+    synthetic_pps = 2000.0  # two or more attackers on one victim
 
     def attackers(self, spec: FloodSpec, draw: ScheduleDraw) -> list[str]:  # type: ignore[override]
         hi = max(2, min(4, (draw.n_uav - 1) // 3))

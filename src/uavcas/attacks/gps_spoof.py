@@ -15,8 +15,9 @@
   position at the attack's planned start, recorded in the plan as `lure_bearing_deg` and
   `lure_distance_m` (the area's scale: 1 km);
 - executor: no network change. `start` publishes the spoofer to the victim's autopilot
-  (`traffic.mavlink.gps`: a control file in the run's apps directory, written atomically
-  with a start time LEAD_S ahead, logged as the start), `stop` publishes the stop the same way.
+  (`attacks.tools.gps_spoofer`: a control file in the run's apps directory that the autopilot's
+  receiver reads, `traffic.mavlink.gps`, written atomically with a start time LEAD_S
+  ahead, logged as the start), `stop` publishes the stop the same way.
   From its logged start the victim's GLOBAL_POSITION_INT and GPS_RAW_INT report the true track
   plus an offset growing at drift_mps along the lure's bearing (capped at its distance), with the
   matching velocity and course; after its logged stop the receiver re-acquires the true signal.
@@ -45,10 +46,11 @@ from pymavlink.dialects.v20 import common
 
 from uavcas.scenario_model import ScenarioError, SpecBase
 from uavcas.traffic.apps import MAVLINK_PAYLOADS
-from uavcas.traffic.mavlink.gps import POSITION_MESSAGES, Spoofing, control_path, publish
+from uavcas.traffic.mavlink.gps import POSITION_MESSAGES, Spoofing, control_path
 
 from .base import AttackExecutor, AttackFamily, ScheduleDraw, TruthContext
 from .registry import register
+from .tools.gps_spoofer import publish
 
 if TYPE_CHECKING:  # types only: the twin's and labels' package __init__s load this registry
     from uavcas.labels.attacklog import AttackWindow
@@ -77,8 +79,6 @@ class GpsSpoof(AttackFamily):
     name = "gps_spoof"
     spec = GpsSpoofSpec
     usage = "gps_spoof=<drift_mps>"
-    label_source = "gps-spoof-reports"
-    effect = "gps_spoof"
     truth_rule = ("a MAVLink GLOBAL_POSITION_INT or GPS_RAW_INT datagram from the victim first seen (at its own "
                   "switch) inside [start, stop): a position report of its spoofed GPS receiver")
     provoked_rule = "nothing (the ground station answers no position report)"

@@ -85,8 +85,6 @@ class Jamming(AttackFamily):
     name = "jamming"
     spec = JammingSpec
     usage = "jamming=<eirp_dbm>[,<duty_pct>[,near|uav]]"
-    label_source = "jamming-links"
-    effect = "jamming"
     truth_rule = ("a packet lost on a link direction the plan jams, seen leaving its first switch inside [start, "
                   "stop); or one that crossed such a direction inside [start, stop) when the jammed rate differs "
                   "from the unjammed by >= 10 % or the loss by >= 1 percentage point")

@@ -10,7 +10,7 @@
   undo a forged speed for long and a frame lost on the channel is repeated). Only payloads that
   carry MAVLink (telemetry, video, mixed); the codec refuses it on `image` in one line;
 - schedule: one attacker (a UAV of the swarm), the composition's victim;
-- executor: one `emulation.apps.mavinject` per attacker, started before t0 (pymavlink's load)
+- executor: one `attacks.tools.mavinject` per attacker, started before t0 (pymavlink's load)
   and waiting for its go file: COMMAND_LONG frames packed by pymavlink with the victim's ground
   station's system id and component id (MAV_COMP_ID_MISSIONPLANNER, 190), targeting the
   victim's autopilot, MAVLink 2 and unsigned (the attacker has no key), from one ephemeral UDP
@@ -46,8 +46,6 @@ from typing import TYPE_CHECKING, Any, Literal
 import numpy as np
 from pydantic import Field
 
-from uavcas.emulation.apps.flood import quiet_after_s
-from uavcas.emulation.apps.mavinject import read_log
 from uavcas.emulation.apps.procs import spawn, wait_for
 from uavcas.scenario_model import ScenarioError, SpecBase, choice, int_field
 from uavcas.traffic.apps import MAVLINK_PAYLOADS
@@ -57,6 +55,9 @@ from .answers import ANSWER_WITHIN_S, icmp_errors_quoting, udp_answers
 from .base import AttackExecutor, AttackFamily, TruthContext
 from .flood import path_hops
 from .registry import register
+from .tools import tool_path
+from .tools.flood import quiet_after_s
+from .tools.mavinject import read_log
 
 if TYPE_CHECKING:  # types only: the twin's and labels' package __init__s load this registry
     from uavcas.labels.attacklog import AttackWindow
@@ -93,8 +94,6 @@ class MavlinkInject(AttackFamily):
     name = "mavlink_inject"
     spec = MavlinkInjectSpec
     usage = "mavlink_inject=<rtl|land|speed>[,mps=<m/s>][,hz=<Hz>][,n=<count>]"
-    label_source = "mavlink-injections"
-    effect = "mavlink_inject"
     truth_rule = ("a UDP packet from an attacker to a victim's MAVLink port (the autopilot's, 14550) captured "
                   "inside [start, stop) (a forged COMMAND_LONG)")
     provoked_rule = ("the victim's answers to a forged frame (its COMMAND_ACKs) on the frame's UDP 5-tuple reversed, "
@@ -144,7 +143,7 @@ class MavlinkInject(AttackFamily):
             go, log = stem.with_suffix(".go"), stem.with_suffix(".jsonl")
             go.unlink(missing_ok=True)
             log.write_text("")
-            argv = [sys.executable, "-m", "uavcas.emulation.apps.mavinject", "--victim-ip", ex.ip(v),
+            argv = [sys.executable, str(tool_path("mavinject")), "--victim-ip", ex.ip(v),
                     "--target-sysid", str(ex.plan.node(v).sysid), "--gcs-sysid", str(gcs.sysid),
                     "--command", s.command, "--speed-mps", str(float(s.speed_mps or 0)),
                     "--rate-hz", str(float(s.rate_hz)), "--count", str(s.count), "--go", str(go),

@@ -12,7 +12,7 @@ _REGISTRY: dict[str, AttackFamily] = {}
 def register(cls: type[AttackFamily]) -> type[AttackFamily]:
     """Class decorator: make `cls` the family of its `name` (a vocabulary family)."""
     if cls.name not in FAMILIES:
-        raise ValueError(f"attack family {cls.name!r} is not in uavcas.vocabulary.FAMILIES")
+        raise ValueError(f"attack family {cls.name!r} has no row in uavcas.vocabulary.ROWS")
     if cls.name in _REGISTRY:
         raise ValueError(f"attack family {cls.name!r} registered twice")
     _REGISTRY[cls.name] = cls()

@@ -2,7 +2,7 @@
 
 - token `replay=<buffer>,<delay_ms>,<pps>,<ttl_dec>,<inc|rand|zero>`;
 - schedule: one attacker;
-- executor: the replayer process (`emulation.apps.replayer`) is started before t0 (scapy takes a
+- executor: the replayer process (`attacks.tools.replayer`) is started before t0 (scapy takes a
   second to import) and sees nothing of the victim until `start` mirrors the victim's host port
   to the attacker's: tc act_mirred copies every IPv4 frame the victim sends (ingress of its host
   port) and receives (egress) out of the attacker's host port, so the attacker's `eth0` sees the
@@ -61,8 +61,9 @@ from .answers import (
     payload_len,
     tcp_flags_are,
 )
-from .base import AttackExecutor, AttackFamily, TruthContext
+from .base import AttackExecutor, AttackFamily, SyntheticPackets, TruthContext
 from .registry import register
+from .tools import tool_path
 
 if TYPE_CHECKING:  # types only: the twin's and labels' package __init__s load this registry
     from collections.abc import Callable
@@ -118,8 +119,6 @@ class Replay(AttackFamily):
     name = "replay"
     spec = ReplaySpec
     usage = "replay=<buf>,<ms>,<pps>,<ttl>,<mode>"
-    label_source = "replay-injections"
-    effect = "replay"
     truth_rule = ("a packet matching an inject record (addresses, protocol, ports, IP id, TTL, TCP seq) within "
                   f"{MATCH_TOLERANCE_S:g} s of it (an injected copy; without a seq, as UDP, the nearest one)")
     provoked_rule = ("answers to an injected copy on its 5-tuple reversed: the SYN-ACK with ack = its seq + 1 (a "
@@ -156,7 +155,7 @@ class Replay(AttackFamily):
             log = ex.log_dir / f"inject-{attack.attack_id}-{attacker}.jsonl"
             log.parent.mkdir(parents=True, exist_ok=True)
             log.write_text("")
-            argv = [sys.executable, "-m", "uavcas.emulation.apps.replayer", "--iface", Naming.HOST_IF,
+            argv = [sys.executable, str(tool_path("replayer")), "--iface", Naming.HOST_IF,
                     "--victim", ex.ip(attack.victims[0]), "--attacker-ip", ex.ip(attacker),
                     "--buffer", str(s.buffer_pkts), "--delay-ms", str(float(s.delay_ms)),
                     "--rate-pps", str(float(s.rate_pps)), "--ttl-dec", str(s.ttl_dec),
@@ -231,6 +230,20 @@ class Replay(AttackFamily):
                | icmp_errors_quoting(p, made, exact=True)
                | dup_acks(p, made, ctx.followed.hop == 0))
         return ctx.spread(hit) & ~made
+
+    def synthetic_change(self, rng: np.random.Generator, packets: SyntheticPackets, made: bool) -> SyntheticPackets:
+        """Copies of 15 % of the flow's packets (at least one), each 10-500 us after its original
+        (near-zero gaps), in time order."""
+        t, size, d, flags = packets
+        k = max(1, int(0.15 * len(t)))
+        pick = np.sort(rng.choice(len(t), k, replace=False))
+        t2 = t[pick] + rng.uniform(1e-5, 5e-4, k)
+        order = np.argsort(np.concatenate([t, t2]), kind="stable")
+
+        def cat(a: np.ndarray, copies: np.ndarray) -> np.ndarray:
+            return np.concatenate([a, copies])[order]
+
+        return cat(t, t2), cat(size, size[pick]), cat(d, d[pick]), cat(flags, flags[pick])
 
 
 def dup_acks(p, copies: np.ndarray, first: np.ndarray, within_s: float = DUP_ACK_WITHIN_S) -> np.ndarray:

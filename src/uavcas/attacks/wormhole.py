@@ -44,8 +44,6 @@ class Wormhole(AttackFamily):
     name = "wormhole"
     spec = WormholeSpec
     usage = "wormhole"
-    label_source = "wormhole-detour"
-    effect = "wormhole"
     truth_rule = ("a packet to or from the victim seen at the attacker's switch inside [start, stop) in a "
                   "window with the planned detour (carried over the detour)")
     provoked_rule = "nothing (a detoured packet is delivered; its answer is judged by the detour rule)"

@@ -34,17 +34,23 @@ import pyarrow as pa
 from uavcas.attacks import families, family
 from uavcas.flows.assemble import Flows
 from uavcas.schema import FAMILIES, class_name
-from uavcas.vocabulary import ATTACK_PACKET_COLUMNS, EFFECT_PRECEDENCE, EFFECTS, LABEL_MODES, LabelMode
+from uavcas.vocabulary import (
+    ATTACK_PACKET_COLUMNS,
+    EFFECT_PRECEDENCE,
+    EFFECTS,
+    LABEL_MODES,
+    LABEL_SOURCES,
+    LabelMode,
+)
 
 from .attacklog import AttackLog
 from .effects import PacketTruth
 
 PAPER_SOURCE = "ip-membership"
-# Order of the parts of a label_source value (fixed: datasets compare across versions).
-# New sources go before PAPER_SOURCE (never combined with another), so stored values keep their form.
-SOURCES: tuple[str, ...] = ("flood-packets", "replay-injections", "blackhole-drops", "wormhole-detour",
-                            "jamming-links", "mavlink-injections", "gps-spoof-reports", PAPER_SOURCE)
-assert {f.label_source for f in families()} <= set(SOURCES), "a family's label_source is missing from SOURCES"
+# Order of the parts of a label_source value (fixed: datasets compare across versions): the families'
+# sources in the order of the vocabulary's rows (append-only), then PAPER_SOURCE (never combined with
+# another), so stored values keep their form.
+SOURCES: tuple[str, ...] = LABEL_SOURCES + (PAPER_SOURCE,)
 
 
 @dataclass(frozen=True)

@@ -15,14 +15,14 @@ compass's, not the receiver's: unchanged. The messages the fix feeds are GLOBAL_
 
 Run time (`GpsReceiver`, in the autopilot): the attack executor publishes the spoofer's [start,
 stop) in a small control file per UAV (`control_path`, JSON `Spoofing`, written atomically) with
-both boundaries LEAD_S ahead of the moment it writes them, and logs exactly those times as the
-attack's start and stop (`publish`). Before each position message the autopilot takes the time,
-then reads the file (a stat; reread when it changed), and a fix due less than GUARD_S before a
-boundary waits for the boundary: so a message's spoofing is decided by the same clock and the
-same numbers as the logged [start, stop), and a message decided before a boundary has left the
-host (and been stamped at the victim's switch, the truth rule's observation) before it. A message
-whose send still ended after a boundary its decision preceded is counted (`straddled`) in the
-autopilot's log, so a run shows whether the agreement held.
+both boundaries ahead of the moment it writes them, and logs exactly those times as the attack's
+start and stop (the spoofer's side: `uavcas.attacks.tools.gps_spoofer`). Before each position
+message the autopilot takes the time, then reads the file (a stat; reread when it changed), and
+a fix due less than GUARD_S before a boundary waits for the boundary: so a message's spoofing is
+decided by the same clock and the same numbers as the logged [start, stop), and a message decided
+before a boundary has left the host (and been stamped at the victim's switch, the truth rule's
+observation) before it. A message whose send still ended after a boundary its decision preceded
+is counted (`straddled`) in the autopilot's log, so a run shows whether the agreement held.
 """
 
 from __future__ import annotations
@@ -38,9 +38,7 @@ from pydantic import BaseModel, ConfigDict, Field
 from uavcas.twin.track import Track, TrackPoint
 
 POSITION_MESSAGES: tuple[str, ...] = ("GLOBAL_POSITION_INT", "GPS_RAW_INT")  # what a GPS fix feeds
-LEAD_S = 0.1  # a boundary is published this far ahead (an atomic rename takes ~0.1 ms)
 GUARD_S = 0.02  # a fix due this close before a boundary waits for it (>> the send's ~0.1 ms)
-PUBLISH_TRIES = 5
 
 
 class Spoofing(BaseModel):
@@ -103,22 +101,6 @@ def course_deg(p: TrackPoint) -> float:
 def control_path(apps_dir: Path, uav: str) -> Path:
     """Where the executor publishes the spoofer of `uav` (beside the MAVLink specs and t0 file)."""
     return Path(apps_dir) / "mavlink" / f"gps-{uav}.json"
-
-
-def publish(paths: list[Path], make: Callable[[float], Spoofing]) -> float:
-    """Write `make(t)` to every path (atomically), t = LEAD_S from now, and return t once every
-    file is in place at least GUARD_S before it (else again with a later t): the time to log."""
-    for _ in range(PUBLISH_TRIES):
-        t = time.time() + LEAD_S
-        text = make(t).model_dump_json()
-        for path in paths:
-            path.parent.mkdir(parents=True, exist_ok=True)
-            tmp = path.with_suffix(".tmp")
-            tmp.write_text(text)
-            tmp.replace(path)
-        if time.time() <= t - GUARD_S:
-            return t
-    raise TimeoutError(f"could not publish the spoofer's times {LEAD_S:g} s ahead ({PUBLISH_TRIES} tries)")
 
 
 class GpsReceiver:

@@ -1,6 +1,6 @@
 """Forged MAVLink commands against the real endpoints over 127.0.0.1 (no namespaces, no root).
 
-A ground station, an autopilot and the attacker's injector (`apps/mavinject.py`) run as three
+A ground station, an autopilot and the attacker's injector (`attacks/tools/mavinject.py`) run as three
 processes; a relay between autopilot and GCS (the MAVLink unit test's) records the autopilot's
 frames, so the HEARTBEATs on the wire show the mode. Without signing the forged RTL is accepted,
 acknowledged to the injector and the mode becomes RTL (6); with signing (the run's key on GCS and
@@ -16,7 +16,8 @@ import time
 import pytest
 
 from helpers.mavlink_relay import Relay, free_port, stop_all, wait_all
-from uavcas.emulation.apps.mavinject import read_log as read_injector_log
+from uavcas.attacks.tools import tool_path
+from uavcas.attacks.tools.mavinject import read_log as read_injector_log
 from uavcas.traffic import mavlink as mv
 from uavcas.traffic.mavlink.commands import COPTER_MODE_RTL
 from uavcas.traffic.mavlink.specs import COPTER_MODE_AUTO
@@ -60,7 +61,7 @@ def test_forged_rtl_is_accepted_without_signing_and_dropped_with_it(tmp_path, si
     (tmp_path / "u.json").write_text(uspec.model_dump_json())
     go, ilog = tmp_path / "go", tmp_path / "inject.jsonl"
     run = [sys.executable, "-m", "uavcas.traffic.mavlink"]
-    inject = [sys.executable, "-m", "uavcas.emulation.apps.mavinject", "--victim-ip", "127.0.0.1", "--port",
+    inject = [sys.executable, str(tool_path("mavinject")), "--victim-ip", "127.0.0.1", "--port",
               str(uav_port), "--target-sysid", str(p.node(victim).sysid), "--gcs-sysid", str(p.node(bs).sysid),
               "--command", "rtl", "--rate-hz", "4", "--count", str(FORGED), "--go", str(go), "--log", str(ilog),
               "--seconds", str(dur + 20)]
@@ -131,7 +132,7 @@ def test_a_command_signed_with_another_key_is_rejected():
 
 
 def test_the_injector_refuses_a_bad_rate_in_one_line(tmp_path):
-    r = subprocess.run([sys.executable, "-m", "uavcas.emulation.apps.mavinject", "--victim-ip", "127.0.0.1",
+    r = subprocess.run([sys.executable, str(tool_path("mavinject")), "--victim-ip", "127.0.0.1",
                         "--target-sysid", "1", "--gcs-sysid", "255", "--command", "rtl", "--rate-hz", "0",
                         "--go", str(tmp_path / "go"), "--log", str(tmp_path / "l"), "--seconds", "1"],
                        capture_output=True, text=True, timeout=60)

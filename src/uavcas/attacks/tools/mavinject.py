@@ -9,7 +9,7 @@ times a second from one ephemeral UDP port to the victim's MAVLink port, until `
 left (0: no limit; then it listens LINGER_S for the answers and exits) or it is stopped; the confirmation field counts
 the repeats (0, 1, ...), as a GCS's resends do. What comes back (COMMAND_ACK) is read and logged, never acted on.
 
-Discipline (as the flood's, `apps/flood.py`): the process is started before t0 (Python and
+Discipline (as the flood's, `attacks/tools/flood.py`): the process is started before t0 (Python and
 pymavlink take seconds to load on a busy host), binds its socket, prints `ready` and waits for
 its go file; the executor notes the start time and then writes the file, so no forged frame
 leaves before the logged start. SIGTERM ends it at once (`os._exit` in the handler, which runs
@@ -17,7 +17,7 @@ only between a send and its log line: SIGTERM is blocked around the pair), so wh
 has exited no frame can leave any more. Each frame sent is one JSON line of `--log` (t_unix,
 seq, confirmation), each COMMAND_ACK that came back one `ack` line.
 
-Run: python -m uavcas.emulation.apps.mavinject --victim-ip IP --target-sysid N --gcs-sysid S
+Run: python .../attacks/tools/mavinject.py --victim-ip IP --target-sysid N --gcs-sysid S
      --command rtl|land|speed [--speed-mps V] --rate-hz R --count N --go PATH --log PATH --seconds T
 """
 
@@ -74,7 +74,7 @@ def _wait_go(path: Path, deadline: float) -> bool:
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(prog="python -m uavcas.emulation.apps.mavinject")
+    ap = argparse.ArgumentParser(prog="mavinject.py")
     ap.add_argument("--victim-ip", required=True)
     ap.add_argument("--port", type=int, default=UAV_PORT, help="the victim autopilot's UDP port")
     ap.add_argument("--target-sysid", type=int, required=True)
@@ -149,5 +149,5 @@ def read_log(path: Path) -> tuple[int, int]:
     return sent, acks
 
 
-if __name__ == "__main__":
+if __name__ == "__main__":  # run by its path (uavcas.attacks.tools.tool_path)
     sys.exit(main())

@@ -6,7 +6,7 @@ hping3 with corrected intervals ran away on a late schedule (1,000 -> 2,500 pps)
 restart reused source ports (one "flow" spanning separate bursts). Instead:
 
 * hping3 is started once per attacker *before* t0 (`prepare`), with `-i 3600`: it never sends
-  on its own. A pacer (`python -m uavcas.emulation.apps.flood pace`, one per hping3) sends it
+  on its own. A pacer (`pacer.py`, one process per hping3) sends it
   SIGALRM at absolute deadlines t_go + k / pps: each signal is one SYN. A standard signal does
   not queue, so the pacer signals only when the previous one was consumed (the pidfd's
   process no longer has SIGALRM pending) and catches up after a late wake-up, never faster
@@ -27,12 +27,9 @@ restart reused source ports (one "flow" spanning separate bursts). Instead:
 
 from __future__ import annotations
 
-import argparse
-import ctypes
 import json
 import os
 import re
-import select
 import signal
 import subprocess
 import sys
@@ -41,17 +38,15 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
+from uavcas.emulation.apps.procs import Proc, spawn, wait_for
 from uavcas.network.queues import full_queue_s
 
-from .procs import Proc, spawn, wait_for
+from . import tool_path
+from .pacer import PACE_FLOOR_US, PRIORITY_NICE
 
-PACE_FLOOR_US = 100  # at most 10,000 SYN/s per attacker: each SYN costs hping3 + pacer a wake-up
 HPING_IDLE_S = 3600  # hping3's own interval: longer than any run, so only the pacer makes it send
 READY_TIMEOUT_S = 10.0
-PRIORITY_NICE = -10  # hping3 and its pacer (see Flood.prepare)
 QUIET_SLACK_S = 0.02  # on top of the path bound: the delay stage's wake-up lateness
-_SIGALRM_BIT = 1 << (signal.SIGALRM - 1)
-_PR_SET_TIMERSLACK = 29
 _gate_ids = iter(range(1, 10_000))  # per process: gate devices, marks and route tables are unique
 
 
@@ -179,7 +174,7 @@ class Flood:
         with open(err_path, "wb") as err:
             # --ns only names the run (`ps` shows whose pacer it is); it exits with its runner
             # (stdin EOF) or its hping3 (pidfd)
-            pacer = subprocess.Popen([sys.executable, "-m", "uavcas.emulation.apps.flood", "pace", "--pid", str(pid),
+            pacer = subprocess.Popen([sys.executable, str(tool_path("pacer")), "--pid", str(pid),
                                       "--pps", str(1e6 / self.interval_us), "--ns", self.emu.ns(self.attacker)],
                                      stdin=subprocess.PIPE,
                                      stdout=subprocess.PIPE, stderr=err, start_new_session=True)
@@ -288,65 +283,3 @@ def _only_child(pid: int, timeout_s: float = 5.0) -> int:
 
 
 # the pacer (own process) -----------------------------------------------------------------------
-def _alarm_pending(pid: int) -> bool:
-    try:
-        with open(f"/proc/{pid}/status") as fh:
-            for line in fh:
-                if line.startswith(("ShdPnd:", "SigPnd:")) and int(line.split()[1], 16) & _SIGALRM_BIT:
-                    return True
-    except OSError:
-        return False
-    return False
-
-
-def pace(pid: int, pps: float, commands: int = 0, out=None) -> dict:
-    """Wait for "go" on fd `commands`, then SIGALRM `pid` at t_go + k / pps until "stop", EOF
-    or the end of `pid`. Returns what it did (signals, seconds from go, most SYNs behind)."""
-    out = out or sys.stdout
-    fd = os.pidfd_open(pid)
-    floor_s = PACE_FLOOR_US / 1e6
-    print("ready", file=out, flush=True)
-    if os.read(commands, 64).strip() != b"go":
-        return {"signals": 0, "seconds": 0.0, "max_behind": 0}
-    t0 = time.monotonic()
-    sent, max_behind, last = 0, 0, float("-inf")
-    while True:
-        now = time.monotonic()
-        due = int((now - t0) * pps) + 1  # the first SYN at t0
-        max_behind = max(max_behind, due - sent - 1)
-        if sent < due and now - last >= floor_s and not _alarm_pending(pid):
-            try:
-                signal.pidfd_send_signal(fd, signal.SIGALRM)
-            except ProcessLookupError:
-                break
-            sent, last = sent + 1, now
-        # still behind (late wake-up, or hping3 had not taken the last signal): retry one floor
-        # interval on; else sleep to the next deadline
-        if sent < int((time.monotonic() - t0) * pps) + 1:
-            wait = floor_s
-        else:
-            wait = t0 + sent / pps - time.monotonic()
-        ready, _, _ = select.select([commands, fd], [], [], max(0.0, wait))
-        if ready:
-            break  # "stop", EOF, or hping3 exited (its pidfd is readable)
-    return {"signals": sent, "seconds": time.monotonic() - t0, "max_behind": max_behind}
-
-
-def main(argv: list[str] | None = None) -> None:
-    ap = argparse.ArgumentParser(description="SIGALRM pacer for one hping3 (see uavcas.emulation.apps.flood)")
-    ap.add_argument("mode", choices=["pace"])
-    ap.add_argument("--pid", type=int, required=True)
-    ap.add_argument("--pps", type=float, required=True)
-    ap.add_argument("--ns", help="the attacker's namespace (informational)")
-    a = ap.parse_args(argv)
-    ctypes.CDLL(None).prctl(_PR_SET_TIMERSLACK, 1, 0, 0, 0)  # deadlines to the microsecond, not 50 us
-    try:
-        os.setpriority(os.PRIO_PROCESS, 0, PRIORITY_NICE)  # a wake-up in time matters more than CPU share
-    except OSError:
-        pass
-    signal.signal(signal.SIGTERM, lambda *_: sys.exit(0))
-    print(json.dumps(pace(a.pid, a.pps)), flush=True)
-
-
-if __name__ == "__main__":
-    main()

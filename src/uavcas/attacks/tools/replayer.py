@@ -3,7 +3,7 @@
 Every IPv4 packet of the victim is a candidate, whatever its protocol: TCP, and the UDP streams
 (MAVLink on 14550, RTP video on 5600); the inject record carries the ports of TCP and UDP copies.
 
-Runs inside the attacker's namespace (`python -m uavcas.emulation.apps.replayer ...`, the
+Runs inside the attacker's namespace (`python .../attacks/tools/replayer.py ...`, the
 venv's python). The fabric mirrors the victim's host port to the attacker's host port
 (`uavcas.attacks.replay.mirror_on`), so the attacker's `eth0` receives a copy of every IPv4 frame the victim
 sends or receives, wherever the two are. What the authors' code got wrong, and what we do:
@@ -211,7 +211,7 @@ def run(args: argparse.Namespace) -> dict:
 
 
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(prog="replayer.py", description=__doc__.splitlines()[0])
     ap.add_argument("--iface", default="eth0")
     ap.add_argument("--victim", required=True)
     ap.add_argument("--attacker-ip", required=True)
@@ -235,5 +235,5 @@ def main(argv: list[str] | None = None) -> None:
     sys.exit(0)
 
 
-if __name__ == "__main__":
+if __name__ == "__main__":  # run by its path (uavcas.attacks.tools.tool_path)
     main()
