@@ -8,90 +8,19 @@ copy, the vocabulary derives its words from the row (the words before it keep th
 order), the codec parses its token and `uavcas plan` plans it, the CLI names it among the families
 it offers, and a run directory whose flood is the new family's (the labels' synthetic run, its
 attack renamed) is extracted into a dataset whose packets carry its effect, whose flows carry its
-class and label source, and whose card and `uavcas info` list it. The root test at the end runs it
-on real stacks.
+class and label source, and whose card and `uavcas info` list it. The root test
+(test_family_dropin_root.py) runs it on real stacks.
 """
 
 from __future__ import annotations
 
 import json
-import os
 import shutil
-import subprocess
-import sys
 from pathlib import Path
 
 import pyarrow.parquet as pq
-import pytest
 
-import uavcas
-
-ROW = '''    # a test's throwaway family: a SYN flood of its own, made packets ranked between replay and flood
-    FamilyRow(token="synflood", class_name="SYNFlood", effect="synflood", precedence=15,
-              label_source="synflood-packets"),
-'''
-
-THROWAWAY = '''"""Throwaway family for a test: a SYN flood of its own, on the flood's tool, executor and rules."""
-
-from __future__ import annotations
-
-from typing import Any, Literal
-
-from pydantic import Field
-
-from uavcas.scenario_model import ScenarioError, SpecBase, int_field
-
-from .flood import _Flood
-from .registry import register
-
-
-class SynFloodSpec(SpecBase):
-    family: Literal["synflood"]
-    interval_us: int = Field(gt=0)
-
-    @property
-    def nominal_pps(self) -> float:
-        return 1e6 / self.interval_us
-
-    def token(self) -> str:
-        return f"{self.family}={self.interval_us}"
-
-
-@register
-class SynFlood(_Flood):
-    name = "synflood"
-    spec = SynFloodSpec
-    exclusive_group = None  # combinable with the floods: its own attack
-
-    def parse(self, arg: str | None, tok: str) -> SynFloodSpec:
-        if arg is None:
-            raise ScenarioError(f"field 'attacks': synflood needs an interval in us, got {tok!r}")
-        return SynFloodSpec(family=self.name, interval_us=int_field("attacks.synflood", arg, 1, 10_000_000))
-
-    def spec_from_params(self, params: dict[str, Any]) -> SynFloodSpec:
-        return SynFloodSpec(family=self.name, interval_us=int(params.get("interval_us", 1000)))
-'''
-
-CONFIG = "synflood=1000-4-1-image-logdist-adaptive-grid-30-95"
-
-
-def _copy_with_throwaway(tmp: Path) -> Path:
-    src = Path(uavcas.__file__).parent
-    dst = tmp / "pkg"
-    shutil.copytree(src, dst / "uavcas", ignore=shutil.ignore_patterns("__pycache__"))
-    vocab = dst / "uavcas" / "vocabulary.py"
-    text = vocab.read_text()
-    end = "\n)\nFAMILY_ROWS"  # the table's last line: one row appended before it
-    assert text.count(end) == 1
-    vocab.write_text(text.replace(end, "\n" + ROW.rstrip("\n") + end))
-    (dst / "uavcas" / "attacks" / "synflood.py").write_text(THROWAWAY)
-    return dst
-
-
-def _run(pkg: Path, *args: str, cwd: Path | None = None) -> subprocess.CompletedProcess:
-    # PYTHONPATH puts the copy before the editable install of the work tree
-    env = {**os.environ, "PYTHONPATH": str(pkg), "COLUMNS": "200", "NO_COLOR": "1", "TERM": "dumb"}
-    return subprocess.run([sys.executable, *args], env=env, capture_output=True, text=True, timeout=600, cwd=cwd)
+from helpers.family_dropin import CONFIG, copy_with_throwaway, run_on
 
 
 def _as_synflood(run_dir: Path) -> Path:
@@ -136,8 +65,8 @@ print(json.dumps(dict(families=v.FAMILIES, effects=v.EFFECTS, precedence=v.EFFEC
 def test_one_row_and_one_module_add_a_family_through_plan_truth_labels_card_and_cli(synth_run_dir, tmp_path):
     from uavcas import vocabulary as v
 
-    pkg = _copy_with_throwaway(tmp_path)
-    probe = _run(pkg, "-c", PROBE)
+    pkg = copy_with_throwaway(tmp_path)
+    probe = run_on(pkg, "-c", PROBE)
     assert probe.returncode == 0, probe.stderr
     got = json.loads(probe.stdout)
     # the words derive from the row; those before it keep their codes and their order
@@ -152,20 +81,20 @@ def test_one_row_and_one_module_add_a_family_through_plan_truth_labels_card_and_
 
     # plan: the codec parses its token, the planner schedules it
     out = tmp_path / "plan.json"
-    planned = _run(pkg, "-m", "uavcas", "plan", CONFIG, "--windows", "3", "--out", str(out))
+    planned = run_on(pkg, "-m", "uavcas", "plan", CONFIG, "--windows", "3", "--out", str(out))
     assert planned.returncode == 0, planned.stderr
     assert "attack synflood-0" in planned.stdout
     (att,) = json.loads(out.read_text())["attacks"]
     assert att["family"] == "synflood" and att["spec"] == {"family": "synflood", "interval_us": 1000}
     # the CLI offers it among the families, and refuses a family no row holds in one line
-    refused = _run(pkg, "-m", "uavcas", "plan", "teleport-4-1-image-logdist-adaptive-grid-30-95")
+    refused = run_on(pkg, "-m", "uavcas", "plan", "teleport-4-1-image-logdist-adaptive-grid-30-95")
     assert refused.returncode != 0 and "synflood=<us>" in refused.stderr
     assert len(refused.stderr.strip().splitlines()) == 1
 
     # truth and labels: its packets carry its effect, its flows its class and label source
     run_dir = _as_synflood(shutil.copytree(synth_run_dir, tmp_path / "run"))
     ds = tmp_path / "ds"
-    made = _run(pkg, "-m", "uavcas", "extract", str(run_dir), "--out", str(ds))
+    made = run_on(pkg, "-m", "uavcas", "extract", str(run_dir), "--out", str(ds))
     assert made.returncode == 0, made.stderr
     flows = pq.read_table(ds / "flows.parquet").to_pandas()
     syn = flows[flows["label_synflood"]]
@@ -176,29 +105,10 @@ def test_one_row_and_one_module_add_a_family_through_plan_truth_labels_card_and_
     card = json.loads((ds / "dataset.json").read_text())
     assert card["class_counts"]["SYNFlood"] == len(syn)
     assert any("synflood:" in rule for rule in card["label_rules"])
-    listed = _run(pkg, "-m", "uavcas", "info", str(ds))
+    listed = run_on(pkg, "-m", "uavcas", "info", str(ds))
     assert listed.returncode == 0, listed.stderr
     assert "SYNFlood" in listed.stdout
-    columns = _run(pkg, "-m", "uavcas", "info", str(ds), "--columns")
+    columns = run_on(pkg, "-m", "uavcas", "info", str(ds), "--columns")
     assert columns.returncode == 0, columns.stderr
     row = next(line for line in columns.stdout.splitlines() if line.startswith("label_synflood\t"))
     assert "SYNFlood" in row
-
-
-@pytest.mark.root
-@pytest.mark.slow
-def test_the_dropped_in_family_runs_on_real_stacks(tmp_path):
-    """The same copy, run for real (hping3 paced by the flood's tool from the family's executor):
-    its extracted flows carry its class."""
-    pkg = _copy_with_throwaway(tmp_path)
-    run_dir, ds = tmp_path / "run", tmp_path / "ds"
-    ran = _run(pkg, "-m", "uavcas", "run", "synflood=1000-3-1-image-logdist-adaptive-grid-30-95", "--windows", "4",
-               "--window-s", "3", "--out", str(run_dir))
-    assert ran.returncode == 0, ran.stderr[-2000:]
-    log = [json.loads(line) for line in (run_dir / "attacks.jsonl").read_text().splitlines()]
-    assert {r["family"] for r in log if r["event"] == "start"} == {"synflood"}
-    made = _run(pkg, "-m", "uavcas", "extract", str(run_dir), "--out", str(ds))
-    assert made.returncode == 0, made.stderr[-2000:]
-    flows = pq.read_table(ds / "flows.parquet").to_pandas()
-    assert (flows["label"] == "SYNFlood").sum() > 0
-    assert set(flows.loc[flows["label_synflood"], "label_source"]) == {"synflood-packets"}
