@@ -12,6 +12,7 @@ import pytest
 
 from uavcas.dataset.dictionary import describe
 from uavcas.dataset.store import read_card
+from uavcas.views import view
 
 # a real quick campaign (about 150 s quiet), then mlcroissant reads its ~28k records row by row
 # (pandas apply per field): past the suite's 600 s on a loaded machine (it timed out so once)
@@ -39,4 +40,4 @@ def test_the_quick_dataset_publishes_a_croissant_file_mlcroissant_validates(tmp_
     rows = {m.group(1): (m.group(2), m.group(3))
             for m in re.finditer(r"^\| `([^`]+)` \| ([^|]+) \| ([^|]+) \|", text, re.M)}
     for f in pq.read_schema(ds / "flows.parquet"):
-        assert rows[f.name][0].strip() == str(f.type) and rows[f.name][1].strip() == describe(f.name, "cic")[0], f.name
+        assert rows[f.name][0].strip() == str(f.type) and rows[f.name][1].strip() == describe(f.name, "cic", view("5tuple"))[0], f.name

@@ -22,9 +22,9 @@ from uavcas.flows.standards import DEFAULT_STANDARD, names, standards
 from uavcas.flows.termination import TERMINATIONS
 from uavcas.labels import LabelError
 from uavcas.scenario import ScenarioError
-from uavcas.schema import EPISODE_VIEW
 from uavcas.twin.plan import plan as make_plan
 from uavcas.twin.profile import ProfileError
+from uavcas.views import views as registered_views
 from uavcas.twin.schedule import EpisodeError
 
 from .console import console, err_console, fail  # noqa: F401  (the commands take them from here)
@@ -34,6 +34,7 @@ TERMINATION_HELP = ("How a TCP flow ends: connection (default: one connection on
                     "first backward FIN or RST closes, duplicate forward FIN dropped, no 1-packet flows; reproduces "
                     "its 'TCP appendix' flows) or timeout (nfstream's: idle/active timeouts only).")
 
+VIEW_HELP = "What each run is extracted to: " + "; ".join(f"{v.name} ({v.help})" for v in registered_views()) + "."
 FEATURES_HELP = "Feature standard: " + "; ".join(f"{s.name} ({s.summary})" for s in standards()) + "."
 
 # --- choices, arguments and options shared by several commands ------------------------------------
@@ -47,7 +48,7 @@ def one_of(values) -> Any:
 
 
 View = one_of(VIEWS)  # a flow view of `uavcas.flows.assemble`
-ExtractView = one_of((*VIEWS, EPISODE_VIEW))  # ... or episodes: one row per node per plan window
+ExtractView = one_of(v.name for v in registered_views())  # a view of the registry `uavcas.views`
 Standard = one_of(names())  # a feature standard of the registry `uavcas.flows.standards`
 Termination = one_of(TERMINATIONS)
 
@@ -89,6 +90,10 @@ def profile_option() -> Any:
 
 def features_option() -> Any:
     return typer.Option(DEFAULT_STANDARD, "--features", help=FEATURES_HELP)
+
+
+def view_option() -> Any:
+    return typer.Option("5tuple", "--view", help=VIEW_HELP)
 
 
 def termination_option() -> Any:
