@@ -40,4 +40,5 @@ def test_the_quick_dataset_publishes_a_croissant_file_mlcroissant_validates(tmp_
     rows = {m.group(1): (m.group(2), m.group(3))
             for m in re.finditer(r"^\| `([^`]+)` \| ([^|]+) \| ([^|]+) \|", text, re.M)}
     for f in pq.read_schema(ds / "flows.parquet"):
-        assert rows[f.name][0].strip() == str(f.type) and rows[f.name][1].strip() == describe(f.name, "cic", view("5tuple"))[0], f.name
+        unit = describe(f.name, "cic", view("5tuple"))[0]
+        assert rows[f.name][0].strip() == str(f.type) and rows[f.name][1].strip() == unit, f.name

@@ -51,7 +51,7 @@ class CampaignDir:
         """Record how runs are extracted (view and termination policy); resuming with another is
         refused (its shards would mix two descriptions of the traffic, or flows with episodes). A
         campaign begun before this was recorded is checked against its DONE shards."""
-        # the feature standard is recorded when it is not the default (files written before it was recorded: the default)
+        # the feature standard is recorded when not the default (files written before it was recorded: the default)
         std = {} if extraction.features == DEFAULT_STANDARD else {"features": extraction.features}
         want = {"view": extraction.view, "termination": extraction.policy, **std}
         if self.extraction_path.exists():
@@ -173,7 +173,7 @@ def read_manifest(path: Path) -> list[ManifestEntry]:
                     seed=int(d["seed"]),
                     windows=int(d.get("windows", 12)),
                     window_s=float(d.get("window_s", 5.0)),
-                    episodes=int(d.get("episodes", 1)),
+                    rounds=int(d.get("episodes", 1)),  # the stored key keeps its old name (ManifestEntry.to_dict)
                 )
             )
         except (json.JSONDecodeError, KeyError, TypeError, ValueError) as e:

@@ -140,7 +140,7 @@ def execute_entry(
         shutil.rmtree(base)
     out = RunOutcome(index=entry.index, ok=False, host=host, wall_s=0.0)
     req = WorkerRequest(config=entry.config, seed=entry.seed, windows=entry.windows, window_s=entry.window_s,
-                        episodes=entry.episodes, out_dir=str(base), profile=profile, mavlink_signing=mavlink_signing)
+                        rounds=entry.rounds, out_dir=str(base), profile=profile, mavlink_signing=mavlink_signing)
     try:
         res = realize_in_child(req, limit_s=entry.windows * entry.window_s + RUN_SLACK_S, detach=detach)
         if not res.ok:

@@ -43,7 +43,7 @@ class WorkerRequest(BaseModel):
     seed: int
     windows: int
     window_s: float
-    episodes: int = 1
+    rounds: int = 1
     out_dir: str
     profile: str | None = None
     mavlink_signing: bool = False  # RunOptions.mavlink_signing
@@ -60,7 +60,7 @@ class WorkerResult(BaseModel):
 def realize_request(req: WorkerRequest) -> WorkerResult:
     """Plan, check and realise one scenario into `req.out_dir` (in this process; needs root)."""
     p = plan(req.config, seed=req.seed, windows=req.windows, window_s=req.window_s, profile=req.profile,
-             episodes=req.episodes)
+             rounds=req.rounds)
     out = Path(req.out_dir)
     reason = preflight(p, out)
     feats = None

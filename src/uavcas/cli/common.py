@@ -24,8 +24,8 @@ from uavcas.labels import LabelError
 from uavcas.scenario import ScenarioError
 from uavcas.twin.plan import plan as make_plan
 from uavcas.twin.profile import ProfileError
+from uavcas.twin.schedule import RoundError
 from uavcas.views import views as registered_views
-from uavcas.twin.schedule import EpisodeError
 
 from .console import console, err_console, fail  # noqa: F401  (the commands take them from here)
 
@@ -78,9 +78,10 @@ def window_s_option() -> Any:
     return typer.Option(5.0, "--window-s", min=MIN_WINDOW_S, help="Window length in seconds.")
 
 
-def episodes_option() -> Any:
-    return typer.Option(1, "--episodes", min=1, help="Attack episodes per run: the composition again on a fresh "
-                                                     "victim, 10-20 s each, >= 5 s apart (the medium preset uses 3).")
+def rounds_option() -> Any:
+    return typer.Option(1, "--rounds", "--episodes", min=1,
+                        help="Attack rounds per run: the composition again on fresh victims, 10-20 s each, >= 5 s "
+                             "apart (the medium preset uses 3). --episodes: its old name, deprecated.")
 
 
 def profile_option() -> Any:
@@ -159,14 +160,14 @@ def path_fail(path: Path, error: Exception) -> "typer.Exit":
     return fail(msg if str(path) in msg else f"{path}: {msg}")
 
 
-def plan_or_fail(config: str, seed: int, windows: int, window_s: float, profile: str | None, episodes: int = 1):
+def plan_or_fail(config: str, seed: int, windows: int, window_s: float, profile: str | None, rounds: int = 1):
     """The plan of a scenario, or a one-line error naming the bad field / profile (exit 2)."""
     try:
-        p = make_plan(config, seed=seed, windows=windows, window_s=window_s, profile=profile, episodes=episodes)
+        p = make_plan(config, seed=seed, windows=windows, window_s=window_s, profile=profile, rounds=rounds)
         if p.config != config:
             err_console.print(f"note: scenario normalised to its canonical form {p.config}", highlight=False)
         return p
-    except (ScenarioError, EpisodeError) as e:
+    except (ScenarioError, RoundError) as e:
         raise fail(str(e)) from None
     except ProfileError as e:
         raise fail(f"--profile: {e}") from None

@@ -57,7 +57,8 @@ def extract_cmd(
     if not info.complete:
         warn([f"run {info.run_id} is incomplete (exit status {info.run_exit_status}); its shard is marked so"])
     counts = ", ".join(f"{k} {v}" for k, v in sorted(info.class_counts.items()))
-    console.print(f"run [bold]{info.run_id}[/]: {info.n_flows} {view_spec(info.view).row.plural} from {info.n_packets} packets ({counts}) "
+    rows = view_spec(info.view).row.plural
+    console.print(f"run [bold]{info.run_id}[/]: {info.n_flows} {rows} from {info.n_packets} packets ({counts}) "
                   f"-> {out}", highlight=False)
     if info.impure_dropped:
         console.print(f"{info.impure_dropped} flow(s) left out: attack_fraction below {min_attack_fraction:g}")

@@ -111,8 +111,8 @@ def write_flow_csv(dataset_dir: Path, out: Path, view: str | None = None) -> int
     spec = card_view(card)
     if not spec.is_flow:
         raise CicCsvError(f"{dataset_dir}: {spec.name} rows ({spec.row.plural}) are no flows and the csv format holds "
-                          "one row per flow; extract the runs with `uavcas extract RUN --view 5tuple` (or hostpair) into "
-                          "another dataset and export that")
+                          "one row per flow; extract the runs with `uavcas extract RUN --view 5tuple` (or hostpair) "
+                          "into another dataset and export that")
     standard = card_standard(card)
     names = [n for n in pq.read_schema(path).names if n not in LEFT_OUT]
     if "view" in names:  # one view only: a dataset extracted with several holds the same traffic twice

@@ -97,7 +97,8 @@ def rebuild(out_dir: Path) -> dict:
     if other is not None:
         raise DatasetError(f"{out_dir}: holds {spec.row.plural} and {other.row.plural} shards; a dataset holds one "
                            f"kind of row: extract the {other.name} view into another --out")
-    with_ctx = {t.schema.get_field_index(spec.context_columns[0]) >= 0 for t in tables}
+    # a view without context columns has none to check
+    with_ctx = {bool(spec.context_columns) and t.schema.get_field_index(spec.context_columns[0]) >= 0 for t in tables}
     if len(with_ctx) > 1:
         raise DatasetError(f"{out_dir}: some shards have the context columns (ctx_*) and some do not; "
                            "extract every run with the same uavcas version")

@@ -30,8 +30,8 @@ from uavcas.atomic import atomic_dir
 from uavcas.flows.assemble import FlowConfig, assemble
 from uavcas.flows.context import context_frame
 from uavcas.flows.features import flow_frame
-from uavcas.flows.standards import DEFAULT_STANDARD
 from uavcas.flows.packets import COLUMNS, NO_MAVLINK, QUOTE_COLUMNS, PacketTable, empty_columns
+from uavcas.flows.standards import DEFAULT_STANDARD
 from uavcas.labels.label import constructed_truth
 from uavcas.scenario.campaign import MEDIUM_PAPER_CONFIGS, run_seed
 from uavcas.scenario.codec import parse

@@ -15,12 +15,12 @@ from uavcas.labels.episodes import episode_rule_text, host_window_frame
 from uavcas.schema import (
     CONTEXT_FEATURES,
     EPISODE_CONTEXT_FEATURES,
-    EPISODE_VIEW,
     EPISODE_ID_COLUMNS,
     EPISODE_METADATA_COLUMNS,
     EPISODE_PACKET_UNITS,
     EPISODE_ROUTE_FEATURES,
     EPISODE_STATS,
+    EPISODE_VIEW,
 )
 
 from .base import IDENTITY_TYPES, RowNoun, ViewInput, ViewRows, ViewSpec, axis_fields, label_fields
