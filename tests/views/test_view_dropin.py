@@ -167,8 +167,10 @@ def test_a_dropped_in_view_is_offered_extracted_described_and_published(synth_ru
     assert "pair-window rows" in croissant["description"]
 
     # a dataset holds one kind of row: flows refuse the view's rows, in one line, before any write
-    other = tmp_path / "run-other"  # the same run under another name: another run id, another shard
+    other = tmp_path / "run-other"  # the same run under another id: another shard
     shutil.copytree(synth_run_dir, other)
+    info = json.loads((other / "run.json").read_text())
+    (other / "run.json").write_text(json.dumps({**info, "run_id": "other"}))
     refused = _run(pkg, "-m", "uavcas", "extract", str(other), "--out", str(ref), "--view", "window-pair")
     assert refused.returncode != 0 and "pair-window rows" in refused.stderr and "another --out" in refused.stderr
     assert len(list((ref / "shards").glob("*.parquet"))) == 1

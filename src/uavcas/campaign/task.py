@@ -28,6 +28,7 @@ from uavcas.flows.standards import names as standard_names
 from uavcas.rundir import RunDir
 from uavcas.scenario import ManifestEntry
 from uavcas.views import names as view_names
+from uavcas.views import view
 
 from .worker import WorkerRequest, realize_in_child
 
@@ -55,13 +56,13 @@ class Extraction:
             raise ValueError(f"--features: {self.features!r} is not one of {', '.join(standard_names())}")
         if self.termination is not None and self.termination not in TERMINATIONS:
             raise ValueError(f"--termination: {self.termination!r} is not one of {', '.join(TERMINATIONS)}")
-        if self.termination is not None and self.view in HOST_VIEWS:
+        if self.termination is not None and view(self.view).flow_key in HOST_VIEWS:
             raise ValueError(f"--termination: the {self.view} view has no termination policy")
 
     @property
     def policy(self) -> str | None:
         """The termination policy in force (None for the host-pair views, which have none)."""
-        return None if self.view in HOST_VIEWS else self.termination or DEFAULT_TERMINATION
+        return None if view(self.view).flow_key in HOST_VIEWS else self.termination or DEFAULT_TERMINATION
 
     def options(self) -> dict:
         return {"view": self.view, "termination": self.termination, "labels": self.labels,
