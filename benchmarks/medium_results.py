@@ -412,7 +412,7 @@ def changes_section(lb: pd.DataFrame, previous: Path | None, classes: dict[str, 
         "- **UAV traffic.** Payload `mixed`: MAVLink 2 telemetry and commands (pymavlink endpoints), H.264 video "
         "(ffmpeg) and image fetches, where the previous campaign had image fetches only; stealth attacks now "
         "act on long streams, which is why the context columns look at every window a stream crosses.",
-        "- **Three episodes per run.** Each run repeats its composition on three victims, so that every "
+        "- **Three attack rounds per run.** Each run repeats its composition on three victims, so that every "
         "collaborative class has victims in enough windows for the window-host view; and the new families "
         "(jamming, GPS spoofing, MAVLink injection) enter with their compositions.",
         *composition_bullet(classes), ""]

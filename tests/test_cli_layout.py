@@ -19,7 +19,7 @@ import uavcas.cli as cli
 from uavcas.cli import app
 
 CLI_DIR = Path(cli.__file__).parent
-SHARED_OPTIONS = ("--seed", "--windows", "--window-s", "--episodes", "--profile", "--prefix", "--termination",
+SHARED_OPTIONS = ("--seed", "--windows", "--window-s", "--rounds", "--profile", "--prefix", "--termination",
                   "--allow-truncated", "--min-attack-fraction")
 
 

@@ -27,22 +27,18 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pandas as pd
 
-from uavcas.flows import DEFAULT_STANDARD, VIEWS, FlowConfig, Flows, PacketTable, flows_of, read_packets
+from uavcas.flows import DEFAULT_STANDARD, FlowConfig, Flows, PacketTable, flows_of, read_packets
 from uavcas.flows.context import CONTEXT_WINDOW_S, context_frames
 from uavcas.flows.follow import Followed, follow_run
 from uavcas.labels import read_attack_log
 from uavcas.labels.effects import PacketTruth, TruthContext, packet_truth
-from uavcas.labels.episodes import episode_rule_text, host_window_frame
-from uavcas.labels.label import label_flows, rule_text
 from uavcas.rundir import RunDir, RunDirError, RunInfo
-from uavcas.schema import CONTEXT_FEATURES, EPISODE_VIEW
+from uavcas.views import DEFAULT_VIEW, ViewInput
+from uavcas.views import view as view_spec
 from uavcas.vocabulary import EFFECTS
 
 if TYPE_CHECKING:
     from uavcas.twin.model import Plan
-
-# the flow views, and the episode view (one row per plan node per plan window, uavcas.labels.episodes)
-EXTRACT_VIEWS: tuple[str, ...] = (*VIEWS, EPISODE_VIEW)
 
 
 @dataclass(frozen=True)
@@ -77,9 +73,8 @@ class ShardInfo:
 
 @dataclass(frozen=True)
 class Shard:
-    frame: pd.DataFrame  # schema.METADATA_COLUMNS + features (+ schema.CONTEXT_FEATURES), one row per flow;
-    # window-host: schema.EPISODE_METADATA_COLUMNS + episode features, one row per node and window
-    info: ShardInfo
+    frame: pd.DataFrame  # one row per row of the view (`uavcas.views`: its metadata, features and context columns)
+    info: ShardInfo  # `features` and `view` say what the frame's columns are (the shard writer reads them)
 
 
 def _fidelity_failed(info) -> list[str]:
@@ -114,7 +109,7 @@ def extract(run_dir: Path | str, **options: Any) -> Shard:
 
 def extract_detailed(
     run_dir: Path | str,
-    view: str = "5tuple",
+    view: str = DEFAULT_VIEW,
     labels: str = "ours",
     min_packets: int | None = None,
     allow_truncated: bool = False,
@@ -129,15 +124,12 @@ def extract_detailed(
     is `run_id`, else run.json's, else the directory's name. `context`: add the `ctx_*` columns.
     `termination`: the flow termination policy (`uavcas.flows.termination`; None: the view's default).
 
-    `view` "window-host" gives episodes (`uavcas.labels.episodes`) built from the 5-tuple flows.
+    `view`: what the rows are (`uavcas.views`: a flow of a flow key, or the window-host view's
+    episodes, built from the 5-tuple flows): the view's flows are made here, its rows and labels by the view.
 
     Raises RunDirError for a run that did not finish cleanly, unless `allow_incomplete`."""
-    episodes = view == EPISODE_VIEW
-    if view not in EXTRACT_VIEWS:
-        raise ValueError(f"unknown view {view!r}; known: {', '.join(EXTRACT_VIEWS)}")
-    if episodes and (labels != "ours" or min_attack_fraction > 0):  # both are rules about flows
-        raise ValueError("the window-host view labels episodes from packet effects: it takes neither "
-                         "--labels paper nor --min-attack-fraction")
+    spec = view_spec(view)
+    spec.check_options(labels, min_attack_fraction)
     rd = RunDir(Path(run_dir))
     plan, pcaps, t0 = run_inputs(rd)
     if plan.scenario is None:
@@ -146,7 +138,7 @@ def extract_detailed(
     problem = incomplete_reason(info)
     if problem and not allow_incomplete:
         raise RunDirError(f"{rd.root}: {problem}; extract it anyway with --allow-incomplete (marked incomplete)")
-    cfg = FlowConfig(view="5tuple" if episodes else view, termination=termination,  # type: ignore[arg-type]
+    cfg = FlowConfig(view=spec.flow_key, termination=termination,  # type: ignore[arg-type]
                      min_packets=min_packets, window_t0_unix=t0, window_s=plan.window_s)
     packets = read_packets(pcaps, points=[p.stem for p in pcaps], allow_truncated=allow_truncated)
     _, followed = follow_run(rd.root, table=packets)  # the captures and the forwarding the run held
@@ -154,18 +146,9 @@ def extract_detailed(
     # from the captures and flows only: computed before the attack log is even read
     ctx, routes = context_frames(ex.packets, ex.flows) if context else (None, None)
     log, followed, truth = run_truth(rd, ex.packets, plan, t0, followed)
-    if episodes:  # the 5-tuple flows first, then their packets and flows per node and window
-        ff = ex.frame.reset_index(drop=True)
-        if ctx is not None:
-            ff = pd.concat([ff, pd.DataFrame(ctx.to_numpy(), columns=list(CONTEXT_FEATURES))], axis=1)
-        df = host_window_frame(ex.packets, ex.flows, ff, truth, plan, t0, standard=features, routes=routes)
-        impure, rule = 0, episode_rule_text()
-    else:
-        lab = label_flows(ex.flows, ex.frame, log, truth, mode=labels,  # type: ignore[arg-type]
-                          min_attack_fraction=min_attack_fraction)
-        df, impure, rule = lab.frame, lab.impure_dropped, rule_text(labels, min_attack_fraction)
-        if ctx is not None:  # label_flows keeps flow_id: rows may have been left out, never reordered
-            df[list(CONTEXT_FEATURES)] = ctx.to_numpy()[df["flow_id"].to_numpy()]
+    made = spec.rows(ViewInput(ex.packets, ex.flows, ex.frame, ctx, routes, log, truth, plan, t0, features, labels,
+                               min_attack_fraction))
+    df, impure, rule = made.frame, made.impure_dropped, made.label_rule
     rid = _check_run_id(rd.root, str(run_id or (info.run_id if info else None) or rd.root.resolve().name))
     df["run_id"], df["config"], df["seed"], df["view"] = rid, plan.config, plan.seed, view
     for k, v in plan.scenario.axes().items():

@@ -84,7 +84,7 @@ def test_channel_predict_gives_the_plans_link_values(tmp_path, profile, tx_dbm):
 @pytest.mark.parametrize("pathloss", ["logdist", "3gpp"])
 def test_the_chain_on_a_quick_plans_loss_gives_its_links(pathloss):
     e = next(x for x in manifest("quick", seed=0) if f"-{pathloss}-" in x.config)
-    p = plan(e.config, seed=e.seed, windows=e.windows, window_s=e.window_s, episodes=e.episodes)
+    p = plan(e.config, seed=e.seed, windows=e.windows, window_s=e.window_s, rounds=e.rounds)
     prof = load_profile(None)
     chain = LinkChain.build(tx_power_dbm=p.scenario.tx_dbm, noise_dbm=p.scenario.noise_dbm, **prof.chain_kwargs())
     air = [(w, lk) for w in p.windows for lk in w.links if lk.kind == "air"]

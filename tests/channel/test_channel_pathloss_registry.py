@@ -133,6 +133,7 @@ import uavcas
 from uavcas.channel import Channel
 from uavcas.channel.pathloss import names, spec
 from uavcas.dataset.dictionary import describe
+from uavcas.views import view
 from uavcas.scenario import parse
 from uavcas.twin.plan import plan
 
@@ -146,7 +147,7 @@ ch = Channel(n_nodes=3, pathloss="halfsplit")
 pos = np.array([[0.0, 0.0, 25.0], [300.0, 0.0, 60.0], [0.0, 400.0, 80.0]])
 la = ch.evaluate(pos, np.array([[0, 1], [0, 2], [1, 2]]), np.array([True, False, False]))
 assert la.los is not None and la.los.dtype == bool  # the LOS state is drawn for any model that has one
-assert "halfsplit" in describe("pathloss")[1]
+assert "halfsplit" in describe("pathloss", "cic", view("5tuple"))[1]
 print("ok")
 '''
 

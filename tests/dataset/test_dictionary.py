@@ -13,10 +13,12 @@ from typer.testing import CliRunner
 from uavcas import vocabulary
 from uavcas.cli import app
 from uavcas.dataset import dictionary, dictionary_docs
-from uavcas.dataset.parquet import arrow_schema, episode_arrow_schema
+from uavcas.dataset.parquet import arrow_schema
 from uavcas.dataset.store import extract_run
 from uavcas.flows.standards import names
+from uavcas.views import view, views
 
+FLOWS = view("5tuple")
 DOCS = Path(__file__).resolve().parents[2] / "docs" / "formats.md"
 
 
@@ -40,30 +42,30 @@ def test_every_column_of_an_extracted_dataset_is_described(synth_run_dir, tmp_pa
 
 def test_every_schema_column_of_every_standard_and_view_is_described():
     for std in names():
-        for sch, episodes in ((arrow_schema(std, context=True), False),
-                              (episode_arrow_schema(std, context=True), True)):
-            cols = dictionary.columns(sch, std, episodes)
+        for spec in views():
+            sch = arrow_schema(std, context=True, view=spec.name)
+            cols = dictionary.columns(sch, std, spec)
             assert [c.name for c in cols] == sch.names and all(c.meaning and c.unit for c in cols)
-    units = {c.name: c.unit for c in dictionary.columns(arrow_schema("cic"), "cic")}
+    units = {c.name: c.unit for c in dictionary.columns(arrow_schema("cic"), "cic", FLOWS)}
     assert units["Flow Duration"] == "us" and units["Flow Bytes/s"] == "bytes/s" and units["duration_s"] == "s"
-    assert dictionary.describe("Flow Duration", "paper")[0] == "s"
+    assert dictionary.describe("Flow Duration", "paper", FLOWS)[0] == "s"
 
 
 def test_a_column_without_an_entry_is_an_error():
     with pytest.raises(dictionary.DictionaryError, match="'Flow Wobble'"):
-        dictionary.describe("Flow Wobble")
+        dictionary.describe("Flow Wobble", "cic", FLOWS)
     with pytest.raises(dictionary.DictionaryError):
-        dictionary.describe("packets_out")  # an episode column is not a flow column
+        dictionary.describe("packets_out", "cic", FLOWS)  # an episode column is not a flow column
     with pytest.raises(dictionary.DictionaryError):
-        dictionary.describe("ctx_src_bogus")
+        dictionary.describe("ctx_src_bogus", "cic", FLOWS)
 
 
 def test_family_columns_follow_the_vocabulary():
     for fam in vocabulary.FAMILIES:
-        assert fam in dictionary.describe(f"attack_packets_{fam}")[1]
-        assert vocabulary.FAMILY_CLASS[fam] in dictionary.describe(f"label_{fam}")[1]
+        assert fam in dictionary.describe(f"attack_packets_{fam}", "cic", FLOWS)[1]
+        assert vocabulary.FAMILY_CLASS[fam] in dictionary.describe(f"label_{fam}", "cic", FLOWS)[1]
     for effect in vocabulary.EFFECTS:
-        assert effect in dictionary.describe("seq_effect")[1]
+        assert effect in dictionary.describe("seq_effect", "cic", FLOWS)[1]
 
 
 def test_docs_section_is_the_generated_one():

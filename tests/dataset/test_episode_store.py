@@ -92,11 +92,11 @@ def test_export_writes_host_pairs(synth_run_dir, episode_ds, tmp_path):
 
 def test_report_of_an_episode_dataset(episode_ds, tmp_path):
     from uavcas.report.dataset_report import write_report
-    from uavcas.report.distributions import SHOWN_EPISODE_FEATURES
+    from uavcas.views import view
 
     ds, _ = episode_ds
     index = write_report(ds, tmp_path / "report")
     page = index.read_text()
     assert "Host-window features per class" in page and "host-window rows from 1 run(s)" in page
-    drawn = [f for f in SHOWN_EPISODE_FEATURES if f'alt="{f} per class"' in page]
+    drawn = [f for f in view("window-host").shown_features if f'alt="{f} per class"' in page]
     assert drawn and sorted(p.name for p in index.parent.iterdir()) == ["index.html"]

@@ -19,6 +19,7 @@ from uavcas.dataset.dictionary import describe
 from uavcas.dataset.parquet import read_flows
 from uavcas.dataset.store import extract_run, read_card
 from uavcas.schema import FAMILIES
+from uavcas.views import view
 
 runner = CliRunner()
 
@@ -109,7 +110,7 @@ def test_the_card_lists_every_column_with_its_unit(ds, published):
     assert set(schema.names) <= set(rows)
     for f in schema:
         dtype, unit = rows[f.name]
-        assert dtype.strip() == str(f.type) and unit.strip() == describe(f.name, "cic")[0], f.name
+        assert dtype.strip() == str(f.type) and unit.strip() == describe(f.name, "cic", view("5tuple"))[0], f.name
 
 
 def test_the_card_has_classes_rules_fidelity_and_the_calibration_licence(ds, published):

@@ -18,6 +18,7 @@ import pytest
 
 from uavcas.dataset.dictionary import describe
 from uavcas.dataset.store import read_card
+from uavcas.views import view
 
 
 def _cli(*args, timeout: int) -> subprocess.CompletedProcess:
@@ -40,7 +41,8 @@ def test_a_real_campaign_publishes_a_croissant_file_mlcroissant_validates(resume
     rows = {m.group(1): (m.group(2), m.group(3))
             for m in re.finditer(r"^\| `([^`]+)` \| ([^|]+) \| ([^|]+) \|", text, re.M)}
     for f in pq.read_schema(ds / "flows.parquet"):
-        assert rows[f.name][0].strip() == str(f.type) and rows[f.name][1].strip() == describe(f.name, "cic")[0], f.name
+        unit = describe(f.name, "cic", view("5tuple"))[0]
+        assert rows[f.name][0].strip() == str(f.type) and rows[f.name][1].strip() == unit, f.name
     # every class the campaign holds is in the card
     labels = set(pq.read_table(ds / "flows.parquet", columns=["label"]).column("label").to_pylist())
     assert labels and all(c in text for c in labels), labels

@@ -43,14 +43,15 @@ import uavcas
 from uavcas.dataset.dictionary import card_columns, describe
 from uavcas.dataset.parquet import arrow_schema
 from uavcas.flows.standards import names, standard
+from uavcas.views import view
 
 assert uavcas.__file__.startswith(sys.argv[1]), uavcas.__file__
 assert "tiny" in names() and standard("tiny").source == "test only"
-cols = card_columns(arrow_schema("tiny"), "tiny")
+cols = card_columns(arrow_schema("tiny"), "tiny", view("5tuple"))
 assert cols["Tiny Bytes"]["unit"] == "bytes", cols["Tiny Bytes"]
 assert cols["Tiny Packets"]["meaning"].startswith("packets of the flow"), cols["Tiny Packets"]
 assert "Flow Duration" not in cols  # the card lists this standard's columns, not another's
-assert describe("tiny_bytes_max", "tiny", episodes=True)[0] == "bytes"
+assert describe("tiny_bytes_max", "tiny", view("window-host"))[0] == "bytes"
 print("ok")
 '''
 

@@ -108,19 +108,37 @@ def test_every_quick_attack_has_something_to_act_on():
 
 def test_every_medium_composition_is_a_declared_class_and_repeats_on_fresh_victims():
     """The medium preset's compositions are classes of the vocabulary (pairs included), and its
-    three episodes per run attack three different victims, never overlapping."""
+    three rounds per run attack three different victims, never overlapping."""
     from uavcas.scenario.campaign import PRESETS
     from uavcas.twin.plan import plan
-    from uavcas.twin.schedule import EPISODE_GAP_S
+    from uavcas.twin.schedule import ROUND_GAP_S
     from uavcas.vocabulary import CLASSES, class_name
 
     medium = PRESETS["medium"]
-    assert medium.episodes == 3
+    assert medium.rounds == 3
     for config in medium.configs:
         assert class_name(parse(config).families) in CLASSES, config
-    p = plan("blackhole+dos=1000-6-2-mixed-3gpp-adaptive-grid-10-95", seed=3, episodes=medium.episodes)
-    by_episode = sorted({(a.start_s, a.stop_s, a.victims[0]) for a in p.attacks})
-    assert len(by_episode) == 3 and len({v for *_, v in by_episode}) == 3
-    for (_, stop, _), (start, _, _) in zip(by_episode, by_episode[1:]):
-        assert start - stop >= EPISODE_GAP_S
-    assert all(10.0 <= b - a <= 20.0 for a, b, _ in by_episode) and p.episodes == 3
+    p = plan("blackhole+dos=1000-6-2-mixed-3gpp-adaptive-grid-10-95", seed=3, rounds=medium.rounds)
+    by_round = sorted({(a.start_s, a.stop_s, a.victims[0]) for a in p.attacks})
+    assert len(by_round) == 3 and len({v for *_, v in by_round}) == 3
+    for (_, stop, _), (start, _, _) in zip(by_round, by_round[1:]):
+        assert start - stop >= ROUND_GAP_S
+    assert all(10.0 <= b - a <= 20.0 for a, b, _ in by_round) and p.rounds == 3
+
+
+def test_a_plan_stores_its_attack_rounds_under_their_old_name():
+    """plan.json keeps the key "episodes" for `Plan.rounds`: plans stay byte-identical, and a plan
+    written before the rename loads with its rounds."""
+    import json
+
+    from uavcas.twin.load import read_plan
+    from uavcas.twin.plan import plan
+
+    p = plan("blackhole+dos=1000-6-2-mixed-3gpp-adaptive-grid-10-95", seed=3, rounds=2)
+    stored = json.loads(p.to_json())
+    assert stored["episodes"] == 2 and "rounds" not in stored
+    back = read_plan(p.to_json())
+    assert back.rounds == 2 and back.to_json() == p.to_json()
+    del stored["episodes"]  # a plan from before attack rounds: one round
+    assert read_plan(json.dumps(stored)).rounds == 1
+

@@ -22,7 +22,7 @@ def digests() -> dict[str, str]:
     entries = manifest("quick", seed=0) + manifest("paper", seed=0)[:50]
     out = {}
     for e in entries:
-        p = plan(e.config, seed=e.seed, windows=e.windows, window_s=e.window_s, episodes=e.episodes)
+        p = plan(e.config, seed=e.seed, windows=e.windows, window_s=e.window_s, rounds=e.rounds)
         out[f"{e.config}@{e.seed}"] = hashlib.sha256(p.to_json().encode()).hexdigest()
     return out
 

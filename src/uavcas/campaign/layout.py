@@ -1,7 +1,8 @@
 """On-disk layout of a campaign inside its dataset directory, and what "done" means.
 
     DATASET_DIR/campaign.jsonl        the manifest being worked on (written once, then checked)
-    DATASET_DIR/campaign_extraction.json  the view and termination policy runs are extracted with (likewise)
+    DATASET_DIR/campaign_extraction.json  the view, termination policy (and a feature standard other than
+                                      the default) runs are extracted with (likewise)
     DATASET_DIR/campaign_emulation.json   the run options runs are emulated with: MAVLink signing (likewise)
     DATASET_DIR/runs/<index>/         one run: plan.json, run.json, attacks.jsonl, shaping.jsonl,
                                       pcap/ (local runs), outcome.json
@@ -23,6 +24,7 @@ from typing import TYPE_CHECKING
 
 from uavcas.atomic import atomic_write_text
 from uavcas.dataset.parquet import table_meta
+from uavcas.flows.standards import DEFAULT_STANDARD
 from uavcas.scenario import ManifestEntry, parse
 
 if TYPE_CHECKING:
@@ -49,7 +51,9 @@ class CampaignDir:
         """Record how runs are extracted (view and termination policy); resuming with another is
         refused (its shards would mix two descriptions of the traffic, or flows with episodes). A
         campaign begun before this was recorded is checked against its DONE shards."""
-        want = {"view": extraction.view, "termination": extraction.policy}
+        # the feature standard is recorded when not the default (files written before it was recorded: the default)
+        std = {} if extraction.features == DEFAULT_STANDARD else {"features": extraction.features}
+        want = {"view": extraction.view, "termination": extraction.policy, **std}
         if self.extraction_path.exists():
             have = [json.loads(self.extraction_path.read_text())]
         else:
@@ -57,14 +61,14 @@ class CampaignDir:
                      if s.stem.isdigit() and self.is_done(int(s.stem))]
             # shards from before the termination policies record none (their flows were cut at
             # the first backward FIN): they differ from any policy of today
-            have = [{"view": m.get("view", "5tuple"), "termination": (m.get("flow_rules") or {}).get("termination")}
+            have = [{"view": m.get("view", "5tuple"), "termination": (m.get("flow_rules") or {}).get("termination"),
+                     **({"features": m["features"]} if m.get("features", DEFAULT_STANDARD) != DEFAULT_STANDARD else {})}
                     for m in metas]
         for h in have:
             if h != want:
                 raise CampaignError(
-                    f"{self.root} holds a campaign extracted with --view {h['view']} --termination {h['termination']}, "
-                    f"not --view {want['view']} --termination {want['termination']}; resume it with those or use "
-                    "another --out")
+                    f"{self.root} holds a campaign extracted with {_options(h)}, not {_options(want)}; resume it with "
+                    "those or use another --out")
         if not self.extraction_path.exists():
             atomic_write_text(self.extraction_path, json.dumps(want) + "\n")
 
@@ -169,7 +173,7 @@ def read_manifest(path: Path) -> list[ManifestEntry]:
                     seed=int(d["seed"]),
                     windows=int(d.get("windows", 12)),
                     window_s=float(d.get("window_s", 5.0)),
-                    episodes=int(d.get("episodes", 1)),
+                    rounds=int(d.get("episodes", 1)),  # the stored key keeps its old name (ManifestEntry.to_dict)
                 )
             )
         except (json.JSONDecodeError, KeyError, TypeError, ValueError) as e:
@@ -180,3 +184,9 @@ def read_manifest(path: Path) -> list[ManifestEntry]:
     if not entries:
         raise CampaignError(f"{path}: empty manifest")
     return entries
+
+
+def _options(recorded: dict) -> str:
+    """A recorded extraction as the options that give it."""
+    std = recorded.get("features")
+    return f"--view {recorded['view']} --termination {recorded['termination']}" + (f" --features {std}" if std else "")

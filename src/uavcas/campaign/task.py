@@ -18,15 +18,17 @@ import time
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
-import pyarrow.parquet as pq
-
-from uavcas.dataset.parquet import to_table
+from uavcas.dataset.parquet import write_shard
 from uavcas.emulation.cleanup import reclaim_dead
-from uavcas.extract import EXTRACT_VIEWS, extract
+from uavcas.extract import extract
 from uavcas.flows import TERMINATIONS
 from uavcas.flows.assemble import DEFAULT_TERMINATION, HOST_VIEWS
+from uavcas.flows.standards import DEFAULT_STANDARD
+from uavcas.flows.standards import names as standard_names
 from uavcas.rundir import RunDir
 from uavcas.scenario import ManifestEntry
+from uavcas.views import names as view_names
+from uavcas.views import view
 
 from .worker import WorkerRequest, realize_in_child
 
@@ -45,23 +47,26 @@ class Extraction:
     termination: str | None = None  # None: the view's default (`uavcas.flows.termination`)
     labels: str = "ours"
     min_attack_fraction: float = 0.0
+    features: str = DEFAULT_STANDARD  # the feature standard (`uavcas.flows.standards`)
 
     def __post_init__(self) -> None:
-        if self.view not in EXTRACT_VIEWS:
-            raise ValueError(f"--view: {self.view!r} is not one of {', '.join(EXTRACT_VIEWS)}")
+        if self.view not in view_names():
+            raise ValueError(f"--view: {self.view!r} is not one of {', '.join(view_names())}")
+        if self.features not in standard_names():
+            raise ValueError(f"--features: {self.features!r} is not one of {', '.join(standard_names())}")
         if self.termination is not None and self.termination not in TERMINATIONS:
             raise ValueError(f"--termination: {self.termination!r} is not one of {', '.join(TERMINATIONS)}")
-        if self.termination is not None and self.view in HOST_VIEWS:
+        if self.termination is not None and view(self.view).flow_key in HOST_VIEWS:
             raise ValueError(f"--termination: the {self.view} view has no termination policy")
 
     @property
     def policy(self) -> str | None:
         """The termination policy in force (None for the host-pair views, which have none)."""
-        return None if self.view in HOST_VIEWS else self.termination or DEFAULT_TERMINATION
+        return None if view(self.view).flow_key in HOST_VIEWS else self.termination or DEFAULT_TERMINATION
 
     def options(self) -> dict:
         return {"view": self.view, "termination": self.termination, "labels": self.labels,
-                "min_attack_fraction": self.min_attack_fraction}
+                "min_attack_fraction": self.min_attack_fraction, "features": self.features}
 
 
 @dataclass
@@ -83,6 +88,24 @@ class RunOutcome:
         d = asdict(self)
         del d["shard"], d["files"]
         return d
+
+
+def extract_outcome(out: RunOutcome, run_dir: Path, extraction: Extraction = Extraction(), fidelity: str = "flag",
+                    return_files: bool = False) -> RunOutcome:
+    """Extract a finished run into `out` (ok): its shard as Parquet bytes (the one shard writer,
+    `uavcas.dataset.parquet.write_shard`, so its feature standard and view are the shard's own),
+    counts, verdict and, when `return_files`, its files."""
+    shard = extract(run_dir, run_id=str(out.index), **extraction.options())
+    buf = io.BytesIO()
+    write_shard(shard.frame, asdict(shard.info), buf)
+    out.shard = buf.getvalue()
+    out.n_flows, out.class_counts = shard.info.n_flows, dict(shard.info.class_counts)
+    out.fidelity = shard.info.fidelity
+    out.retry = fidelity == "retry" and out.fidelity == "fail"
+    if return_files:
+        out.files = {p.name: p.read_bytes() for p in RunDir(run_dir).files() if p.exists()}
+    out.ok = True
+    return out
 
 
 def execute_entry(
@@ -118,23 +141,13 @@ def execute_entry(
         shutil.rmtree(base)
     out = RunOutcome(index=entry.index, ok=False, host=host, wall_s=0.0)
     req = WorkerRequest(config=entry.config, seed=entry.seed, windows=entry.windows, window_s=entry.window_s,
-                        episodes=entry.episodes, out_dir=str(base), profile=profile, mavlink_signing=mavlink_signing)
+                        rounds=entry.rounds, out_dir=str(base), profile=profile, mavlink_signing=mavlink_signing)
     try:
         res = realize_in_child(req, limit_s=entry.windows * entry.window_s + RUN_SLACK_S, detach=detach)
         if not res.ok:
             out.error = res.error
             return out
-        shard = extract(base, run_id=str(entry.index), **extraction.options())
-        buf = io.BytesIO()
-        pq.write_table(to_table(shard.frame, meta=asdict(shard.info)), buf, compression="zstd")
-        out.shard = buf.getvalue()
-        out.n_flows, out.class_counts = shard.info.n_flows, dict(shard.info.class_counts)
-        out.fidelity = shard.info.fidelity
-        out.retry = fidelity == "retry" and out.fidelity == "fail"
-        if return_files:
-            out.files = {p.name: p.read_bytes() for p in RunDir(base).files() if p.exists()}
-        out.ok = True
-        return out
+        return extract_outcome(out, base, extraction, fidelity, return_files)
     except Exception as e:  # reported per run; the campaign goes on and retries
         out.error = f"{type(e).__name__}: {str(e).splitlines()[0] if str(e) else ''}"
         return out

@@ -44,7 +44,7 @@ class WorkerRequest(BaseModel):
     seed: int
     windows: int
     window_s: float
-    episodes: int = 1
+    rounds: int = 1
     out_dir: str
     profile: str | None = None
     mavlink_signing: bool = False  # RunOptions.mavlink_signing
@@ -62,7 +62,7 @@ def realize_request(req: WorkerRequest) -> WorkerResult:
     """Plan, check, realise and audit one scenario into `req.out_dir` (in this process; needs root).
     The audit's verdict in run.json is what the campaign's fidelity policy reads (`task.execute_entry`)."""
     p = plan(req.config, seed=req.seed, windows=req.windows, window_s=req.window_s, profile=req.profile,
-             episodes=req.episodes)
+             rounds=req.rounds)
     out = Path(req.out_dir)
     reason = preflight(p, out)
     feats = None

@@ -17,15 +17,18 @@ from uavcas.vocabulary import FIDELITY_POLICIES
 
 from .common import (
     ExtractView,
+    Standard,
     Termination,
     check_output,
     console,
     fail,
+    features_option,
     min_attack_fraction_option,
     one_of,
     profile_option,
     seed_option,
     termination_option,
+    view_option,
 )
 
 Preset = one_of(PRESETS)
@@ -68,9 +71,8 @@ def run_cmd(
                                       "or 'retry' (try again up to --retries, then keep the last, flagged)."),
     report: bool = typer.Option(True, "--report/--no-report", help="Write DATASET_DIR/report/index.html at the end."),
     min_attack_fraction: float = min_attack_fraction_option(),
-    view: ExtractView = typer.Option("5tuple", "--view",
-                                     help="What each run is extracted to: 5tuple, hostpair, window-hostpair "
-                                                      "(flows) or window-host (one row per node per plan window)."),
+    view: ExtractView = view_option(),
+    features: Standard = features_option(),
     termination: Termination | None = termination_option(),
     mavlink_signing: bool = typer.Option(False, "--mavlink-signing/--no-mavlink-signing",
                                          help="Every run signs its MAVLink (MAVLink 2 signing, a per-run key): "
@@ -80,7 +82,8 @@ def run_cmd(
     check_output(out, "dir")
 
     try:  # before anything is planned or created
-        extraction = Extraction(view=view, termination=termination, min_attack_fraction=min_attack_fraction)
+        extraction = Extraction(view=view, termination=termination, min_attack_fraction=min_attack_fraction,
+                                features=features)
     except ValueError as e:
         raise fail(str(e)) from None
     if preset is not None and manifest_file is not None:

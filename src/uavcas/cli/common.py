@@ -22,10 +22,10 @@ from uavcas.flows.termination import TERMINATIONS
 from uavcas.labels import LabelError
 from uavcas.network.naming import check_prefix as check
 from uavcas.scenario import ScenarioError
-from uavcas.schema import EPISODE_VIEW
 from uavcas.twin.plan import plan as make_plan
 from uavcas.twin.profile import ProfileError
-from uavcas.twin.schedule import EpisodeError
+from uavcas.twin.schedule import RoundError
+from uavcas.views import views as registered_views
 
 from .console import console, err_console, fail  # noqa: F401  (the commands take them from here)
 
@@ -34,6 +34,7 @@ TERMINATION_HELP = ("How a TCP flow ends: connection (default: one connection on
                     "first backward FIN or RST closes, duplicate forward FIN dropped, no 1-packet flows; reproduces "
                     "its 'TCP appendix' flows) or timeout (nfstream's: idle/active timeouts only).")
 
+VIEW_HELP = "What each run is extracted to: " + "; ".join(f"{v.name} ({v.help})" for v in registered_views()) + "."
 FEATURES_HELP = "Feature standard: " + "; ".join(f"{s.name} ({s.summary})" for s in standards()) + "."
 
 # --- choices, arguments and options shared by several commands ------------------------------------
@@ -47,7 +48,7 @@ def one_of(values) -> Any:
 
 
 View = one_of(VIEWS)  # a flow view of `uavcas.flows.assemble`
-ExtractView = one_of((*VIEWS, EPISODE_VIEW))  # ... or episodes: one row per node per plan window
+ExtractView = one_of(v.name for v in registered_views())  # a view of the registry `uavcas.views`
 Standard = one_of(names())  # a feature standard of the registry `uavcas.flows.standards`
 Termination = one_of(TERMINATIONS)
 
@@ -77,9 +78,10 @@ def window_s_option() -> Any:
     return typer.Option(5.0, "--window-s", min=MIN_WINDOW_S, help="Window length in seconds.")
 
 
-def episodes_option() -> Any:
-    return typer.Option(1, "--episodes", min=1, help="Attack episodes per run: the composition again on a fresh "
-                                                     "victim, 10-20 s each, >= 5 s apart (the medium preset uses 3).")
+def rounds_option() -> Any:
+    return typer.Option(1, "--rounds", "--episodes", min=1,
+                        help="Attack rounds per run: the composition again on fresh victims, 10-20 s each, >= 5 s "
+                             "apart (the medium preset uses 3). --episodes: its old name, deprecated.")
 
 
 def profile_option() -> Any:
@@ -89,6 +91,10 @@ def profile_option() -> Any:
 
 def features_option() -> Any:
     return typer.Option(DEFAULT_STANDARD, "--features", help=FEATURES_HELP)
+
+
+def view_option() -> Any:
+    return typer.Option("5tuple", "--view", help=VIEW_HELP)
 
 
 def termination_option() -> Any:
@@ -154,14 +160,14 @@ def path_fail(path: Path, error: Exception) -> "typer.Exit":
     return fail(msg if str(path) in msg else f"{path}: {msg}")
 
 
-def plan_or_fail(config: str, seed: int, windows: int, window_s: float, profile: str | None, episodes: int = 1):
+def plan_or_fail(config: str, seed: int, windows: int, window_s: float, profile: str | None, rounds: int = 1):
     """The plan of a scenario, or a one-line error naming the bad field / profile (exit 2)."""
     try:
-        p = make_plan(config, seed=seed, windows=windows, window_s=window_s, profile=profile, episodes=episodes)
+        p = make_plan(config, seed=seed, windows=windows, window_s=window_s, profile=profile, rounds=rounds)
         if p.config != config:
             err_console.print(f"note: scenario normalised to its canonical form {p.config}", highlight=False)
         return p
-    except (ScenarioError, EpisodeError) as e:
+    except (ScenarioError, RoundError) as e:
         raise fail(str(e)) from None
     except ProfileError as e:
         raise fail(f"--profile: {e}") from None

@@ -8,7 +8,7 @@ from pathlib import Path
 import typer
 
 from uavcas.dataset.store import extract_run
-from uavcas.schema import EPISODE_VIEW
+from uavcas.views import view as view_spec
 from uavcas.vocabulary import LABEL_MODES
 
 from .common import (
@@ -25,6 +25,7 @@ from .common import (
     one_of,
     run_dir_argument,
     termination_option,
+    view_option,
     warn,
 )
 
@@ -32,10 +33,7 @@ from .common import (
 def extract_cmd(
     run_dir: Path = run_dir_argument(),
     out: Path = typer.Option(..., "--out", help="Dataset directory to add the run's shard to."),
-    view: ExtractView = typer.Option("5tuple", "--view",
-                                     help="Flow key: 5tuple, hostpair or window-hostpair (one flow per host pair per "
-                                          "plan window); or window-host: episodes, one row per node per plan window "
-                                          "(collaborative classes)."),
+    view: ExtractView = view_option(),
     features: Standard = features_option(),
     labels: one_of(LABEL_MODES) = typer.Option("ours", "--labels",
                                                help="ours (from each packet's effect) or paper (IP membership)."),
@@ -59,8 +57,8 @@ def extract_cmd(
     if not info.complete:
         warn([f"run {info.run_id} is incomplete (exit status {info.run_exit_status}); its shard is marked so"])
     counts = ", ".join(f"{k} {v}" for k, v in sorted(info.class_counts.items()))
-    unit = "host-window rows" if info.view == EPISODE_VIEW else "flows"
-    console.print(f"run [bold]{info.run_id}[/]: {info.n_flows} {unit} from {info.n_packets} packets ({counts}) "
+    rows = view_spec(info.view).row.plural
+    console.print(f"run [bold]{info.run_id}[/]: {info.n_flows} {rows} from {info.n_packets} packets ({counts}) "
                   f"-> {out}", highlight=False)
     if info.impure_dropped:
         console.print(f"{info.impure_dropped} flow(s) left out: attack_fraction below {min_attack_fraction:g}")

@@ -13,6 +13,7 @@ from rich.table import Table
 from uavcas.dataset.dictionary import DictionaryError, columns
 from uavcas.dataset.runs import dataset_runs, percent
 from uavcas.dataset.store import card_standard, read_card
+from uavcas.views import card_view
 
 from .common import console, dataset_argument, dataset_errors, fail
 
@@ -31,7 +32,7 @@ def info_cmd(
         _print_columns(dataset_dir, card)
         return
     total = int(card.get("n_flows", 0))
-    unit = "host-window rows" if card.get("unit") == "host-window" else "flows"
+    unit = card_view(card).row.plural
     table = Table(title=f"{dataset_dir}: {total} {unit}, {card.get('n_runs', 0)} runs")
     table.add_column("class")
     table.add_column("flows", justify="right")
@@ -64,8 +65,7 @@ def _print_columns(dataset_dir: Path, card: dict) -> None:
     if not path.is_file():
         raise fail(f"{dataset_dir}: no flows.parquet beside dataset.json")
     try:
-        cols = columns(pq.read_schema(path), card_standard(card),
-                       episodes=card.get("unit") == "host-window")
+        cols = columns(pq.read_schema(path), card_standard(card), card_view(card))
     except DictionaryError as exc:
         raise fail(str(exc)) from None
     sys.stdout.write("column\tdtype\tunit\tmeaning\n")

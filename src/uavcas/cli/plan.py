@@ -15,9 +15,9 @@ from .common import (
     check_output,
     config_argument,
     console,
-    episodes_option,
     plan_or_fail,
     profile_option,
+    rounds_option,
     seed_option,
     window_s_option,
     windows_option,
@@ -29,7 +29,7 @@ def plan_cmd(
     seed: int = seed_option("Seed: the same seed and config give the same plan."),
     windows: int = windows_option(),
     window_s: float = window_s_option(),
-    episodes: int = episodes_option(),
+    rounds: int = rounds_option(),
     profile: str = profile_option(),
     out: Path = typer.Option(None, "--out", help="Write plan.json here."),
     figure: Path = typer.Option(None, "--figure", help="Directory for one topology PNG per window."),
@@ -39,7 +39,7 @@ def plan_cmd(
         check_output(out, "file")
     if figure is not None:
         check_output(figure, "dir", "--figure")
-    p = plan_or_fail(config, seed, windows, window_s, profile, episodes)
+    p = plan_or_fail(config, seed, windows, window_s, profile, rounds)
     print_summary(p)
     if out is not None:
         atomic_write_text(out, p.to_json())

@@ -24,12 +24,12 @@ from .common import (
     check_output,
     config_argument,
     console,
-    episodes_option,
     fail,
     plan_or_fail,
     prefix_option,
     prefix_or_fail,
     profile_option,
+    rounds_option,
     seed_option,
     window_s_option,
     windows_option,
@@ -43,7 +43,7 @@ def run_cmd(
     seed: int = seed_option("Plan seed."),
     windows: int = windows_option(),
     window_s: float = window_s_option(),
-    episodes: int = episodes_option(),
+    rounds: int = rounds_option(),
     profile: str = profile_option(),
     prefix: str = prefix_option("Namespace prefix (default: random)."),
     think_s: float = typer.Option(0.5, "--think-s", min=0.0, help="Mean pause between a BS's image fetches."),
@@ -58,7 +58,7 @@ def run_cmd(
 ) -> None:
     """Realise a scenario's plan on real Linux stacks, attack it, capture every switch."""
     check_output(out, "dir")
-    p = plan_or_fail(config, seed, windows, window_s, profile, episodes)
+    p = plan_or_fail(config, seed, windows, window_s, profile, rounds)
     if mavlink_signing and p.scenario is not None and p.scenario.payload not in MAVLINK_PAYLOADS:
         raise fail(f"--mavlink-signing: payload {p.scenario.payload!r} carries no MAVLink "
                    f"(use {', '.join(MAVLINK_PAYLOADS)})")

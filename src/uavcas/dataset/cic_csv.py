@@ -32,7 +32,8 @@ import pyarrow.parquet as pq
 
 from uavcas.atomic import atomic_path
 from uavcas.flows.standards import feature_columns
-from uavcas.schema import EPISODE_VIEW, SEQUENCE_COLUMNS
+from uavcas.schema import SEQUENCE_COLUMNS
+from uavcas.views import card_view
 
 from .read import select_view
 from .store import card_standard, read_card
@@ -104,13 +105,14 @@ def _rows(b: pa.RecordBatch, header: list[str]) -> list[str]:
 
 def write_flow_csv(dataset_dir: Path, out: Path, view: str | None = None) -> int:
     """Write DATASET_DIR's flows (of `view`, needed when it holds several) to the CSV file `out`;
-    the number of rows written. Episodes (window-host rows) are refused: they are no flows."""
+    the number of rows written. Rows of a view that are no flows (window-host episodes) are refused."""
     card = read_card(dataset_dir)
     path = Path(dataset_dir) / "flows.parquet"
-    if card.get("unit") == "host-window" or "host" in pq.read_schema(path).names:
-        raise CicCsvError(f"{dataset_dir}: {EPISODE_VIEW} rows (episodes) are no flows and the csv format holds one "
-                          "row per flow; extract the runs with `uavcas extract RUN --view 5tuple` (or hostpair) into "
-                          "another dataset and export that")
+    spec = card_view(card)
+    if not spec.is_flow:
+        raise CicCsvError(f"{dataset_dir}: {spec.name} rows ({spec.row.plural}) are no flows and the csv format holds "
+                          "one row per flow; extract the runs with `uavcas extract RUN --view 5tuple` (or hostpair) "
+                          "into another dataset and export that")
     standard = card_standard(card)
     names = [n for n in pq.read_schema(path).names if n not in LEFT_OUT]
     if "view" in names:  # one view only: a dataset extracted with several holds the same traffic twice

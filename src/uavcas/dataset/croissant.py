@@ -3,7 +3,7 @@ published dataset directory (`uavcas.dataset.publish`).
 
 One FileSet, the Parquet shards (`shards/*.parquet`, each listed with its SHA-256 as a FileObject
 of the distribution too, so a reader can check every file it downloads), and one RecordSet over
-it, `flows` (or `host_windows` for a window-host dataset): one Field per column of the data
+it, named by the dataset's view (`flows`, or `host_windows` for a window-host dataset): one Field per column of the data
 dictionary (`uavcas.dataset.dictionary`), its Croissant data type from the column's Arrow type
 (a list column is `isArray`), its description the dictionary's meaning and unit. The card
 (`dataset.json`) rides along as a FileObject.
@@ -21,6 +21,8 @@ from pathlib import Path
 
 import mlcroissant as mlc
 import pyarrow as pa
+
+from uavcas.views import ViewSpec
 
 from .dictionary import columns
 
@@ -77,12 +79,8 @@ def _field_id(record_set: str, name: str) -> str:
     return f"{record_set}/{safe}"
 
 
-def record_set_name(episodes: bool) -> str:
-    return "host_windows" if episodes else "flows"
-
-
 def metadata_json(info: DatasetInfo, files: list[FileEntry], schema: pa.Schema, standard: str,
-                  episodes: bool) -> dict:
+                  view: ViewSpec) -> dict:
     """The Croissant JSON-LD of the published directory; raises CroissantError if mlcroissant
     finds an error while building it."""
     ctx = mlc.Context(conforms_to=CROISSANT_VERSION)
@@ -94,18 +92,17 @@ def metadata_json(info: DatasetInfo, files: list[FileEntry], schema: pa.Schema, 
                                     includes=[f"{SHARDS}/*.parquet"],
                                     description=f"{len(shards)} Parquet shards, one per run; their union is the "
                                                 "dataset"))
-    rs = record_set_name(episodes)
+    rs = view.record_set
     fields = []
-    for f, col in zip(schema, columns(schema, standard, episodes)):
+    for f, col in zip(schema, columns(schema, standard, view)):
         data_type, is_array = _data_type(f.type)
         fields.append(mlc.Field(
             # a list column: isArray, no arrayShape (Croissant's default, one dimension of any length)
             ctx=ctx, id=_field_id(rs, f.name), name=f.name, data_types=[data_type], is_array=is_array or None,
             description=f"{col.meaning} (unit: {col.unit})",
             source=mlc.Source(ctx=ctx, file_set=SHARDS, extract=mlc.Extract(ctx=ctx, column=f.name))))
-    unit = "one plan node's traffic in one plan window" if episodes else "one flow"
     record_set = mlc.RecordSet(ctx=ctx, id=rs, name=rs, fields=fields,
-                               description=f"one row = {unit}; the columns of the data dictionary")
+                               description=f"one row = {view.meaning}; the columns of the data dictionary")
     try:
         md = mlc.Metadata(ctx=ctx, name=info.name, description=info.description, license=[info.license],
                           cite_as=info.cite_as, version=info.version, url=info.url,

@@ -7,20 +7,25 @@ section of docs/formats.md (`markdown`; a test keeps the file equal to it) and
 `uavcas info DATASET --columns`. Feature units and meanings are those of the feature standard's
 record (`uavcas.flows.standards`: `FeatureStandard.units`, `.meanings`); family columns
 (`attack_packets_<family>`, `label_<family>`) and effect words derive from `uavcas.vocabulary`, so
-a new standard, family or effect is described without an edit here. A column with no entry raises
+a new standard, family or effect is described without an edit here. The columns only one view has
+(the window-host view's `host`, its packet features and summaries) are described by the view's
+module (`uavcas.views`: `ViewSpec.describe`), from the shared entries here (`feature_entry`,
+`context_entry`). A column with no entry raises
 `DictionaryError` (a test extracts datasets and looks every column up).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
-from uavcas import schema as s
 from uavcas import vocabulary as v
 from uavcas.channel.pathloss import names as pathloss_names
-from uavcas.flows.standards import DEFAULT_STANDARD
 from uavcas.flows.standards import standard as feature_standard
 from uavcas.traffic.payloads import PAYLOAD_NAMES
+
+if TYPE_CHECKING:  # a view's modules read this dictionary's shared entries: the spec is passed in
+    from uavcas.views.base import ViewSpec
 
 NO_UNIT = "-"
 
@@ -53,9 +58,6 @@ _IDS: dict[str, tuple[str, str]] = {
     "first_ts_ns": ("ns", "Unix time of the first packet, exact; packet k is at first_ts_ns + seq_time_s[k] x 1e9"),
     "capture_point": (NO_UNIT, "the flow's vantage switch (s-<node>): its capture holds the row's packets, except a "
                       "transmission that never crossed it, kept at its last switch"),
-    "host": (NO_UNIT, "the plan node (UAV or base station) the episode is about"),
-    "host_ip": (NO_UNIT, "the node's address"),
-    "window": (NO_UNIT, "plan window index: floor((t - t0) / window_s)"),
 }
 _AXES: dict[str, tuple[str, str]] = {
     "attacks": (NO_UNIT, "the scenario's attacks field: family tokens with their parameters, or benign"),
@@ -94,21 +96,6 @@ for _f in v.FAMILIES:
     _TRUTH[f"attack_packets_{_f}"] = ("packets", f"attack packets whose effect comes from a {_f} attack "
                                                  f"(provoked: the provoking family)")
     _TRUTH[f"label_{_f}"] = (NO_UNIT, f"the row carries family {_f} (class {v.FAMILY_CLASS[_f]}); multi-hot")
-
-# the window-host view's packet features (schema.EPISODE_PACKET_UNITS gives their units)
-_EPISODE: dict[str, str] = {
-    "packets_out": "packets the node sent in the window", "packets_in": "packets the node received",
-    "bytes_out": "frame bytes the node sent", "bytes_in": "frame bytes the node received",
-    "packets_per_s": "packets sent or received per second of window", "bytes_per_s": "frame bytes per second of window",
-    "active_s": "last packet time - first packet time in the window", "peers": "distinct addresses at the other end",
-    "peer_ports": "distinct TCP/UDP ports at the other end", "syn_out": "TCP SYNs (ACK clear) sent",
-    "syn_in": "TCP SYNs (ACK clear) received", "synack_out": "TCP SYN-ACKs sent", "synack_in": "TCP SYN-ACKs received",
-    "rst_out": "TCP RSTs sent", "rst_in": "TCP RSTs received", "fin_out": "TCP FINs sent",
-    "fin_in": "TCP FINs received",
-    "udp_share": "share of the episode's packets that are UDP", "icmp_share": "share that are ICMP (or ICMPv6)",
-    "flows": "5-tuple flows starting in the window with the node as an endpoint",
-    "flows_out": "of those, initiated by the node", "flows_in": "of those, initiated by its peer",
-}  # fmt: skip
 
 # context columns (uavcas.flows.context; docs/formats.md "Context columns" says what a node must observe)
 _CTX_FLOW: dict[str, tuple[str, str]] = {
@@ -181,7 +168,7 @@ _CTX_OWN_SHIFT = {"ctx_rtt_shift_ms": "ctx_rtt_ms", "ctx_delay_shift_ms": "ctx_d
                   "ctx_path_len_shift": "ctx_path_len_mean"}
 
 
-def _context(name: str) -> tuple[str, str] | None:
+def context_entry(name: str) -> tuple[str, str] | None:
     if name in _CTX_FLOW:
         return _CTX_FLOW[name]
     if name in _CTX_OWN_SHIFT:
@@ -195,63 +182,41 @@ def _context(name: str) -> tuple[str, str] | None:
     return None
 
 
-def _feature(name: str, standard: str) -> tuple[str, str] | None:
+def feature_entry(name: str, standard: str) -> tuple[str, str] | None:
+    """(unit, meaning) of a feature of the standard (None: none of its columns)."""
     std = feature_standard(standard)
     if name not in std.units:
         return None
     return std.units[name], f"{std.meanings[name]} [{std.name}]"
 
 
-def describe(name: str, standard: str = DEFAULT_STANDARD, episodes: bool = False) -> tuple[str, str]:
-    """(unit, meaning) of column `name` of a dataset of feature standard `standard` (rows are
-    window-host episodes when `episodes`)."""
+def describe(name: str, standard: str, view: "ViewSpec") -> tuple[str, str]:
+    """(unit, meaning) of column `name` of a dataset of feature standard `standard` whose rows
+    are of `view` (`uavcas.views`: the entries of the view's own columns are its)."""
     for table in (_IDS, _AXES, _COUNTS, _SEQUENCES, _TRUTH):
         if name in table:
             return table[name]
-    if not episodes:
-        found = _feature(name, standard) or _context(name)
-    elif name in _EPISODE:
-        found = s.EPISODE_PACKET_UNITS[name], _EPISODE[name]
-    elif name in s.EPISODE_ROUTE_FEATURES:
-        found = _CTX_FLOW[name]
-    else:
-        found = _episode_summary(name, standard)
+    found = view.describe(name, standard)
     if found is None:
         raise DictionaryError(f"column {name!r} has no entry in the data dictionary (uavcas.dataset.dictionary)")
     return found
 
 
-def _episode_summary(name: str, standard: str) -> tuple[str, str] | None:
-    stem, _, stat = name.rpartition("_")
-    if stat not in s.EPISODE_STATS:
-        return None
-    word = "mean" if stat == "mean" else "largest"
-    for feat, feat_stem in feature_standard(standard).episode_summary.items():
-        if feat_stem == stem:
-            unit, _ = _feature(feat, standard)
-            return unit, (f"{word} of the flows' {feat} [{standard}] over the flows starting in the window with the "
-                          "node as an endpoint")
-    ctx = _context(stem)
-    if ctx is not None:
-        return ctx[0], f"{word} of {stem} over those flows ({ctx[1]})"
-    return None
-
-
-def field_metadata(name: str, standard: str = DEFAULT_STANDARD, episodes: bool = False) -> dict[bytes, bytes]:
+def field_metadata(name: str, standard: str, view: "ViewSpec") -> dict[bytes, bytes]:
     """The Parquet field metadata of a column: b"unit" and b"meaning"."""
-    unit, meaning = describe(name, standard, episodes)
+    unit, meaning = describe(name, standard, view)
     return {b"unit": unit.encode(), b"meaning": meaning.encode()}
 
 
-def columns(arrow_schema, standard: str = DEFAULT_STANDARD, episodes: bool = False) -> list[Column]:
-    """Every column of `arrow_schema` (a pyarrow Schema: a dataset's file or a shard's) described."""
-    return [Column(f.name, str(f.type), *describe(f.name, standard, episodes)) for f in arrow_schema]
+def columns(arrow_schema, standard: str, view: "ViewSpec") -> list[Column]:
+    """Every column of `arrow_schema` (a pyarrow Schema: a dataset's file or a shard's of `view`) described."""
+    return [Column(f.name, str(f.type), *describe(f.name, standard, view)) for f in arrow_schema]
 
 
-def card_columns(arrow_schema, standard: str = DEFAULT_STANDARD, episodes: bool = False) -> dict[str, dict]:
+def card_columns(arrow_schema, standard: str, view: "ViewSpec") -> dict[str, dict]:
     """The card's `columns`: name -> {dtype, unit, meaning}, in file order."""
     return {c.name: {"dtype": c.dtype, "unit": c.unit, "meaning": c.meaning}
-            for c in columns(arrow_schema, standard, episodes)}
+            for c in columns(arrow_schema, standard, view)}
 
 
 def markdown_table(cols: list[Column]) -> list[str]:

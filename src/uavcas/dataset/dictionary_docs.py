@@ -9,9 +9,10 @@ from __future__ import annotations
 
 from uavcas import schema as s
 from uavcas.flows.standards import DEFAULT_STANDARD, standards
+from uavcas.views import DEFAULT_VIEW, view
 
 from .dictionary import columns, markdown_table
-from .parquet import arrow_schema, episode_arrow_schema
+from .parquet import arrow_schema
 
 
 def markdown() -> str:
@@ -19,19 +20,20 @@ def markdown() -> str:
     with context, every other standard's features, and the window-host view's own columns."""
     table, default = markdown_table, DEFAULT_STANDARD
     others = [std for std in standards() if std.name != default]
-    flows = columns(arrow_schema(default, context=True), default)
+    flow_view, episode_view = view(DEFAULT_VIEW), view(s.EPISODE_VIEW)
+    flows = columns(arrow_schema(default, context=True), default, flow_view)
     flow_names = {c.name for c in flows}
     summaries = set(s.EPISODE_CONTEXT_FEATURES) - set(s.EPISODE_ROUTE_FEATURES)  # said in one sentence below
-    episode = [c for c in columns(episode_arrow_schema(default, context=True), default, episodes=True)
+    episode = [c for c in columns(arrow_schema(default, context=True, view=s.EPISODE_VIEW), default, episode_view)
                if (c.name not in flow_names or c.name == "packets") and c.name not in summaries]
     out = ["<!-- generated: python -m uavcas.dataset.dictionary_docs docs/formats.md (tests/dataset/test_dictionary.py "
            "checks it) -->",
            "", f"Flow datasets (`{default}` standard, with the context columns):", "", *table(flows), ""]
     for std in others:
-        own = [c for c in columns(arrow_schema(std.name), std.name) if c.name in std.units]
+        own = [c for c in columns(arrow_schema(std.name), std.name, flow_view) if c.name in std.units]
         out += [f"The `{std.name}` standard's {len(std.columns)} features (in place of the `{default}` ones):", "",
                 *table(own), ""]
-        episode += [c for c in columns(episode_arrow_schema(std.name), std.name, episodes=True)
+        episode += [c for c in columns(arrow_schema(std.name, view=s.EPISODE_VIEW), std.name, episode_view)
                     if c.name not in {e.name for e in episode} and c.name not in flow_names]
     out += ["The window-host view's own columns (identity, axes, truth and labels as for flows; each context column "
             "`ctx_<name>` as `ctx_<name>_mean` and `ctx_<name>_max` over the episode's flows, same unit):", "",

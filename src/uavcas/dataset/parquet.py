@@ -1,4 +1,4 @@
-"""Arrow schema of `flows.parquet` (column names from `schema.py`, dtypes fixed here) and I/O.
+"""Arrow schema of `flows.parquet` (column names from `schema.py`, dtypes from the view, `uavcas.views`) and I/O.
 
 Dtypes: identity strings are `string`; ports int32, protocol int16, seed/flow_id/packets/bytes
 int64; first_ts/last_ts float64 Unix seconds, first_ts_ns int64 Unix nanoseconds (exact);
@@ -9,9 +9,13 @@ columns: seq_time_s list<float64>, seq_size list<int32>, seq_flags list<int16>, 
 features of the dataset's standard float64 (`uavcas.flows.standards`); attack_packets, provoked_packets and
 attack_packets_<family> int64, attack_fraction float64; label_<family> bool; label, label_source string;
 the context columns (`schema.CONTEXT_FEATURES`, all or none) float64. Every field carries its
-data-dictionary entry (`uavcas.dataset.dictionary`) as field metadata: b"unit", b"meaning". A window-host shard
-(episodes, `uavcas.labels.episodes`) has its own columns instead: `episode_arrow_schema`. Any column may hold nulls
-where the source did not carry the value (an imported CSV has no ports, for instance).
+data-dictionary entry (`uavcas.dataset.dictionary`) as field metadata: b"unit", b"meaning". Those are
+the columns of a flow view; another view (`uavcas.views`: the window-host view's episodes, say) has its
+own (`ViewSpec.fields`, `arrow_schema(view=...)`). Any column may hold nulls where the source did
+not carry the value (an imported CSV has no ports, for instance).
+
+Every shard is written by `write_shard`, from its rows and its metadata, which names its feature
+standard and its view.
 
 Files are written from Arrow arrays without pandas metadata, so plain `pandas.read_parquet` reads
 every file (list columns come back as object columns of arrays).
@@ -20,7 +24,9 @@ every file (list columns come back as object columns of arrays).
 from __future__ import annotations
 
 import json
+from collections.abc import Mapping
 from pathlib import Path
+from typing import Any, BinaryIO
 
 import numpy as np
 import pandas as pd
@@ -28,136 +34,62 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from uavcas.atomic import atomic_path
-from uavcas.flows.standards import DEFAULT_STANDARD, episode_feature_columns, feature_columns
-from uavcas.schema import (
-    AXIS_COLUMNS,
-    CONTEXT_FEATURES,
-    COUNT_COLUMNS,
-    EPISODE_CONTEXT_FEATURES,
-    EPISODE_ID_COLUMNS,
-    EPISODE_PACKET_UNITS,
-    ID_COLUMNS,
-    LABEL_COLUMNS,
-    SEQUENCE_COLUMNS,
-    TRUTH_COLUMNS,
-)
+from uavcas.flows.standards import DEFAULT_STANDARD
+from uavcas.views import DEFAULT_VIEW, ViewSpec, recorded_view
+from uavcas.views import view as view_spec
 
 from .dictionary import field_metadata
 
-_ID_TYPES = {
-    "run_id": pa.string(),
-    "config": pa.string(),
-    "seed": pa.int64(),
-    "view": pa.string(),
-    "flow_id": pa.int64(),
-    "src_ip": pa.string(),
-    "src_port": pa.int32(),
-    "dst_ip": pa.string(),
-    "dst_port": pa.int32(),
-    "protocol": pa.int16(),
-    "first_ts": pa.float64(),
-    "last_ts": pa.float64(),
-    "first_ts_ns": pa.int64(),
-    "capture_point": pa.string(),
-}
-_AXIS_TYPES = {
-    "attacks": pa.string(),
-    "n_uav": pa.int64(),
-    "n_bs": pa.int64(),
-    "payload": pa.string(),
-    "pathloss": pa.string(),
-    "modulation": pa.string(),
-    "mission": pa.string(),
-    "tx_dbm": pa.int64(),
-    "noise_dbm": pa.float64(),
-}
-_COUNT_TYPES = {"packets": pa.int64(), "bytes": pa.int64(), "duration_s": pa.float64()}
-_SEQ_TYPES = {
-    "seq_time_s": pa.list_(pa.float64()),
-    "seq_size": pa.list_(pa.int32()),
-    "seq_flags": pa.list_(pa.int16()),
-    "seq_dir": pa.list_(pa.int8()),
-    "seq_effect": pa.list_(pa.string()),
-}
 META_KEY = b"uavcas"
 
 
-def _described(fields: list[pa.Field], standard: str, episodes: bool) -> pa.Schema:
+def _described(fields: list[pa.Field], standard: str, view: ViewSpec) -> pa.Schema:
     """The fields with their data-dictionary entry (unit, meaning) as Parquet field metadata."""
-    return pa.schema([f.with_metadata(field_metadata(f.name, standard, episodes)) for f in fields])
+    return pa.schema([f.with_metadata(field_metadata(f.name, standard, view)) for f in fields])
 
 
-def with_dictionary(table: pa.Table, standard: str) -> pa.Table:
+def with_dictionary(table: pa.Table, standard: str, view: ViewSpec) -> pa.Table:
     """`table` with every field's data-dictionary metadata (a union of shards written before the
     dictionary existed gets it too)."""
-    schema = _described(list(table.schema), standard, episodes=table.schema.get_field_index("host") >= 0)
-    return table.cast(schema.with_metadata(table.schema.metadata))
+    return table.cast(_described(list(table.schema), standard, view).with_metadata(table.schema.metadata))
 
 
-def arrow_schema(standard: str = DEFAULT_STANDARD, context: bool = False) -> pa.Schema:
-    """The columns of a shard: `context` adds the ctx_* columns after the features."""
-    fields = [pa.field(c, _ID_TYPES[c]) for c in ID_COLUMNS]
-    fields += [pa.field(c, _AXIS_TYPES[c]) for c in AXIS_COLUMNS]
-    fields += [pa.field(c, _COUNT_TYPES[c]) for c in COUNT_COLUMNS]
-    fields += [pa.field(c, _SEQ_TYPES[c]) for c in SEQUENCE_COLUMNS]
-    fields += [pa.field(c, pa.float64()) for c in feature_columns(standard)]
-    fields += [pa.field(c, pa.float64()) for c in (CONTEXT_FEATURES if context else ())]
-    fields += [pa.field(c, pa.float64() if c == "attack_fraction" else pa.int64()) for c in TRUTH_COLUMNS]
-    fields += [pa.field(c, pa.bool_()) for c in LABEL_COLUMNS]
-    fields += [pa.field("label", pa.string()), pa.field("label_source", pa.string())]
-    return _described(fields, standard, episodes=False)
+def arrow_schema(standard: str = DEFAULT_STANDARD, context: bool = False, view: str = DEFAULT_VIEW) -> pa.Schema:
+    """The columns of a shard of `view` (`uavcas.views`; default: 5-tuple flows): `context` adds
+    the view's ctx_* columns after the features."""
+    spec = view_spec(view)
+    return _described(spec.fields(standard, context), standard, spec)
 
 
 COLUMNS: tuple[str, ...] = tuple(arrow_schema().names)
-_EPISODE_ID_TYPES = {**_ID_TYPES, "host": pa.string(), "host_ip": pa.string(), "window": pa.int64()}
-# counts of packets, bytes, peers, ports and flows are integers; rates, shares, spans and summaries floats
-_EPISODE_INT_UNITS = ("packets", "bytes", "hosts", "ports", "flows")
 
 
-def episode_arrow_schema(standard: str = DEFAULT_STANDARD, context: bool = False) -> pa.Schema:
-    """The columns of a window-host shard (`uavcas.labels.episodes`): identity, axes, packets,
-    the episode features (`FeatureStandard.episode_columns`), the summarised context columns
-    when `context`, then the same truth and label columns as flows."""
-    fields = [pa.field(c, _EPISODE_ID_TYPES[c]) for c in EPISODE_ID_COLUMNS]
-    fields += [pa.field(c, _AXIS_TYPES[c]) for c in AXIS_COLUMNS]
-    fields += [pa.field("packets", pa.int64())]
-    fields += [pa.field(c, pa.int64() if EPISODE_PACKET_UNITS.get(c) in _EPISODE_INT_UNITS else pa.float64())
-               for c in episode_feature_columns(standard)]
-    fields += [pa.field(c, pa.float64()) for c in (EPISODE_CONTEXT_FEATURES if context else ())]
-    fields += [pa.field(c, pa.float64() if c == "attack_fraction" else pa.int64()) for c in TRUTH_COLUMNS]
-    fields += [pa.field(c, pa.bool_()) for c in LABEL_COLUMNS]
-    fields += [pa.field("label", pa.string()), pa.field("label_source", pa.string())]
-    return _described(fields, standard, episodes=True)
+def shard_table(frame: pd.DataFrame, meta: Mapping[str, Any]) -> pa.Table:
+    """The one shard writer's table (`write_shard`): `frame` (one run's rows, every column of its
+    view) in its view's columns and dtypes, `meta` as the file's metadata.
 
-
-def is_episode_frame(df: pd.DataFrame) -> bool:
-    """A window-host frame (rows are node-windows, `host` names the node), not a flow frame."""
-    return "host" in df.columns
-
-
-def to_table(df: pd.DataFrame, meta: dict | None = None, standard: str | None = None) -> pa.Table:
-    """DataFrame with every schema column -> Arrow table in schema order and dtypes.
-
-    `standard` (default: `df.attrs["feature_standard"]`, else 'cic') picks the feature columns; the
-    context columns are written when `df` has them (all of them, or none).
+    The feature standard and the view are the shard's own record, `meta["features"]` and
+    `meta["view"]` (`uavcas.extract.ShardInfo`; no view: flows), never guessed from the frame (a
+    frame's `attrs` do not survive `pd.concat`); the context columns are written when `frame` has them (all of
+    them, or none).
     """
-    standard = standard or df.attrs.get("feature_standard", DEFAULT_STANDARD)
-    episodes = is_episode_frame(df)
-    all_ctx = EPISODE_CONTEXT_FEATURES if episodes else CONTEXT_FEATURES
-    ctx = [c for c in all_ctx if c in df.columns]
-    if ctx and len(ctx) != len(all_ctx):
-        missing = [c for c in all_ctx if c not in df.columns]
-        raise ValueError(f"flow frame has some context columns but lacks {missing}")
-    schema = (episode_arrow_schema if episodes else arrow_schema)(standard, context=bool(ctx))
-    missing = [c for c in schema.names if c not in df.columns]
+    if not meta.get("features"):
+        raise ValueError("shard metadata lacks 'features': a shard's feature standard is recorded, never guessed")
+    standard, view = str(meta["features"]), recorded_view(meta)  # no view recorded (an import): flows
+    ctx = [c for c in view.context_columns if c in frame.columns]
+    if ctx and len(ctx) != len(view.context_columns):
+        missing = [c for c in view.context_columns if c not in frame.columns]
+        raise ValueError(f"{view.row.singular} frame has some context columns but lacks {missing}")
+    schema = _described(view.fields(standard, bool(ctx)), standard, view)
+    missing = [c for c in schema.names if c not in frame.columns]
     if missing:
-        raise ValueError(f"flow frame lacks schema columns ({standard} features): {missing}")
+        raise ValueError(f"{view.row.singular} frame lacks schema columns ({standard} features): {missing}")
     arrays = []
     for f in schema:
-        col = df[f.name]
+        col = frame[f.name]
         if isinstance(col.dtype, pd.ArrowDtype):
             arr = pa.array(col.array)
-        elif f.name in _SEQ_TYPES and col.dtype == object:
+        elif pa.types.is_list(f.type) and col.dtype == object:
             arr = pa.array([None if v is None or (isinstance(v, float) and np.isnan(v)) else list(v) for v in col],
                            type=f.type)
         else:
@@ -166,8 +98,18 @@ def to_table(df: pd.DataFrame, meta: dict | None = None, standard: str | None = 
             arr = arr.combine_chunks()
         arrays.append(arr.cast(f.type))
     table = pa.Table.from_arrays(arrays, schema=schema)
-    meta = dict(meta or {}, feature_standard=standard)
-    return table.replace_schema_metadata({META_KEY: json.dumps(meta, sort_keys=True).encode()})
+    stored = dict(meta, feature_standard=standard)
+    return table.replace_schema_metadata({META_KEY: json.dumps(stored, sort_keys=True).encode()})
+
+
+def write_shard(frame: pd.DataFrame, meta: Mapping[str, Any], dest: Path | BinaryIO) -> None:
+    """Write one run's shard (`shard_table`) to `dest`: a path (atomically) or a binary buffer
+    (a campaign run's result, sent back to be committed)."""
+    table = shard_table(frame, meta)
+    if isinstance(dest, Path):
+        write_table(table, dest)
+    else:
+        pq.write_table(table, dest, compression="zstd")
 
 
 def table_standard(table_or_schema) -> str:

@@ -37,8 +37,9 @@ from uavcas.atomic import atomic_dir
 from uavcas.labels.label import rule_summary
 from uavcas.twin.profile import ProfileError, load_profile, profile_sha256
 from uavcas.versions import file_sha256
+from uavcas.views import card_view
 
-from .croissant import PARQUET, SHARDS, CroissantError, DatasetInfo, FileEntry, metadata_json, record_set_name, validate
+from .croissant import PARQUET, SHARDS, CroissantError, DatasetInfo, FileEntry, metadata_json, validate
 from .dictionary import columns, markdown_table
 from .runs import class_table, dataset_runs, flagged_lines
 from .store import DatasetError, card_standard, read_card
@@ -141,7 +142,7 @@ def _origin(card: dict) -> str:
 def _card_text(card: dict, dataset_dir: Path, info: DatasetInfo, files: list[FileEntry], schema) -> str:
     """README.md: the dataset card for people."""
     standard = card_standard(card)
-    episodes = card.get("unit") == "host-window"
+    view = card_view(card)
     names = set(schema.names)
     frame = pq.read_table(dataset_dir / "flows.parquet",
                           columns=[c for c in ("label", "view") if c in names]).to_pandas()
@@ -150,11 +151,11 @@ def _card_text(card: dict, dataset_dir: Path, info: DatasetInfo, files: list[Fil
     env = jinja2.Environment(loader=jinja2.PackageLoader("uavcas.dataset", "templates"), autoescape=False,
                              undefined=jinja2.StrictUndefined, keep_trailing_newline=True)
     return env.get_template("README.md.j2").render(
-        info=info, card=card, rows=int(card.get("n_flows", len(frame))), standard=standard, episodes=episodes,
-        record_set=record_set_name(episodes), class_header=list(classes.columns),
+        info=info, card=card, rows=int(card.get("n_flows", len(frame))), standard=standard, view=view,
+        class_header=list(classes.columns),
         class_rows=classes.to_dict("records"), headlines=headlines, rules=parts,
         fidelity=card.get("fidelity") or {}, flagged=flagged_lines(dataset_runs(dataset_dir, card)),
-        column_table="\n".join(markdown_table(columns(schema, standard, episodes))),
+        column_table="\n".join(markdown_table(columns(schema, standard, view))),
         calibration=calibration(card), calibration_data=CALIBRATION_DATA, files=files, uavcas_version=__version__,
         paper_url=PAPER_URL)
 
@@ -173,20 +174,19 @@ def publish(dataset_dir: str | Path, out: str | Path, name: str | None = None, l
         raise PublishError(f"{out}: not empty; publish into a new directory")
     schema = pq.read_schema(flows)
     standard = card_standard(card)
-    episodes = card.get("unit") == "host-window"
+    view = card_view(card)
     files = [FileEntry(f"{SHARDS}/{s.name}", s.stat().st_size, file_sha256(s), PARQUET) for s in shards]
     files.append(FileEntry("dataset.json", (dataset_dir / "dataset.json").stat().st_size,
                            file_sha256(dataset_dir / "dataset.json"), "application/json"))
-    unit = "host-window rows" if episodes else "flows"
     info = DatasetInfo(
         name=name or dataset_dir.resolve().name,
-        description=(f"{card.get('n_flows', 0)} labelled {unit} of {card.get('n_runs', 0)} {_origin(card)} "
+        description=(f"{card.get('n_flows', 0)} labelled {view.row.plural} of {card.get('n_runs', 0)} {_origin(card)} "
                      f"(features: {standard}; uavcas {__version__}, a re-implementation of: {PAPER_TITLE})."),
         license=license, cite_as=PAPER_BIBTEX, version=version, url=url,
         published=dt.datetime.now(dt.timezone.utc).replace(microsecond=0),
         keywords=("intrusion detection", "UAV swarm", "network flows", "digital twin", "AERPAW"))
     try:
-        jsonld = metadata_json(info, files, schema, standard, episodes)
+        jsonld = metadata_json(info, files, schema, standard, view)
     except CroissantError as e:
         raise PublishError(f"croissant.json: {e}") from None
     readme = _card_text(card, dataset_dir, info, files, schema)

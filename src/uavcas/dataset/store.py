@@ -29,19 +29,12 @@ import pyarrow.parquet as pq
 from uavcas.atomic import atomic_write_text, ensure_out_dir
 from uavcas.extract import ShardInfo, extract
 from uavcas.flows.standards import DEFAULT_STANDARD
-from uavcas.flows.standards import standard as feature_standard
-from uavcas.schema import (
-    CLASSES,
-    CONTEXT_FEATURES,
-    EFFECTS,
-    EPISODE_CONTEXT_FEATURES,
-    EPISODE_VIEW,
-    SCHEMA_VERSION,
-)
+from uavcas.schema import CLASSES, EFFECTS, SCHEMA_VERSION
 from uavcas.versions import package_versions
+from uavcas.views import ViewSpec, recorded_view, view
 
 from .dictionary import card_columns
-from .parquet import META_KEY, table_meta, table_standard, to_table, with_dictionary, write_table
+from .parquet import META_KEY, table_meta, table_standard, with_dictionary, write_shard, write_table
 from .uavcas_csv import Imported, read_layout
 
 __all__ = ["DatasetError", "ShardInfo", "extract_run", "import_layout", "read_card", "rebuild"]
@@ -60,19 +53,20 @@ def extract_run(run_dir: Path, out_dir: Path, **options: Any) -> ShardInfo:
     shard = extract(run_dir, **options)
     out_dir = ensure_out_dir(out_dir)  # only once there is a shard to write: bad input leaves nothing
     with _locked(out_dir):
-        _check_unit(out_dir, shard.info.run_id, episodes="host" in shard.frame.columns)
-        write_table(to_table(shard.frame, meta=asdict(shard.info), standard=shard.info.features),
-                    out_dir / "shards" / f"{shard.info.run_id}.parquet")
+        _check_unit(out_dir, shard.info.run_id, view(shard.info.view))
+        write_shard(shard.frame, asdict(shard.info), out_dir / "shards" / f"{shard.info.run_id}.parquet")
         rebuild(out_dir)
     return shard.info
 
 
-def _check_unit(out_dir: Path, run_id: str, episodes: bool) -> None:
-    """Refuse, before anything is written, a shard of flows among episode shards or the reverse."""
+def _check_unit(out_dir: Path, run_id: str, spec: ViewSpec) -> None:
+    """Refuse, before anything is written, a shard whose rows are of another unit than the
+    dataset's (flows among window-host rows, or the reverse)."""
     for path in sorted((out_dir / "shards").glob("*.parquet")):
-        if path.stem != run_id and (pq.read_schema(path).get_field_index("host") >= 0) != episodes:
-            raise DatasetError(f"{out_dir}: holds {'flow' if episodes else EPISODE_VIEW} shards; a dataset holds flows "
-                               f"or {EPISODE_VIEW} episodes, not both: extract into another --out")
+        have = recorded_view(table_meta(path))
+        if path.stem != run_id and have.unit != spec.unit:
+            raise DatasetError(f"{out_dir}: holds {have.row.plural} ({have.name}); a dataset holds one kind of row, "
+                               f"not {spec.row.plural} too: extract the {spec.name} view into another --out")
 
 
 @contextlib.contextmanager
@@ -96,34 +90,34 @@ def rebuild(out_dir: Path) -> dict:
         raise DatasetError(f"{out_dir}: shards of different feature standards {standards}; extract every run with one "
                            "--features")
     standard = standards[0]
-    # episodes (window-host) and flows are different units with different columns: one per dataset
-    episodes = {t.schema.get_field_index("host") >= 0 for t in tables}
-    if len(episodes) > 1:
-        raise DatasetError(f"{out_dir}: holds flow shards, and a {EPISODE_VIEW} shard would mix episodes with flows; "
-                           f"extract the {EPISODE_VIEW} view into another --out")
-    episode = episodes == {True}
-    with_ctx = {t.schema.get_field_index((EPISODE_CONTEXT_FEATURES if episode else CONTEXT_FEATURES)[0]) >= 0
-                for t in tables}
+    runs = [table_meta(s) for s in shards]
+    # the units of rows (flows, window-host rows) have different columns: one per dataset
+    spec = recorded_view(runs[0])
+    other = next((v for v in map(recorded_view, runs) if v.unit != spec.unit), None)
+    if other is not None:
+        raise DatasetError(f"{out_dir}: holds {spec.row.plural} and {other.row.plural} shards; a dataset holds one "
+                           f"kind of row: extract the {other.name} view into another --out")
+    # a view without context columns has none to check
+    with_ctx = {bool(spec.context_columns) and t.schema.get_field_index(spec.context_columns[0]) >= 0 for t in tables}
     if len(with_ctx) > 1:
         raise DatasetError(f"{out_dir}: some shards have the context columns (ctx_*) and some do not; "
                            "extract every run with the same uavcas version")
-    union = with_dictionary(pa.concat_tables([t.replace_schema_metadata(None) for t in tables]), standard)
+    union = with_dictionary(pa.concat_tables([t.replace_schema_metadata(None) for t in tables]), standard, spec)
     write_table(union.replace_schema_metadata({META_KEY: json.dumps({"feature_standard": standard}).encode()}),
                 out_dir / "flows.parquet")
-    runs = [table_meta(s) for s in shards]
     counts: dict[str, int] = {c: 0 for c in CLASSES}
     vc = pc.value_counts(union.column("label")).to_pylist() if union.num_rows else []
     for item in vc:
         counts[item["values"]] = counts.get(item["values"], 0) + int(item["counts"])
     card = {
         "schema_version": SCHEMA_VERSION,
-        "features": feature_card(standard, episodes=episode),
+        "features": dict(spec.feature_card(standard)),
         # every column of flows.parquet: dtype, unit, meaning (uavcas.dataset.dictionary)
-        "columns": card_columns(union.schema, standard, episodes=episode),
-        # what a row is: a flow, or (window-host) one plan node's traffic in one plan window
-        "unit": "host-window" if episode else "flow",
+        "columns": card_columns(union.schema, standard, spec),
+        # what a row is (the view's unit): a flow, or (window-host) one plan node's traffic in one plan window
+        "unit": spec.unit,
         # the ctx_* columns (uavcas.flows.context) and their window, null when the shards lack them
-        "context": {"columns": len(EPISODE_CONTEXT_FEATURES if episode else CONTEXT_FEATURES),
+        "context": {"columns": len(spec.context_columns),
                     "window_s": runs[0].get("context_window_s")} if with_ctx == {True} else None,
         "n_flows": union.num_rows,
         "n_runs": len(shards),
@@ -162,20 +156,6 @@ def _effect_counts(runs: list[dict]) -> dict[str, int]:
     return out
 
 
-def feature_card(standard: str, episodes: bool = False) -> dict:
-    """The card's record of a feature standard: its name, source and the unit of every column,
-    all from the standard's module (`uavcas.flows.standards`).
-
-    `episodes`: the window-host view's columns instead (`uavcas.labels.episodes`): packet counts
-    and the mean / max of a subset of the standard's flow features (units of those features)."""
-    std = feature_standard(standard)
-    source = f"{std.source} ({std.module})"
-    if not episodes:
-        return {"standard": std.name, "source": source, "units": dict(std.units)}
-    return {"standard": std.name, "source": f"{EPISODE_VIEW} episodes (uavcas.labels.episodes) of flows by {source}",
-            "summarised": {stem: feat for feat, stem in std.episode_summary.items()}, "units": std.episode_units}
-
-
 def card_standard(card: dict) -> str:
     """The feature standard a card names (cards before standards were recorded: the default)."""
     return (card.get("features") or {}).get("standard", DEFAULT_STANDARD)
@@ -204,8 +184,9 @@ def import_layout(src: Path, out_dir: Path) -> tuple[dict, "Imported"]:
     if any(out_dir.iterdir()):
         raise DatasetError(f"{out_dir}: not empty; import into a new directory")
     imp = read_layout(Path(src))
-    meta = {"run_id": "import", "source": "uavcas-csv", "files": imp.files, "lacks": imp.lacks, "notes": imp.notes}
+    meta = {"run_id": "import", "source": "uavcas-csv", "files": imp.files, "lacks": imp.lacks, "notes": imp.notes,
+            "features": imp.standard}
     with _locked(out_dir):
-        write_table(to_table(imp.frame, meta=meta), out_dir / "shards" / "import.parquet")
+        write_shard(imp.frame, meta, out_dir / "shards" / "import.parquet")
         card = rebuild(out_dir)
     return card, imp

@@ -31,12 +31,13 @@ from uavcas.flows.assemble import FlowConfig, assemble
 from uavcas.flows.context import context_frame
 from uavcas.flows.features import flow_frame
 from uavcas.flows.packets import COLUMNS, NO_MAVLINK, QUOTE_COLUMNS, PacketTable, empty_columns
+from uavcas.flows.standards import DEFAULT_STANDARD
 from uavcas.labels.label import constructed_truth
 from uavcas.scenario.campaign import MEDIUM_PAPER_CONFIGS, run_seed
 from uavcas.scenario.codec import parse
 from uavcas.vocabulary import canonical_families
 
-from .parquet import to_table, write_table
+from .parquet import write_shard
 from .store import rebuild
 
 _SERVER_IP, _SERVER_PORT = "10.0.0.100", 80
@@ -190,8 +191,9 @@ def write_dataset(out_dir: str | Path, df: pd.DataFrame, run_meta: dict[str, dic
         for run_id, g in df.groupby("run_id", sort=True):
             meta = {"run_id": str(run_id), "config": str(g["config"].iloc[0]), "seed": int(g["seed"].iloc[0]),
                     "view": str(g["view"].iloc[0]), "labels": LABEL_SOURCE, "n_flows": len(g),
-                    "class_counts": g["label"].value_counts().to_dict(), **(run_meta or {}).get(str(run_id), {})}
-            write_table(to_table(g, meta), tmp / "shards" / f"{run_id}.parquet")
+                    "class_counts": g["label"].value_counts().to_dict(), "features": DEFAULT_STANDARD,
+                    **(run_meta or {}).get(str(run_id), {})}
+            write_shard(g, meta, tmp / "shards" / f"{run_id}.parquet")  # flow_frame's default standard
         rebuild(tmp)
     return out
 

@@ -42,6 +42,7 @@ from uavcas.flows.packets import ns_to_s
 from uavcas.flows.standards.paper import INT_FEATURES, PAPER_FEATURES, paper_features
 from uavcas.flows.standards.paper import STANDARD as PAPER
 from uavcas.schema import FAMILIES, FAMILY_CLASS, TRUTH_COLUMNS
+from uavcas.views import frame_view
 
 STAT_FILE, TS_FILE = "UAV-CAS_stat.csv", "UAV-CAS_ts.csv"
 STAT_CFG_FILE, TS_CFG_FILE = "UAV-CAS_stat_cfg.csv", "UAV-CAS_ts_cfg.csv"
@@ -206,8 +207,10 @@ def write_layout(df: pd.DataFrame, out_dir: Path, embed_config: bool = False, in
     """Write `df` (flows with sequences, one view) as the authors' stat and ts CSVs in `out_dir`,
     row for row: the ts rows are the flows of >= 2 packets and the stat rows the ts rows of >= 10,
     in the same order. `uavcas export` first brings the rows to host pairs (`layout_rows`)."""
-    if "host" in df.columns:
-        raise CsvFormatError("window-host rows (episodes) have no packet sequences: the layout holds host-pair flows")
+    spec = frame_view(df)
+    if not spec.is_flow:
+        raise CsvFormatError(f"{spec.name} rows ({spec.row.plural}) have no packet sequences: the layout holds "
+                             "host-pair flows")
     out_dir = ensure_out_dir(out_dir)
     df = df.reset_index(drop=True)
     n = len(df)
@@ -366,6 +369,7 @@ class Imported:
     lacks: list[str]
     notes: list[str]
     files: list[str]
+    standard: str = PAPER.name  # the feature standard of `frame`: the layout's columns are the paper's
 
 
 def _families(labels: pd.Series) -> dict[str, np.ndarray]:

@@ -5,9 +5,10 @@ column that is no flow feature) must never reach a model — the authors' `confi
 features is the defect this module exists to prevent.
 
 Feature lists come from the feature-standard registry (`uavcas.flows.standards`: each standard's
-columns, and the window-host view's columns of flows of that standard) and the schema's
-context columns (`schema.CONTEXT_FEATURES`, observations of the switches around a flow),
-which only the models that ask for them receive (`context_matrix`).
+columns) and the view registry (`uavcas.views`: a view whose rows are no flows, the window-host
+view, has its own columns from flows of each standard, and its own context columns; a flow's are
+`schema.CONTEXT_FEATURES`, observations of the switches around a flow), which only the models
+that ask for them receive (`context_matrix`).
 """
 
 from __future__ import annotations
@@ -17,8 +18,8 @@ from collections.abc import Iterable
 import numpy as np
 import pandas as pd
 
-from uavcas import schema
 from uavcas.flows.standards import DEFAULT_STANDARD, names, standards
+from uavcas.views import frame_view, views
 
 
 class MetadataLeakError(ValueError):
@@ -27,30 +28,29 @@ class MetadataLeakError(ValueError):
 
 def feature_sets() -> dict[str, tuple[str, ...]]:
     """Named feature sets: every registered standard's columns under its name ('cic', 'paper'),
-    then the episode view's of each ('window-host-cic', 'window-host-paper')."""
-    return {**{s.name: s.columns for s in standards()},
-            **{f"{schema.EPISODE_VIEW}-{s.name}": s.episode_columns for s in standards()}}
+    then those of each view whose rows have their own ('window-host-cic', 'window-host-paper':
+    `ViewSpec.feature_set`)."""
+    sets = {s.name: s.columns for s in standards()}
+    for v in views():
+        sets.update({v.feature_set(s.name): v.feature_columns(s.name) for s in standards()})
+    return sets
 
 
 def known_features() -> set[str]:
-    return set().union(*feature_sets().values(), schema.CONTEXT_FEATURES, schema.EPISODE_CONTEXT_FEATURES)
-
-
-def is_episode_table(df: pd.DataFrame) -> bool:
-    """Rows of the window-host view (episodes: one node in one plan window), not flows."""
-    return "view" in df.columns and len(df) > 0 and bool((df["view"].astype(str) == schema.EPISODE_VIEW).all())
+    return set().union(*feature_sets().values(), *(v.context_columns for v in views()))
 
 
 def context_columns(df: pd.DataFrame) -> tuple[str, ...]:
-    """The context columns of `df`'s kind of row: the flows' ctx_*, or their episode summaries."""
-    return schema.EPISODE_CONTEXT_FEATURES if is_episode_table(df) else schema.CONTEXT_FEATURES
+    """The context columns of `df`'s kind of row (its view's, `uavcas.views.frame_view`): the
+    flows' ctx_*, or their episode summaries."""
+    return frame_view(df).context_columns
 
 
 def check_feature_columns(columns: Iterable[str]) -> list[str]:
     """Return `columns` as a list if every one is a schema feature; raise otherwise."""
     cols = list(columns)
     known = known_features()
-    meta = [c for c in cols if c in schema.METADATA_COLUMNS or c in schema.EPISODE_METADATA_COLUMNS]
+    meta = [c for c in cols if any(c in v.metadata_columns for v in views())]
     other = [c for c in cols if c not in known and c not in meta]
     if meta or other:
         raise MetadataLeakError(f"not flow features (never used by the IDS): {meta + other}")
@@ -62,7 +62,8 @@ def check_feature_columns(columns: Iterable[str]) -> list[str]:
 def resolve_features(df: pd.DataFrame, spec: str | Iterable[str] | None = None) -> list[str]:
     """The feature columns to use on `df`.
 
-    None: the dataset's feature set (episodes: the window-host set of their flows' standard;
+    None: the dataset's feature set (rows of a view with its own columns: the view's set of their
+    flows' standard, e.g. window-host-cic;
     `df.attrs['feature_standard']` when it names one, else the first set whose columns `df` all
     has, else the default standard's features `df` has); a name: that set, every
     column of which `df` must have; a list: those columns (checked to be features).
@@ -70,8 +71,9 @@ def resolve_features(df: pd.DataFrame, spec: str | Iterable[str] | None = None) 
     sets = feature_sets()
     if spec is None:
         named = df.attrs.get("feature_standard", df.attrs.get("features"))
-        if is_episode_table(df):
-            named = f"{schema.EPISODE_VIEW}-{named if named in names() else DEFAULT_STANDARD}"
+        view = frame_view(df)
+        if view.feature_set(DEFAULT_STANDARD) != DEFAULT_STANDARD:  # rows with the view's own columns
+            named = view.feature_set(named if named in names() else DEFAULT_STANDARD)
         if isinstance(named, str) and named in sets:
             spec = named
         else:
@@ -105,8 +107,8 @@ def feature_matrix(df: pd.DataFrame, columns: Iterable[str] | str | None = None)
 
 
 def context_matrix(df: pd.DataFrame) -> np.ndarray:
-    """float32 matrix of the context columns (`schema.CONTEXT_FEATURES`, or their episode
-    summaries for window-host rows: `context_columns`) of `df`."""
+    """float32 matrix of the context columns (`context_columns`: the flows' `schema.CONTEXT_FEATURES`,
+    or their episode summaries for window-host rows) of `df`."""
     cols = context_columns(df)
     missing = [c for c in cols if c not in df.columns]
     if missing:

@@ -28,8 +28,9 @@ from uavcas.figure import png_data_uri
 from uavcas.labels.label import rule_summary
 from uavcas.schema import CLASSES
 from uavcas.twin.load import read_plan
+from uavcas.views import ViewSpec, card_view
 
-from .distributions import SHOWN_EPISODE_FEATURES, SHOWN_FEATURES, counts_frame, feature_figure
+from .distributions import counts_frame, feature_figure
 from .fidelity import COLUMNS as FIDELITY_HELP
 from .fidelity import fidelity_figure, fidelity_frame, read_run_fidelity
 from .topology import attack_start_figure
@@ -55,12 +56,12 @@ def _class_table(df: pd.DataFrame) -> str:
     return _styled(class_table(df))
 
 
-def _summary(card: dict, df: pd.DataFrame, runs, standard: str) -> dict:
+def _summary(card: dict, df: pd.DataFrame, runs, standard: str, view: ViewSpec) -> dict:
     rules = card.get("runs") or []
     flow_rules = sorted({json.dumps(r.get("flow_rules") or {}, sort_keys=True) for r in rules} - {"{}"})
     headlines, parts = rule_summary(card.get("label_rules", []))
     return {
-        "rows": len(df), "unit": "host-window row" if card.get("unit") == "host-window" else "flow",
+        "rows": len(df), "unit": view.row.singular,
         "runs": card.get("n_runs", len(runs)), "standard": standard,
         "fidelity": card.get("fidelity") or {"unaudited": len(runs)}, "flagged": sum(r.flagged for r in runs),
         "class_table": _class_table(df), "label_modes": card.get("label_modes", []),
@@ -112,15 +113,14 @@ def _fidelity(dataset_dir: Path, runs) -> tuple[str | None, str | None]:
     return table, fidelity_figure(audits)
 
 
-def _distributions(df: pd.DataFrame, shown: tuple[str, ...], standard: str, episodes: bool) -> dict:
+def _distributions(df: pd.DataFrame, standard: str, view: ViewSpec) -> dict:
     classes = [c for c in CLASSES if c in set(df["label"])] + sorted(set(df["label"]) - set(CLASSES))
     figures, counts = [], {}
-    for feat in shown:
+    for feat in view.shown_features:
         if feat in df.columns:
-            uri, counts[feat] = feature_figure(df, feat, classes, describe(feat, standard, episodes)[0])
+            uri, counts[feat] = feature_figure(df, feat, classes, describe(feat, standard, view)[0])
             figures.append({"feature": feat, "uri": uri})
-    title = "Host-window features per class" if episodes else "Flow features per class"
-    return {"title": title, "figures": figures,
+    return {"title": view.report_title, "figures": figures,
             "counts_table": _styled(counts_frame(counts, classes)) if counts else ""}
 
 
@@ -131,13 +131,12 @@ def write_report(dataset_dir: str | Path, out_dir: str | Path) -> Path:
     flows_path = dataset_dir / "flows.parquet"
     if not flows_path.exists():
         raise ReportError(f"{dataset_dir}: no flows.parquet")
-    episodes = card.get("unit") == "host-window"
-    shown = SHOWN_EPISODE_FEATURES if episodes else SHOWN_FEATURES
+    view = card_view(card)
     standard = card_standard(card)
     names = set(pq.read_schema(flows_path).names)
-    df = read_flows(flows_path, columns=[c for c in ("run_id", "label", "view", *shown) if c in names])
+    df = read_flows(flows_path, columns=[c for c in ("run_id", "label", "view", *view.shown_features) if c in names])
     runs = dataset_runs(dataset_dir, card)
-    summary = _summary(card, df, runs, standard)
+    summary = _summary(card, df, runs, standard, view)
     topologies = _topologies(dataset_dir, runs)
     fid_table, fid_uri = _fidelity(dataset_dir, runs)
 
@@ -149,7 +148,7 @@ def write_report(dataset_dir: str | Path, out_dir: str | Path) -> Path:
         name=dataset_dir.resolve().name, summary=summary,
         runs_table=_runs_table(runs, {t["run_id"] for t in topologies}, fid_ids, summary["unit"]),
         topologies=topologies, fidelity_table=fid_table, fidelity_help=FIDELITY_HELP, fidelity_uri=fid_uri,
-        distributions=_distributions(df, shown, standard, episodes),
+        distributions=_distributions(df, standard, view),
         card_json=card_json, card_lines=card_json.count("\n") + 1)
     out.mkdir(parents=True, exist_ok=True)
     index = out / "index.html"

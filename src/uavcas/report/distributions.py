@@ -16,12 +16,6 @@ from matplotlib.ticker import FuncFormatter, LogLocator
 
 from uavcas.figure import plt, png_data_uri
 
-# Features shown per class: time structure, volume and size, the ones the paper's figures use.
-SHOWN_FEATURES = ("Flow IAT Mean", "Flow Packets/s", "Flow Duration", "Packet Length Mean", "Total Fwd Packets",
-                  "SYN Flag Count")
-# the same for a dataset of host-window rows (`--view window-host`: `uavcas.labels.episodes`)
-SHOWN_EPISODE_FEATURES = ("packets_per_s", "bytes_per_s", "peers", "syn_in", "synack_out", "flows_in")
-
 
 def value_counts(values: np.ndarray) -> dict[str, int]:
     """rows, non-finite (NaN, +-inf), zero, negative and drawn (positive, finite) values."""

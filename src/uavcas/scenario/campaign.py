@@ -51,7 +51,7 @@ class ManifestEntry:
     seed: int  # the run's own seed, derived from (campaign seed, index)
     windows: int
     window_s: float
-    episodes: int = 1  # attack episodes per run (twin.schedule)
+    rounds: int = 1  # attack rounds per run (twin.schedule); stored as "episodes", its old name
 
     def to_dict(self) -> dict:
         return {
@@ -61,7 +61,7 @@ class ManifestEntry:
             "seed": self.seed,
             "windows": self.windows,
             "window_s": self.window_s,
-            "episodes": self.episodes,
+            "episodes": self.rounds,  # the stored key keeps its old name: manifests written before read alike
         }
 
 
@@ -71,7 +71,7 @@ class Preset:
     configs: tuple[str, ...]
     windows: int
     window_s: float
-    episodes: int = 1
+    rounds: int = 1
 
 
 def _paper_configs() -> tuple[str, ...]:
@@ -129,10 +129,10 @@ MEDIUM_SETTINGS: tuple[tuple[int, str, str, int], ...] = (  # (n_uav, pathloss, 
     (10, "logdist", "random", 10),
 )
 MEDIUM_PAYLOAD = "mixed"
-# Three attack episodes per run (each 10-16.7 s, >= 5 s apart, on a victim drawn afresh): a class
-# lives on its victim in ~4 windows per episode, so one episode gave ~16 window-host rows per
+# Three attack rounds per run (each 10-16.7 s, >= 5 s apart, on a victim drawn afresh): a class
+# lives on its victim in ~4 windows per round, so one round gave ~16 window-host rows per
 # collaborative class over its 4 runs; three give ~45 (the benchmark asks 30 from 2 runs).
-MEDIUM_EPISODES = 3
+MEDIUM_ROUNDS = 3
 
 
 def _medium_configs(compositions: tuple[str, ...]) -> tuple[str, ...]:
@@ -150,7 +150,7 @@ MEDIUM_PAPER_CONFIGS = _medium_configs(PAPER_COMPOSITIONS)
 PRESETS: dict[str, Preset] = {
     "paper": Preset("paper", _paper_configs(), windows=12, window_s=5.0),
     "medium": Preset("medium", MEDIUM_PAPER_CONFIGS + _medium_configs(NEW_FAMILY_COMPOSITIONS), windows=12,
-                     window_s=5.0, episodes=MEDIUM_EPISODES),
+                     window_s=5.0, rounds=MEDIUM_ROUNDS),
     "quick": Preset("quick", QUICK_CONFIGS, windows=3, window_s=5.0),
 }
 
@@ -193,7 +193,7 @@ def manifest(
             seed=run_seed(seed, int(idx)),
             windows=p.windows,
             window_s=p.window_s,
-            episodes=p.episodes,
+            rounds=p.rounds,
         )
         for pos, idx in enumerate(order)
     ]

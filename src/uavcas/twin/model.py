@@ -19,8 +19,8 @@ from pydantic import BaseModel, ConfigDict, Field, SerializeAsAny, ValidationInf
 from uavcas.scenario_model import SPEC_READER, Scenario, SpecBase, read_spec, spec_reader
 from uavcas.vocabulary import FAMILIES, Family
 
-# 2: Plan.site and Node.sysid; 3: Window.interferers and link_overrides (jamming); 4: Plan.episodes; defaults fill them
-# in older plans
+# 2: Plan.site and Node.sysid; 3: Window.interferers and link_overrides (jamming); 4: Plan.rounds (stored as
+# "episodes"); defaults fill them in older plans
 SCHEMA_VERSION = 4
 
 NodeKind = Literal["uav", "bs"]
@@ -210,14 +210,19 @@ class Attack(_Frozen):
 
 
 class Plan(_Frozen):
+    # fields are set by name in code and stored under their alias (`rounds` as "episodes")
+    model_config = ConfigDict(frozen=True, extra="forbid", validate_by_name=True, validate_by_alias=True,
+                              serialize_by_alias=True)
+
     schema_version: int = SCHEMA_VERSION
     config: str  # the scenario string, canonical form
     # Its typed axes and attack specs (None for hand-made plans whose config is no scenario).
     scenario: Scenario | None = None
     seed: int
     window_s: float
-    # attack episodes drawn (`twin.schedule`): with seed, config and windows, it fixes the plan
-    episodes: int = Field(default=1, ge=1)
+    # attack rounds drawn (`twin.schedule`): with seed, config and windows, it fixes the plan. Stored
+    # as "episodes", its old name, so that plan.json stays byte-identical and old plans load.
+    rounds: int = Field(default=1, ge=1, alias="episodes")
     profile: str  # channel/mobility profile name the plan was made with
     profile_sha256: str | None = None  # SHA-256 of the profile's JSON (None: plans made before it was recorded)
     area_m: tuple[float, float, float, float]  # x_max, y_max, z_min, z_max

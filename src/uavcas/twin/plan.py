@@ -92,7 +92,7 @@ def plan(
     windows: int = 12,
     window_s: float = 5.0,
     profile: TwinProfile | str | None = None,
-    episodes: int = 1,
+    rounds: int = 1,
 ) -> Plan:
     if isinstance(scenario, str):
         scenario = parse(scenario)
@@ -138,7 +138,7 @@ def plan(
     bases = [nearest_neighbour_topology(positions[w], is_bs, losses[w]) for w in range(windows)]
     def routes_at(t_s: float) -> dict[str, list[str]]:
         """The routes of the window holding t_s: they pick the blackhole relay and an off-path
-        wormhole attacker of an episode starting then."""
+        wormhole attacker of a round starting then."""
         w = min(int(t_s // window_s), windows - 1)
         return {names[u]: [names[h] for h in route(bases[w], n, u, bs_of[u]) or []] for u in range(n_uav)}
 
@@ -149,7 +149,7 @@ def plan(
                    for w in range(windows) if w * window_s < stop_s and (w + 1) * window_s > start_s)
 
     attacks = schedule_attacks(scenario, names[:n_uav], windows * window_s, _rng(seed, _ATTACK_STREAM), routes_at,
-                               detour_windows, episodes=episodes)
+                               detour_windows, rounds=rounds)
 
     # Emitters the attacks place (jammers), drawn from their own stream: other draws stay as they were.
     ectx = EmitterContext(names, float(window_s), np.stack(positions),
@@ -191,7 +191,7 @@ def plan(
         scenario=scenario,
         seed=seed,
         window_s=float(window_s),
-        episodes=episodes,
+        rounds=rounds,
         profile=prof.name,
         profile_sha256=profile_sha256(prof),
         area_m=(area.x_max_m, area.y_max_m, area.z_min_m, area.z_max_m),
