@@ -4,7 +4,7 @@ import sys
 
 import pytest
 
-from uavcas.scenario import PRESETS, manifest, parse, parse_shard, run_seed
+from uavcas.scenario import PRESETS, ManifestEntry, manifest, parse, parse_shard, run_seed
 
 
 def test_paper_preset_has_1024_distinct_round_tripping_configs():
@@ -142,3 +142,9 @@ def test_a_plan_stores_its_attack_rounds_under_their_old_name():
     del stored["episodes"]  # a plan from before attack rounds: one round
     assert read_plan(json.dumps(stored)).rounds == 1
 
+
+
+def test_an_entry_survives_its_dict_as_a_dask_task_carries_it():
+    # a Dask task carries `to_dict()` (stored key `episodes`); the worker rebuilds the entry from it
+    for e in manifest("medium", 0)[:3]:
+        assert ManifestEntry.from_dict(e.to_dict()) == e and e.rounds == 3

@@ -127,7 +127,7 @@ def execute_entry(
     """
 
     if isinstance(entry, dict):
-        entry = ManifestEntry(**entry)
+        entry = ManifestEntry.from_dict(entry)
     t0 = time.monotonic()
     host = socket.gethostname()
     log.info("run %d starting on %s (pid %d): %s seed %d", entry.index, host, os.getpid(), entry.config, entry.seed)

@@ -64,6 +64,14 @@ class ManifestEntry:
             "episodes": self.rounds,  # the stored key keeps its old name: manifests written before read alike
         }
 
+    @classmethod
+    def from_dict(cls, data: dict) -> ManifestEntry:
+        """The entry `to_dict` gave (what a Dask task carries): its stored key `episodes` is `rounds`."""
+        data = dict(data)
+        if "episodes" in data:
+            data["rounds"] = data.pop("episodes")
+        return cls(**data)
+
 
 @dataclass(frozen=True)
 class Preset:
