@@ -5,6 +5,7 @@ from __future__ import annotations
 import subprocess
 import sys
 
+import pytest
 import typer.main as typer_main
 from typer.testing import CliRunner
 
@@ -102,6 +103,7 @@ def test_no_folder_is_created_that_the_user_did_not_name(tmp_path):
         assert r.exit_code == 2 and r.output.count("\n") == 1 and not (tmp_path / "x").exists(), (argv, r.output)
 
 
+@pytest.mark.slow  # 6 s on 2 cores
 def test_output_to_a_pipe_is_not_cut_to_a_terminals_width():
     r = subprocess.run([sys.executable, "-m", "uavcas", "plan", "benign-20-2-image-logdist-adaptive-random-10-95",
                         "--windows", "2"], capture_output=True, text=True, timeout=120)

@@ -28,6 +28,7 @@ def _as_unprivileged(argv: list[str]) -> list[str]:
     return [*drop, *argv]
 
 
+@pytest.mark.slow  # 6 s on 2 cores
 def test_plan_into_an_unwritable_folder_is_one_line_exit_2():
     base = Path(tempfile.mkdtemp(prefix="uavcas-test-"))  # pytest's tmp_path is root-only (0700)
     try:

@@ -358,7 +358,7 @@ REPORT = "report"  # the dataset report page; nothing offline builds on it
 OFFLINE = (  # read runs, plans and datasets without the kernel ("__init__": the root package's own)
     "__init__", "analysis", "atomic", "calibration", "channel", "dataset", "events", "extract", "fidelity", "figure",
     "flows", "ids", "labels", "mavlink_capture", "mobility", "network", "report", "rundir", "scenario",
-    "scenario_model", "schema", "seeding", "stats", "topology", "twin", "versions", "vocabulary",
+    "scenario_model", "schema", "seeding", "stats", "topology", "twin", "versions", "views", "vocabulary",
 )  # fmt: skip
 KERNEL_SIDE = (  # may import the kernel package: they run, drive or check emulations
     "__main__", "attacks", "campaign", "cli", "diagnostics", "emulation", "testing",

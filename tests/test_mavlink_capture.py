@@ -130,6 +130,7 @@ def test_the_table_is_written_as_parquet_or_csv_by_suffix(table, tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["m.PARQUET", "m.csv"]  # nothing else, no temporary
 
 
+@pytest.mark.slow  # 19 s on 2 cores
 def test_cli_writes_parquet_and_refuses_a_bad_run_dir(mav_run, tmp_path):
     out = tmp_path / "mav.parquet"
     r = subprocess.run([UAVCAS, "mavlink", str(mav_run), "--out", str(out), "--point", "s-bs0"],

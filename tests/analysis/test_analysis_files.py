@@ -7,10 +7,13 @@ import json
 import math
 
 import pandas as pd
+import pytest
 
 from uavcas.analysis.axes import CONFOUND_TV, write_axes
 from uavcas.analysis.diversity import DiversityOptions, DiversityResult, write_diversity
 from uavcas.analysis.separability import separability_stats, write_separability
+
+pytestmark = pytest.mark.slow  # a module fixture takes 25 s on 2 cores: the whole file is the full suite's
 
 
 def test_diversity_files_hold_every_dataset(tmp_path):

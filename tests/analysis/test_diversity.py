@@ -17,6 +17,8 @@ from uavcas.analysis.iat import choose_source, flow_iats
 from uavcas.analysis.separability import stratified_sample
 from uavcas.cli import app
 
+pytestmark = pytest.mark.slow  # a module fixture takes 10 s on 2 cores: the whole file is the full suite's
+
 runner = CliRunner()
 
 

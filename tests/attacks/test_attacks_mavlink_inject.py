@@ -123,6 +123,7 @@ def test_forged_frames_and_their_acks_are_labelled_packet_exact():
         assert effects(name) == ({"benign"}, {-1}), name
 
 
+@pytest.mark.slow  # 5 s on 2 cores
 def test_run_refuses_signing_on_a_payload_without_mavlink(tmp_path):
     import subprocess
     import sys

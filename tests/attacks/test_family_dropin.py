@@ -19,6 +19,7 @@ import shutil
 from pathlib import Path
 
 import pyarrow.parquet as pq
+import pytest
 
 from helpers.family_dropin import CONFIG, copy_with_throwaway, run_on
 
@@ -62,6 +63,7 @@ print(json.dumps(dict(families=v.FAMILIES, effects=v.EFFECTS, precedence=v.EFFEC
 """
 
 
+@pytest.mark.slow  # 25 s on 2 cores
 def test_one_row_and_one_module_add_a_family_through_plan_truth_labels_card_and_cli(synth_run_dir, tmp_path):
     from uavcas import vocabulary as v
 

@@ -24,6 +24,7 @@ def _tracks(kind, params, n_uav, duration_s, area, seed=7):
     return [Track(name=f"u{i}", team=0, t_s=t, pos_m=pos[:, i, :]) for i in range(n_uav)]
 
 
+@pytest.mark.slow  # 16 s on 2 cores
 def test_gauss_markov_fit_reproduces_the_speed_law():
     area = Area(x_max_m=20000, y_max_m=20000, z_min_m=0, z_max_m=2000)  # walls far away
     true = GaussMarkovParams(alpha=0.8, mean_speed_mps=3.0, sigma2_mps2=2.0, step_s=1.0, sim_step_s=1.0,

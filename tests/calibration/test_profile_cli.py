@@ -45,6 +45,7 @@ def _air_links(p):
                 yield (w.index, lk.a, lk.b), lk, h
 
 
+@pytest.mark.slow  # 4 s on 2 cores
 def test_calibrate_pathloss_cli_writes_outputs_and_a_profile_with_provenance(tmp_path, profile_dir):
     data = tmp_path / "data"
     write_maeng(data, n=3000)

@@ -13,7 +13,8 @@ from uavcas.calibration.layer1_pathloss import FSPL_1M_DB
 from uavcas.calibration.loaders import load_afar, load_maeng, load_multibw, load_pattern
 from uavcas.calibration.pipeline import LAYERS, run
 
-pytestmark = pytest.mark.shared
+# a module fixture takes 115 s on 2 cores: the whole file is the full suite's
+pytestmark = [pytest.mark.shared, pytest.mark.slow]
 
 
 @pytest.fixture(scope="module")

@@ -162,6 +162,7 @@ def test_a_dropped_in_module_is_found_by_the_registry_codec_plan_channel_and_dic
     check_ok(CHECK, *plugged)
 
 
+@pytest.mark.slow  # 10 s on 2 cores
 def test_a_dropped_in_module_is_offered_and_evaluated_by_channel_predict(plugged):
     root, env = plugged
     r = subprocess.run([sys.executable, "-m", "uavcas", "channel", "predict", "--help"], capture_output=True,

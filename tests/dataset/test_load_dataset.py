@@ -59,6 +59,7 @@ def test_external_sample_each_flow_its_own_group(shared_data):
     assert groups.is_unique and len(X) == len(y) and not set(X.columns) & set(meta.columns)
 
 
+@pytest.mark.slow  # 6 s on 2 cores
 def test_context_columns_on_request(synth_dir, synth_df, tmp_path):
     from uavcas.dataset.synthetic import write_dataset
 

@@ -69,6 +69,7 @@ def test_the_publication_holds_the_shards_card_croissant_and_readme(ds, publishe
     assert by_name["label"]["dataType"] == "sc:Text"
 
 
+@pytest.mark.slow  # 5 s on 2 cores
 def test_mlcroissant_validates_and_reads_every_record(ds, published):
     mlc = pytest.importorskip("mlcroissant")
     from uavcas.dataset.croissant import validate

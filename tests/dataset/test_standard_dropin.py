@@ -17,6 +17,7 @@ import sys
 from pathlib import Path
 
 import pyarrow.parquet as pq
+import pytest
 
 import uavcas
 
@@ -69,6 +70,7 @@ def _run(pkg: Path, *args: str) -> subprocess.CompletedProcess:
     return subprocess.run([sys.executable, *args], env=env, capture_output=True, text=True, timeout=600)
 
 
+@pytest.mark.slow  # 18 s on 2 cores
 def test_a_dropped_in_standard_is_registered_offered_and_described(synth_run_dir, tmp_path):
     pkg = _copy_with_throwaway(tmp_path)
     probe = _run(pkg, "-c", "import uavcas, uavcas.flows.standards as s; print(uavcas.__file__); "

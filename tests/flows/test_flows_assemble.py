@@ -110,6 +110,7 @@ def test_vantage_point_keeps_transmissions_that_missed_it(tmp_path):
         flows_of(packets, cfg, transmissions=tid[:-1])
 
 
+@pytest.mark.slow  # 4 s on 2 cores
 def test_ipv6_flow(tmp_path):
     df = extract_flows([write(tmp_path / "v6.pcap", ipv6_session())]).frame
     assert len(df) == 1 and df.src_ip[0] == "2001:db8::1" and df.protocol[0] == 6
@@ -140,6 +141,7 @@ def _mixed_capture(tmp_path, n_sessions=60, seed=3):
     return write(tmp_path / "mixed.pcap", sorted(pk, key=lambda p: p.time))
 
 
+@pytest.mark.slow  # 7 s on 2 cores
 @pytest.mark.parametrize("termination", ["connection", "cic", "timeout"])
 @pytest.mark.parametrize("chunk", [300, 2000, 1 << 20])
 def test_streaming_gives_the_same_flows(tmp_path, chunk, termination):

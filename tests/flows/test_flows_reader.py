@@ -55,6 +55,7 @@ def test_sll_sll2_vlan_raw(tmp_path):
     assert list(r.dport) == [10] and list(r.frame_len) == [len(raw)]
 
 
+@pytest.mark.slow  # 4 s on 2 cores
 def test_ipv6_hop_limit_and_ports(tmp_path):
     t = read_packets([write(tmp_path / "v6.pcap", ipv6_session())]).to_pandas()
     assert set(t.ip_version) == {6}

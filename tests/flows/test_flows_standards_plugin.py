@@ -66,6 +66,7 @@ def test_a_dropped_in_standard_is_in_the_registry_and_the_card(plugged):
     check_ok(CHECK, *plugged)
 
 
+@pytest.mark.slow  # 8 s on 2 cores
 def test_a_dropped_in_standard_is_offered_and_computed_by_the_cli(plugged, tmp_path):
     root, env = plugged
     r = subprocess.run([sys.executable, "-m", "uavcas", "flows", "--help"], capture_output=True, text=True, env=env,

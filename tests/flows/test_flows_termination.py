@@ -193,6 +193,7 @@ def test_policy_errors():
     assert FlowConfig(termination="cic").effective_min_packets == 2
 
 
+@pytest.mark.slow  # 7 s on 2 cores
 def test_spoofed_syn_flood_one_flow_per_attempt(tmp_path):
     # random spoofed sources and ports, some 5-tuples drawn twice with new sequence numbers: every
     # attempt is a flow, whatever the policy that ends TCP connections

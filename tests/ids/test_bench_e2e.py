@@ -44,6 +44,7 @@ def _overall(df, metric):
     return df[(df["metric"] == metric) & (df["class"] == "")].groupby("model")["value"].mean()
 
 
+@pytest.mark.slow  # 47 s on 2 cores
 @NEEDS_TORCH
 def test_multiclass_all_ten_models(synth_dir, tmp_path):
     df = _bench(synth_dir, tmp_path, "--protocol", "multiclass")
@@ -81,6 +82,7 @@ def test_multiclass_all_ten_models(synth_dir, tmp_path):
     assert tuple(lb.columns) == LEADERBOARD_COLUMNS and (lb["std"].dropna() >= 0).all()
 
 
+@pytest.mark.slow  # 10 s on 2 cores
 def test_binary_dos_is_separable(synth_dir, tmp_path):
     df = _bench(synth_dir, tmp_path, "--protocol", "binary", "--models", "lr,rf", "--scaler", "robust")
     assert (_overall(df, "f1_weighted")[["LR",
@@ -136,6 +138,7 @@ def test_quick_like_dataset_is_refused_naming_the_class(synth_df, tmp_path):
         assert not (tmp_path / protocol).exists()
 
 
+@pytest.mark.slow  # 15 s on 2 cores
 def test_min_class_runs_leaves_out_the_rare_classes_and_says_so(synth_df, tmp_path):
     """A class in one run makes the split degenerate; --min-class-runs 2 leaves out its flows
     instead (named, with run and flow counts, in the notes) and fits on the rest."""

@@ -98,6 +98,7 @@ def test_selection_by_name_and_refusals():
     assert baseline("context-flow", n_jobs=1).fit(X.to_numpy(), y).n_features_in_ == 2
 
 
+@pytest.mark.slow  # 167 s on 2 cores
 def test_bench_context_models_with_importance(synth_dir, tmp_path):
     context = ",".join(s.name for s in detectors() if s.uses_context)
     r = runner.invoke(app, ["bench", "ids", str(synth_dir), "--out", str(tmp_path), "--protocol", "multiclass",
@@ -118,6 +119,7 @@ def test_bench_context_models_with_importance(synth_dir, tmp_path):
     assert "Context-only" in lb
 
 
+@pytest.mark.slow  # 11 s on 2 cores
 def test_bench_context_needs_context_columns(synth_df, tmp_path):
     ds = write_dataset(tmp_path / "no-ctx", synth_df.drop(columns=list(CONTEXT_FEATURES)))
     r = runner.invoke(app, ["bench", "ids", str(ds), "--out", str(tmp_path / "o"), "--models", "lr,context"])
@@ -160,6 +162,7 @@ def test_class_weights_by_frequency():
         class_weights(yi, "inverse")
 
 
+@pytest.mark.slow  # 5 s on 2 cores
 def test_sqrt_weights_call_a_rare_overlapping_class_less_often():
     """A rare class that overlaps Benign: weighted by the inverse square root of its frequency it
     is predicted on fewer Benign rows than with 'balanced' weights, and the sqrt weights reach

@@ -77,6 +77,7 @@ def test_grouped_split_no_run_in_two_splits_every_class_both_sides(synth_df):
     assert grouped_split(y, g, seed=0, strata=s).test.tolist() == sp.test.tolist()  # seeded
 
 
+@pytest.mark.slow  # 10 s on 2 cores
 def test_seeds_change_the_partition_on_48_runs():
     from uavcas.dataset.synthetic import make_flows
 

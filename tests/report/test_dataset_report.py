@@ -13,6 +13,8 @@ import pytest
 
 from uavcas.report.dataset_report import write_report
 
+pytestmark = pytest.mark.slow  # a module fixture takes 11 s on 2 cores: the whole file is the full suite's
+
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 SECTIONS = ["summary", "runs", "topology", "fidelity", "distributions", "card"]
 

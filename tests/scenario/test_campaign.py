@@ -20,6 +20,7 @@ def test_paper_preset_has_1024_distinct_round_tripping_configs():
     assert len({s.axes()["attacks"] for s in axes}) == 16
 
 
+@pytest.mark.slow  # 5 s on 2 cores
 def test_medium_preset_every_composition_in_four_channel_settings(tmp_path):
     """100 runs of 12 windows: the paper's 16 compositions and the new families' 9 (each alone and
     in two compositions) x 4 settings covering path loss, mission, TX power and swarm size (path
@@ -74,6 +75,7 @@ def test_bad_shards_are_refused(bad):
         parse_shard(bad)
 
 
+@pytest.mark.slow  # 14 s on 2 cores
 def test_cli_manifest(tmp_path):
     out = tmp_path / "m.jsonl"
     r = subprocess.run([sys.executable, "-m", "uavcas.cli", "campaign", "manifest", "--preset", "paper",

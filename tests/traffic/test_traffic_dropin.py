@@ -14,9 +14,12 @@ from __future__ import annotations
 
 import json
 
+import pytest
+
 from helpers.traffic_dropin import CONFIG, copy_with_throwaway, run_on
 
 
+@pytest.mark.slow  # 17 s on 2 cores
 def test_a_dropped_in_app_and_payload_row_are_registered_parsed_and_planned(tmp_path):
     pkg = copy_with_throwaway(tmp_path)
     probe = run_on(pkg, "-c", "import uavcas, uavcas.traffic.apps as a; from uavcas.scenario import parse; "

@@ -19,6 +19,7 @@ from uavcas.traffic.base import AppContext, AppOptions, TrafficApp
 from uavcas.traffic.benign import BenignTraffic
 from uavcas.traffic.payloads import DEFAULT_PAYLOAD, PAYLOAD_NAMES, PAYLOADS, apps_of, check_payload
 from uavcas.twin.plan import plan
+from uavcas.views import view
 
 
 def test_the_payloads_are_compositions_of_registered_apps():
@@ -51,7 +52,7 @@ def test_the_vocabulary_lists_no_payload_and_the_codec_reads_the_table():
         parse("benign-3-1-audio-logdist-adaptive-random-30-95")
     with pytest.raises(ValidationError, match="unknown payload 'audio'; known: image, telemetry, video, mixed"):
         Scenario(n_uav=3, n_bs=1, payload="audio")
-    assert describe("payload")[1].endswith("one of image, telemetry, video, mixed")
+    assert describe("payload", "cic", view("5tuple"))[1].endswith("one of image, telemetry, video, mixed")
 
 
 def test_unknown_names_are_one_line_errors():

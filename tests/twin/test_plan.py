@@ -91,6 +91,7 @@ def test_plan_json_has_the_documented_fields():
     assert atk["family"] == "ddos" and len(atk["attackers"]) >= 2
 
 
+@pytest.mark.slow  # 10 s on 2 cores
 def test_attack_schedule_follows_the_paper():
     starts = set()
     for seed in range(30):
@@ -124,6 +125,7 @@ def test_wormhole_windows_detour_the_victim_through_the_attacker():
             assert not w.wormholes and not any(lk.detour for lk in w.links)
 
 
+@pytest.mark.slow  # 14 s on 2 cores
 def test_physics_varies_with_distance_and_tx_power():
     # Across the campaign geometry, MCS, rate and loss depend on the link and on TX power.
     rates, mcs = {}, set()
@@ -154,6 +156,7 @@ def _cli(*args):
     return subprocess.run([sys.executable, "-m", "uavcas.cli", *args], capture_output=True, text=True)
 
 
+@pytest.mark.slow  # 11 s on 2 cores
 def test_cli_plan_writes_json_and_figures(tmp_path):
     out, figs = tmp_path / "plan.json", tmp_path / "figs"
     r = _cli("plan", "dos=1000-6-2-image-logdist-adaptive-random-30-95", "--seed", "1", "--windows", "3",
@@ -168,11 +171,13 @@ def test_cli_plan_writes_json_and_figures(tmp_path):
     assert again.read_bytes() == out.read_bytes()
 
 
+@pytest.mark.slow  # 4 s on 2 cores
 def test_cli_plan_refuses_bad_config(tmp_path):
     r = _cli("plan", "dos=1000-6-2-image-nowhere-adaptive-random-30-95", "--out", str(tmp_path / "p.json"))
     assert r.returncode == 2 and "field 'pathloss'" in r.stderr and not (tmp_path / "p.json").exists()
 
 
+@pytest.mark.slow  # 4 s on 2 cores
 def test_wormhole_attacker_is_off_the_victims_initial_route():
     detoured = 0
     for seed in range(20):

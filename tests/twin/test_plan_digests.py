@@ -6,9 +6,11 @@ from __future__ import annotations
 
 import json
 
+import pytest
 from golden_plans import OUT, digests
 
 
+@pytest.mark.slow  # 27 s on 2 cores
 def test_plans_are_byte_identical_to_the_recorded_digests():
     want = json.loads(OUT.read_text())
     got = digests()

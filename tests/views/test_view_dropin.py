@@ -19,6 +19,7 @@ import sys
 from pathlib import Path
 
 import pyarrow.parquet as pq
+import pytest
 
 import uavcas
 from helpers.synth_run import IPS
@@ -114,6 +115,7 @@ def _run(pkg: Path, *args: str) -> subprocess.CompletedProcess:
     return subprocess.run([sys.executable, *args], env=env, capture_output=True, text=True, timeout=600)
 
 
+@pytest.mark.slow  # 31 s on 2 cores
 def test_a_dropped_in_view_is_offered_extracted_described_and_published(synth_run_dir, tmp_path):
     pkg = _copy_with_throwaway(tmp_path)
     probe = _run(pkg, "-c", "import uavcas, uavcas.views as v; print(uavcas.__file__); print(' '.join(v.names()))")
