@@ -16,6 +16,7 @@ import math
 import numpy as np
 import pytest
 
+from helpers.audit_checks import assert_audit_passes
 from uavcas.extract import extract_detailed
 from uavcas.fidelity import read_fidelity
 from uavcas.labels import read_attack_log
@@ -51,7 +52,7 @@ def test_fidelity_passes(runs, name):
     rd, _ = runs[name]
     info = rd.read_info()
     assert info.exit_status == 0, info
-    assert info.fidelity is not None and info.fidelity.verdict == "pass", info.fidelity
+    assert_audit_passes(rd)
 
 
 @pytest.mark.parametrize("name", list(CONFIGS))

@@ -17,6 +17,7 @@ import math
 import numpy as np
 import pytest
 
+from helpers.audit_checks import assert_audit_passes
 from uavcas.events import AttackStart, AttackStop, read_attack_records
 from uavcas.rundir import RunDir
 from uavcas.testing.audited import run_audited
@@ -53,7 +54,7 @@ def table(run):
 def test_run_and_audit_pass(run):
     info = run.read_info()
     assert info.exit_status == 0
-    assert info.fidelity is not None and info.fidelity.verdict == "pass", info.fidelity
+    assert_audit_passes(run)
 
 
 def test_victim_reports_drift_at_the_rate_towards_the_lure_inside_the_window(run, window, table):

@@ -18,6 +18,7 @@ import json
 
 import pytest
 
+from helpers.audit_checks import assert_audit_passes
 from uavcas.rundir import RunDir
 from uavcas.testing.audited import run_audited
 from uavcas.traffic.mavlink import read_log
@@ -64,7 +65,7 @@ def _decoded(run: RunDir, start: dict):
 def test_runs_are_faithful_and_record_signing(runs, signed):
     info = runs[signed].read_info()
     assert info.exit_status == 0 and info.mavlink_signing is signed
-    assert info.fidelity is not None and info.fidelity.verdict == "pass", info.fidelity
+    assert_audit_passes(runs[signed])
 
 
 def test_without_signing_the_forged_rtl_is_acknowledged_and_the_mode_changes(runs):

@@ -17,6 +17,7 @@ from collections import Counter
 
 import pytest
 
+from helpers.audit_checks import assert_audit_passes
 from uavcas.rundir import RunDir
 from uavcas.testing.audited import run_audited
 from uavcas.traffic.mavlink import read_log
@@ -52,8 +53,7 @@ def run(runs) -> RunDir:
 # this test was an expected failure; the delay stage paces them since stop 27, and it passed in
 # the last two fresh clones' suites.
 def test_the_mixed_run_passes_its_audit(run):
-    info = run.read_info()
-    assert info.fidelity is not None and info.fidelity.verdict == "pass", info.fidelity
+    assert_audit_passes(run)
 
 
 def test_missions_and_commands_are_acknowledged(run):
@@ -165,7 +165,7 @@ def test_video_reaches_the_bs_at_its_bitrate_where_the_path_has_room(runs):
 
     run = runs["video"]
     plan, info = run.read_plan(), run.read_info()
-    assert info.fidelity is not None and info.fidelity.verdict == "pass", info.fidelity
+    assert_audit_passes(run)
     pcaps = run.pcaps()
     p = read_packets(pcaps, points=[x.stem for x in pcaps])
     src = addresses_to_str(p["src_hi"], p["src_lo"])
