@@ -21,7 +21,8 @@ from pathlib import Path
 import pyarrow.parquet as pq
 import pytest
 
-from helpers.family_dropin import CONFIG, copy_with_throwaway, run_on
+from helpers.family_dropin import CONFIG, copy_with_throwaway
+from helpers.plugin import run_on
 
 
 def _as_synflood(run_dir: Path) -> Path:

@@ -7,7 +7,8 @@ import json
 
 import pyarrow.parquet as pq
 
-from helpers.family_dropin import copy_with_throwaway, run_on
+from helpers.family_dropin import copy_with_throwaway
+from helpers.plugin import run_on
 
 
 def test_the_dropped_in_family_runs_on_real_stacks(tmp_path):

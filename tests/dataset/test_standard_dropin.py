@@ -10,16 +10,11 @@ the Parquet field metadata (not cic's microseconds, not paper's seconds).
 from __future__ import annotations
 
 import json
-import os
-import shutil
-import subprocess
-import sys
-from pathlib import Path
 
 import pyarrow.parquet as pq
 import pytest
 
-import uavcas
+from helpers.plugin import package_copy, run_on
 
 THROWAWAY = '''"""Throwaway standard for a test: cic's columns renamed, times in milliseconds."""
 
@@ -56,39 +51,25 @@ STANDARD = register(FeatureStandard(
 '''
 
 
-def _copy_with_throwaway(tmp: Path) -> Path:
-    src = Path(uavcas.__file__).parent
-    dst = tmp / "pkg"
-    shutil.copytree(src, dst / "uavcas", ignore=shutil.ignore_patterns("__pycache__"))
-    (dst / "uavcas" / "flows" / "standards" / "cicms.py").write_text(THROWAWAY)
-    return dst
-
-
-def _run(pkg: Path, *args: str) -> subprocess.CompletedProcess:
-    # PYTHONPATH puts the copy before the editable install of the work tree
-    env = {**os.environ, "PYTHONPATH": str(pkg), "COLUMNS": "200", "NO_COLOR": "1", "TERM": "dumb"}
-    return subprocess.run([sys.executable, *args], env=env, capture_output=True, text=True, timeout=600)
-
-
 @pytest.mark.slow  # 18 s on 2 cores
 def test_a_dropped_in_standard_is_registered_offered_and_described(synth_run_dir, tmp_path):
-    pkg = _copy_with_throwaway(tmp_path)
-    probe = _run(pkg, "-c", "import uavcas, uavcas.flows.standards as s; print(uavcas.__file__); "
+    pkg = package_copy(tmp_path, {"flows/standards/cicms.py": THROWAWAY})
+    probe = run_on(pkg, "-c", "import uavcas, uavcas.flows.standards as s; print(uavcas.__file__); "
                             "print(' '.join(s.names()))")
     assert probe.returncode == 0, probe.stderr
     where, names = probe.stdout.splitlines()
     assert where.startswith(str(pkg)) and names.split() == ["cic", "cicms", "paper"]
 
-    helped = _run(pkg, "-m", "uavcas", "extract", "--help")
+    helped = run_on(pkg, "-m", "uavcas", "extract", "--help")
     assert helped.returncode == 0, helped.stderr
     helptext = " ".join(helped.stdout.replace("│", " ").split())  # help wrapped in a rich panel
     assert "cic|cicms|paper" in helptext and "cicms (cic in milliseconds)" in helptext
-    refused = _run(pkg, "-m", "uavcas", "extract", str(synth_run_dir), "--out", str(tmp_path / "no"),
+    refused = run_on(pkg, "-m", "uavcas", "extract", str(synth_run_dir), "--out", str(tmp_path / "no"),
                    "--features", "nope")
     assert refused.returncode != 0 and "cicms" in refused.stderr and not (tmp_path / "no").exists()
 
     ds = tmp_path / "ds"
-    made = _run(pkg, "-m", "uavcas", "extract", str(synth_run_dir), "--out", str(ds), "--features", "cicms")
+    made = run_on(pkg, "-m", "uavcas", "extract", str(synth_run_dir), "--out", str(ds), "--features", "cicms")
     assert made.returncode == 0, made.stderr
     card = json.loads((ds / "dataset.json").read_text())
     feats = card["features"]
@@ -101,14 +82,14 @@ def test_a_dropped_in_standard_is_registered_offered_and_described(synth_run_dir
     assert "Flow Duration" not in cols  # only its own columns, none of cic's or paper's
     field = pq.read_schema(ds / "flows.parquet").field("ms Flow Duration")
     assert field.metadata[b"unit"] == b"ms"
-    listed = _run(pkg, "-m", "uavcas", "info", str(ds), "--columns")
+    listed = run_on(pkg, "-m", "uavcas", "info", str(ds), "--columns")
     assert listed.returncode == 0, listed.stderr
     row = next(line.split("\t") for line in listed.stdout.splitlines() if line.startswith("ms Flow IAT Max\t"))
     assert row[2] == "ms"
 
     # the values are cic's, in ms: the standard's compute is what the dataset holds
     ref = tmp_path / "ref"
-    assert _run(pkg, "-m", "uavcas", "extract", str(synth_run_dir), "--out", str(ref)).returncode == 0
+    assert run_on(pkg, "-m", "uavcas", "extract", str(synth_run_dir), "--out", str(ref)).returncode == 0
     ours, cic = pq.read_table(ds / "flows.parquet").to_pandas(), pq.read_table(ref / "flows.parquet").to_pandas()
     assert len(ours) == len(cic) > 0
     assert ours["ms Flow Duration"].tolist() == (cic["Flow Duration"] / 1000.0).tolist()

@@ -3,13 +3,9 @@ and its real run in test_family_dropin_root.py): one vocabulary row and one modu
 
 from __future__ import annotations
 
-import os
-import shutil
-import subprocess
-import sys
 from pathlib import Path
 
-import uavcas
+from helpers.plugin import package_copy
 
 ROW = '''    # a test's throwaway family: a SYN flood of its own, made packets ranked between replay and flood
     FamilyRow(token="synflood", class_name="SYNFlood", effect="synflood", precedence=15,
@@ -61,19 +57,10 @@ CONFIG = "synflood=1000-4-1-image-logdist-adaptive-grid-30-95"
 
 
 def copy_with_throwaway(tmp: Path) -> Path:
-    src = Path(uavcas.__file__).parent
-    dst = tmp / "pkg"
-    shutil.copytree(src, dst / "uavcas", ignore=shutil.ignore_patterns("__pycache__"))
+    dst = package_copy(tmp, {"attacks/synflood.py": THROWAWAY})
     vocab = dst / "uavcas" / "vocabulary.py"
     text = vocab.read_text()
     end = "\n)\nFAMILY_ROWS"  # the table's last line: one row appended before it
     assert text.count(end) == 1
     vocab.write_text(text.replace(end, "\n" + ROW.rstrip("\n") + end))
-    (dst / "uavcas" / "attacks" / "synflood.py").write_text(THROWAWAY)
     return dst
-
-
-def run_on(pkg: Path, *args: str, cwd: Path | None = None) -> subprocess.CompletedProcess:
-    # PYTHONPATH puts the copy before the editable install of the work tree
-    env = {**os.environ, "PYTHONPATH": str(pkg), "COLUMNS": "200", "NO_COLOR": "1", "TERM": "dumb"}
-    return subprocess.run([sys.executable, *args], env=env, capture_output=True, text=True, timeout=600, cwd=cwd)

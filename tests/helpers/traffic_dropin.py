@@ -3,13 +3,9 @@
 
 from __future__ import annotations
 
-import os
-import shutil
-import subprocess
-import sys
 from pathlib import Path
 
-import uavcas
+from helpers.plugin import package_copy
 
 THROWAWAY = '''"""Throwaway app for a test: TCP echo, a server per BS and a client per UAV."""
 
@@ -98,19 +94,10 @@ CONFIG = "benign-2-1-echo-logdist-adaptive-random-30-95"
 
 
 def copy_with_throwaway(tmp: Path) -> Path:
-    src = Path(uavcas.__file__).parent
-    dst = tmp / "pkg"
-    shutil.copytree(src, dst / "uavcas", ignore=shutil.ignore_patterns("__pycache__"))
-    (dst / "uavcas" / "traffic" / "apps" / "echo.py").write_text(THROWAWAY)
+    dst = package_copy(tmp, {"traffic/apps/echo.py": THROWAWAY})
     table = dst / "uavcas" / "traffic" / "payloads.py"
     text = table.read_text()
     anchor = '    "mixed": ("mavlink", "video", "image"),\n'
     assert text.count(anchor) == 1  # the row goes after the table's last one
     table.write_text(text.replace(anchor, anchor + ROW))
     return dst
-
-
-def run_on(pkg: Path, *args: str, timeout_s: float = 600) -> subprocess.CompletedProcess:
-    # PYTHONPATH puts the copy before the editable install of the work tree
-    env = {**os.environ, "PYTHONPATH": str(pkg), "COLUMNS": "200", "NO_COLOR": "1", "TERM": "dumb"}
-    return subprocess.run([sys.executable, *args], env=env, capture_output=True, text=True, timeout=timeout_s)

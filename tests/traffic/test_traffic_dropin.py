@@ -16,7 +16,8 @@ import json
 
 import pytest
 
-from helpers.traffic_dropin import CONFIG, copy_with_throwaway, run_on
+from helpers.plugin import run_on
+from helpers.traffic_dropin import CONFIG, copy_with_throwaway
 
 
 @pytest.mark.slow  # 17 s on 2 cores

@@ -5,7 +5,8 @@ from __future__ import annotations
 
 import json
 
-from helpers.traffic_dropin import CONFIG, copy_with_throwaway, run_on
+from helpers.plugin import run_on
+from helpers.traffic_dropin import CONFIG, copy_with_throwaway
 
 
 def test_a_dropped_in_payload_runs_with_its_app(tmp_path):

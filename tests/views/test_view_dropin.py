@@ -12,16 +12,12 @@ and its numbers are the 5-tuple flows' of the same run.
 from __future__ import annotations
 
 import json
-import os
 import shutil
-import subprocess
-import sys
-from pathlib import Path
 
 import pyarrow.parquet as pq
 import pytest
 
-import uavcas
+from helpers.plugin import package_copy, run_on
 from helpers.synth_run import IPS
 
 THROWAWAY = '''"""Throwaway view for a test: one row per unordered plan-node pair per plan window."""
@@ -101,34 +97,20 @@ VIEW = register(ViewSpec(
 '''
 
 
-def _copy_with_throwaway(tmp: Path) -> Path:
-    src = Path(uavcas.__file__).parent
-    dst = tmp / "pkg"
-    shutil.copytree(src, dst / "uavcas", ignore=shutil.ignore_patterns("__pycache__"))
-    (dst / "uavcas" / "views" / "window_pair.py").write_text(THROWAWAY)
-    return dst
-
-
-def _run(pkg: Path, *args: str) -> subprocess.CompletedProcess:
-    # PYTHONPATH puts the copy before the editable install of the work tree
-    env = {**os.environ, "PYTHONPATH": str(pkg), "COLUMNS": "200", "NO_COLOR": "1", "TERM": "dumb"}
-    return subprocess.run([sys.executable, *args], env=env, capture_output=True, text=True, timeout=600)
-
-
 @pytest.mark.slow  # 31 s on 2 cores
 def test_a_dropped_in_view_is_offered_extracted_described_and_published(synth_run_dir, tmp_path):
-    pkg = _copy_with_throwaway(tmp_path)
-    probe = _run(pkg, "-c", "import uavcas, uavcas.views as v; print(uavcas.__file__); print(' '.join(v.names()))")
+    pkg = package_copy(tmp_path, {"views/window_pair.py": THROWAWAY})
+    probe = run_on(pkg, "-c", "import uavcas, uavcas.views as v; print(uavcas.__file__); print(' '.join(v.names()))")
     assert probe.returncode == 0, probe.stderr
     where, names = probe.stdout.splitlines()
     assert where.startswith(str(pkg)) and "window-pair" in names.split() and "5tuple" in names.split()
-    helped = _run(pkg, "-m", "uavcas", "extract", "--help")
+    helped = run_on(pkg, "-m", "uavcas", "extract", "--help")
     assert helped.returncode == 0, helped.stderr
     helptext = " ".join(helped.stdout.replace("│", " ").split())  # help wrapped in a rich panel
     assert "window-pair (one row per plan-node pair per plan window)" in helptext
 
     ds = tmp_path / "ds"
-    made = _run(pkg, "-m", "uavcas", "extract", str(synth_run_dir), "--out", str(ds), "--view", "window-pair")
+    made = run_on(pkg, "-m", "uavcas", "extract", str(synth_run_dir), "--out", str(ds), "--view", "window-pair")
     assert made.returncode == 0, made.stderr
     assert "pair-window rows from" in made.stdout
     card = json.loads((ds / "dataset.json").read_text())
@@ -140,7 +122,7 @@ def test_a_dropped_in_view_is_offered_extracted_described_and_published(synth_ru
 
     # its numbers are the 5-tuple flows' between plan nodes, by the window of their first packet
     ref = tmp_path / "ref"
-    assert _run(pkg, "-m", "uavcas", "extract", str(synth_run_dir), "--out", str(ref)).returncode == 0
+    assert run_on(pkg, "-m", "uavcas", "extract", str(synth_run_dir), "--out", str(ref)).returncode == 0
     rows, flows = pq.read_table(ds / "flows.parquet").to_pandas(), pq.read_table(ref / "flows.parquet").to_pandas()
     assert len(rows) > 0 and rows["pair_flows"].sum() <= len(flows)
     assert rows[["host_a", "host_b", "window"]].duplicated().sum() == 0
@@ -152,15 +134,15 @@ def test_a_dropped_in_view_is_offered_extracted_described_and_published(synth_ru
     assert {frozenset(k): tuple(v) for k, v in pair.iterrows()} == {frozenset(k): tuple(v) for k, v in want.iterrows()}
     assert set(rows["label"]) == set(f["label"])  # the run's classes, here one family per pair
 
-    listed = _run(pkg, "-m", "uavcas", "info", str(ds))
+    listed = run_on(pkg, "-m", "uavcas", "info", str(ds))
     assert listed.returncode == 0, listed.stderr
     assert f"{len(rows)} pair-window rows" in listed.stdout and "views: window-pair" in listed.stdout
-    cols = _run(pkg, "-m", "uavcas", "info", str(ds), "--columns")
+    cols = run_on(pkg, "-m", "uavcas", "info", str(ds), "--columns")
     assert cols.returncode == 0, cols.stderr
     assert "pair_packets_per_s\tdouble\tpackets/s\tpackets per second of window" in cols.stdout
 
     pub = tmp_path / "pub"
-    published = _run(pkg, "-m", "uavcas", "publish", str(ds), "--out", str(pub))
+    published = run_on(pkg, "-m", "uavcas", "publish", str(ds), "--out", str(pub))
     assert published.returncode == 0, published.stderr
     readme = (pub / "README.md").read_text()
     assert "(one per plan-node pair per plan window)" in readme and 'records("pair_windows")' in readme
@@ -173,7 +155,7 @@ def test_a_dropped_in_view_is_offered_extracted_described_and_published(synth_ru
     shutil.copytree(synth_run_dir, other)
     info = json.loads((other / "run.json").read_text())
     (other / "run.json").write_text(json.dumps({**info, "run_id": "other"}))
-    refused = _run(pkg, "-m", "uavcas", "extract", str(other), "--out", str(ref), "--view", "window-pair")
+    refused = run_on(pkg, "-m", "uavcas", "extract", str(other), "--out", str(ref), "--view", "window-pair")
     assert refused.returncode != 0 and "pair-window rows" in refused.stderr and "another --out" in refused.stderr
     assert len(list((ref / "shards").glob("*.parquet"))) == 1
 
