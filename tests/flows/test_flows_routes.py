@@ -7,6 +7,8 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from helpers.capture_tables import HOP_S, send, table
 from uavcas.flows.assemble import FlowConfig, assemble
@@ -14,6 +16,7 @@ from uavcas.flows.context import context_frame, context_frames
 from uavcas.flows.routes import (
     RouteShifts,
     base_station_points,
+    earlier_median,
     episode_route_context,
     off_own_route,
     route_codes,
@@ -228,3 +231,20 @@ def test_a_re_route_inside_a_bin_is_no_disagreement():
     by = offs_by_sport(obs)
     assert by[1][0].shape == (17,) and np.all(by[1][0] == 0.0)
     assert np.all(by[2][0][np.isfinite(by[2][0])] == 0.0)
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.lists(st.tuples(st.integers(0, 6), st.one_of(st.none(), st.integers(0, 9))), min_size=1, max_size=60))
+def test_earlier_median_is_the_median_of_the_keys_earlier_values(rows):
+    """Per key (rows in window order), the median of its earlier non-missing values; NaN before any."""
+    rows = sorted(rows, key=lambda r: r[0])  # grouped by key, order within a key kept
+    tab = pd.DataFrame({"key": [f"k{k}" for k, _ in rows], "m": [np.nan if v is None else float(v) for _, v in rows]},
+                       index=np.arange(len(rows))[::-1] + 5)  # an index that is neither 0.. nor sorted
+    got = earlier_median(tab, "m")
+    seen: dict[str, list[float]] = {}
+    for (i, key), v in zip(tab["key"].items(), tab["m"]):
+        prior = seen.setdefault(key, [])
+        want = float(np.median(prior)) if prior else np.nan
+        assert (np.isnan(got[i]) and np.isnan(want)) or got[i] == pytest.approx(want), (key, prior)
+        if not np.isnan(v):
+            prior.append(v)
