@@ -80,7 +80,7 @@ def run_endpoints(tmp_path, gspec, uspec, relay: Relay, at_t0=lambda t0: None) -
 
 
 def type_of(data: bytes) -> str:
-    from pymavlink.dialects.v20 import common
+    from pymavlink.dialects.v20 import ardupilotmega as common  # the dialect both endpoints speak
 
     return common.MAVLink(None).parse_buffer(data)[0].get_type()
 
@@ -108,7 +108,7 @@ def stop_all(relay: Relay, procs) -> None:
 
 
 def parse_each(datagrams):
-    from pymavlink.dialects.v20 import common
+    from pymavlink.dialects.v20 import ardupilotmega as common  # the dialect both endpoints speak
 
     out = []
     for t, d in datagrams:
