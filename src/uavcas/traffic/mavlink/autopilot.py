@@ -16,7 +16,7 @@ from .commands import VehicleState
 from .flight import Sensors
 from .gps import POSITION_MESSAGES, GpsReceiver, claimed
 from .link import Log, Peer, Periodic, Stop, await_t0, recv_all
-from .params import PARAM_RATE_HZ, param_value, vehicle_params
+from .params import param_rate_hz, param_value, vehicle_params
 from .specs import COMPONENT_AUTOPILOT, UavSpec
 from .streams import GROUP_BY_ID, STREAM_GROUPS, TERRAIN_REQUEST_MIN_INTERVAL_S
 from .telemetry import TelemetryContext, build, terrain_request
@@ -71,7 +71,7 @@ def run_uav(spec: UavSpec) -> dict:
                         if name in streams and streams[name].period != (1.0 / rate if rate > 0 else None):
                             streams[name] = Periodic(rate, time.time())
                 elif typ == "PARAM_REQUEST_LIST":  # (re)start the list from the first parameter
-                    plist.update(next=0, pace=Periodic(PARAM_RATE_HZ, time.time()))
+                    plist.update(next=0, pace=Periodic(param_rate_hz(spec.telem_baud), time.time()))
                     log("param_request_list", count=len(params))
                 elif typ == "PARAM_REQUEST_READ":  # answered at once, ahead of the list
                     idx = msg.param_index

@@ -27,7 +27,14 @@ from pymavlink.dialects.v20 import ardupilotmega as apm
 TELEM_BAUD = 57600  # SERIAL1_BAUD 57, ArduCopter's default for the telemetry radio port
 PARAM_SHARE = 0.3  # queued_param_send: "use at most 30% of bandwidth on parameters"
 PARAM_VALUE_FRAME_BYTES = 25 + 12  # MAVLINK_MSG_ID_PARAM_VALUE_LEN + MAVLink 2 header and CRC
-PARAM_RATE_HZ = PARAM_SHARE * TELEM_BAUD / 10 / PARAM_VALUE_FRAME_BYTES  # 46.7 PARAM_VALUE a second
+
+
+def param_rate_hz(baud: int = TELEM_BAUD) -> float:
+    """PARAM_VALUE frames a second on a port of `baud` (46.7 at the default 57600)."""
+    return PARAM_SHARE * baud / 10 / PARAM_VALUE_FRAME_BYTES
+
+
+PARAM_RATE_HZ = param_rate_hz()
 BATT_MONITOR_ANALOG = 4  # BATT_MONITOR: analog voltage and current
 
 _TYPES = {"INT8": apm.MAV_PARAM_TYPE_INT8, "INT16": apm.MAV_PARAM_TYPE_INT16, "INT32": apm.MAV_PARAM_TYPE_INT32,

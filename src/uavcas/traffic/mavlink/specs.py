@@ -11,6 +11,7 @@ from pymavlink.dialects.v20 import common
 from uavcas.twin.model import DEFAULT_STREAM_HZ, Site
 from uavcas.twin.track import Track, local_to_geodetic
 
+from .params import TELEM_BAUD
 from .signing import SigningSpec
 from .streams import message_rates_hz
 
@@ -95,6 +96,8 @@ class UavSpec(_Frozen):
     retry: RetrySpec = RetrySpec()
     log_path: Path
     gps_path: Path | None = None  # where an attack may publish a GPS spoofer (gps.control_path)
+    # the telemetry port's baud rate, which paces the parameter download (params.param_rate_hz)
+    telem_baud: int = Field(default=TELEM_BAUD, gt=0)
     # the sensor noise stream: uavcas.seeding stream (plan_seed, "mavlink-sensors", uav_index)
     plan_seed: int = Field(default=0, ge=0)
     uav_index: int = Field(default=0, ge=0)

@@ -70,7 +70,7 @@ STREAM_GROUPS: tuple[StreamGroup, ...] = (
                           "OPTICAL_FLOW": "a flow sensor", "GIMBAL_REPORT": "a Solo gimbal",
                           "MAG_CAL_REPORT": "a compass calibration in progress",
                           "MAG_CAL_PROGRESS": "a compass calibration in progress", "RPM": "an RPM sensor",
-                          "ESC_TELEMETRY": "ESC telemetry",
+                          "ESC_TELEMETRY_1_TO_4": "ESC telemetry (MSG_ESC_TELEMETRY)",
                           "TERRAIN_REQUEST": "sent, but at most every 2 s (TERRAIN_REQUEST_MIN_INTERVAL_S), "
                                              "not every tick"}),
     StreamGroup(name="ADSB", stream_id=-1, param="ADSB", messages=(),  # no MAV_DATA_STREAM id of its own
