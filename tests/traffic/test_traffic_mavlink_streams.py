@@ -171,3 +171,20 @@ def test_both_ends_stream_ardupilots_mix_at_3_hz_and_fetch_every_parameter_over_
             want = _state(track, m.time_boot_ms / 1000)
             assert (m.roll, m.pitch) == pytest.approx((want.roll_rad, want.pitch_rad), abs=1e-4)
             assert math.degrees(m.yaw) % 360 == pytest.approx(track.at(m.time_boot_ms / 1000).heading_deg, abs=1e-3)
+
+
+@pytest.mark.slow  # three CLI processes loading uavcas
+@pytest.mark.parametrize("args, why", [
+    (["benign-6-2-telemetry-logdist-adaptive-random-30-95", "--stream-hz", "0"], "--stream-hz:"),
+    (["benign-6-2-telemetry-logdist-adaptive-random-30-95", "--stream-hz", "51"], "--stream-hz:"),
+    (["benign-6-2-image-logdist-adaptive-random-30-95", "--stream-hz", "3"],
+     "--stream-hz: payload 'image' carries no MAVLink"),
+])
+def test_run_refuses_a_bad_stream_rate_in_one_line(tmp_path, args, why):
+    import subprocess
+    import sys
+
+    r = subprocess.run([sys.executable, "-m", "uavcas", "run", *args, "--out", str(tmp_path / "run")],
+                       capture_output=True, text=True, timeout=120)
+    assert r.returncode == 2 and why in r.stderr, r.stderr
+    assert len(r.stderr.strip().splitlines()) == 1 and not (tmp_path / "run").exists()
