@@ -46,9 +46,8 @@ def run_gcs(spec: GcsSpec) -> dict:
     # one signing state checks every datagram (its streams' last timestamps persist across the
     # per-datagram parsers); each peer signs what it sends with its own
     checks = signing.new_signing_state(spec.signing) if spec.signing is not None else None
-    # Re-request the stream groups not heard this long after a request (bounded retries). Each
-    # group is its own REQUEST_DATA_STREAM datagram, and a loaded downlink can drop any one of
-    # them: a UAV heard streaming POSITION may still never have been asked for EXTENDED_STATUS.
+    # MAVProxy's msg_period: every detected vehicle's streams are requested again every
+    # `rerequest_s` (15 s), which repairs a request a loaded downlink lost.
     rerequest = Periodic(1.0 / spec.rates.rerequest_s, time.time() + spec.rates.rerequest_s)
     while not stop.flag and (now := time.time()) < deadline:
         waits = [deadline, rerequest.next]
