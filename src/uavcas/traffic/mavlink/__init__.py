@@ -16,8 +16,9 @@ plus ArduPilot's own messages, on both ends):
   flight model (`flight`: attitude from the acceleration the track needs against drag and at its
   window boundaries, IMU specific force and rates, magnetometer, ISA barometer, motor outputs,
   battery; sensor noise from a seeded stream per UAV) built into messages by `telemetry`; the
-  IMU, barometer and attitude follow the physical track, the GPS-fed messages the believed one
-  (the GPS receiver's fix, `gps`). It streams ArduCopter 4.6's 1095 parameters on
+  IMU, barometer and attitude follow the physical track, GPS_RAW_INT and GLOBAL_POSITION_INT the
+  GPS receiver's fix (`gps`: a spoofer's while one is believed; the messages the attack's truth
+  rule labels). It streams ArduCopter 4.6's 1095 parameters on
   PARAM_REQUEST_LIST at ArduPilot's pace and answers PARAM_REQUEST_READ (`params`). It accepts a
   mission (MISSION_COUNT -> MISSION_REQUEST_INT per item -> MISSION_ACK) and answers every
   COMMAND_LONG with COMMAND_ACK to the address it came from (`commands`: DO_CHANGE_SPEED,

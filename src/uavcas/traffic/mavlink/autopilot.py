@@ -14,7 +14,7 @@ from uavcas.twin.track import local_to_geodetic
 from . import signing
 from .commands import VehicleState
 from .flight import Sensors
-from .gps import POSITION_MESSAGES, GpsReceiver, claimed
+from .gps import POSITION_MESSAGES, GpsReceiver
 from .link import Log, Peer, Periodic, Stop, await_t0, recv_all
 from .params import param_rate_hz, param_value, vehicle_params
 from .specs import COMPONENT_AUTOPILOT, UavSpec
@@ -122,8 +122,11 @@ def run_uav(spec: UavSpec) -> dict:
             continue
         ctx = TelemetryContext(battery=spec.battery, mission_count=len(waypoints), sensors=sensors,
                                custom_mode=vehicle.custom_mode)
-        gps.poll()  # the believed fix of this instant, for the messages the navigation filter feeds
-        state = sensors.state(track, spec.site, t, now, claimed(track.at(t), gps.spoof, now), waypoints)
+        # The GPS receiver's (possibly spoofed) fix goes into GPS_RAW_INT and GLOBAL_POSITION_INT
+        # alone (gps.report below), the messages the gps_spoof truth rule labels; the other
+        # position-bearing messages (LOCAL_POSITION_NED, AHRS2, TERRAIN_REPORT, the navigation to
+        # the next waypoint) carry the physical track until that rule labels them too (flight.py).
+        state = sensors.state(track, spec.site, t, now, track.at(t), waypoints)
         for g in due:
             for typ in g.messages:
                 if typ in POSITION_MESSAGES:  # a GPS fix, of this instant (gps.py: spoofing decided then)

@@ -2,11 +2,14 @@
 
 Two tracks (the physical/believed split): the PHYSICAL one is where the vehicle is and how it
 moves (the plan's track): IMU, gyro, magnetometer, barometer, attitude and motors follow it. The
-BELIEVED one is what the navigation filter thinks from GPS: the GPS receiver's fix (`gps.claimed`,
-the spoofer's offset while one is believed), which GLOBAL_POSITION_INT, GPS_RAW_INT,
-LOCAL_POSITION_NED, AHRS2's position, TERRAIN_REPORT and the navigation to the next waypoint use.
-`ekf_innovation_m` is where a later model can feed the filter's disagreement between the two
-into EKF_STATUS_REPORT; it is 0 for now (a filter that trusts its GPS).
+BELIEVED one is the GPS receiver's fix (`fix`: `gps.claimed`, the spoofer's offset while one is
+believed). Today the fix goes into GPS_RAW_INT and GLOBAL_POSITION_INT only (the autopilot
+builds those from the receiver's report of their own instant), because those are the messages
+the `gps_spoof` attack's truth rule labels; LOCAL_POSITION_NED, AHRS2's position, TERRAIN_REPORT
+and the navigation to the next waypoint read `fix` too, and get the physical track from the
+autopilot, so that no unlabelled message carries a spoofed position. A later change that labels
+them can hand them the receiver's fix. `ekf_innovation_m` is where a later model can feed the
+filter's disagreement between the two into EKF_STATUS_REPORT; it is 0 for now.
 
 Attitude model. Positions are the track's (piecewise linear, velocity v_k constant in window k).
 A copter holds v against drag by tilting: SITL's default multicopter (ArduPilot
