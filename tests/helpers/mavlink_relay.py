@@ -16,7 +16,8 @@ from uavcas.traffic import mavlink as mv
 class Relay(threading.Thread):
     """UDP middle box: datagrams from the UAV go to the GCS and back; all of them are recorded."""
 
-    def __init__(self, gcs_port: int, drop_once: tuple[str, ...] = ("MISSION_ITEM_INT", "COMMAND_LONG")) -> None:
+    def __init__(self, gcs_port: int, drop_once: tuple[str, ...] = ("MISSION_ITEM_INT", "COMMAND_LONG"),
+                 drop_up=None) -> None:
         super().__init__(daemon=True)
         self.sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
         self.sock.bind(("127.0.0.1", 0))
@@ -27,6 +28,8 @@ class Relay(threading.Thread):
         self.down: list[tuple[float, bytes]] = []  # GCS -> UAV
         self.stop = False
         self.drop_once = set(drop_once)  # the first GCS -> UAV datagram of each type is lost
+        self.drop_up = drop_up  # UAV -> GCS datagrams for which drop_up(data) is true are lost
+        self.dropped_up: list[bytes] = []
 
     def run(self) -> None:
         while not self.stop:
@@ -45,6 +48,9 @@ class Relay(threading.Thread):
             else:
                 self.uav = addr
                 self.up.append((time.time(), data))
+                if self.drop_up is not None and self.drop_up(data):
+                    self.dropped_up.append(data)
+                    continue
                 self.sock.sendto(data, self.gcs)
 
 
@@ -80,7 +86,7 @@ def run_endpoints(tmp_path, gspec, uspec, relay: Relay, at_t0=lambda t0: None) -
 
 
 def type_of(data: bytes) -> str:
-    from pymavlink.dialects.v20 import common
+    from pymavlink.dialects.v20 import ardupilotmega as common  # the dialect both endpoints speak
 
     return common.MAVLink(None).parse_buffer(data)[0].get_type()
 
@@ -108,7 +114,7 @@ def stop_all(relay: Relay, procs) -> None:
 
 
 def parse_each(datagrams):
-    from pymavlink.dialects.v20 import common
+    from pymavlink.dialects.v20 import ardupilotmega as common  # the dialect both endpoints speak
 
     out = []
     for t, d in datagrams:

@@ -92,6 +92,9 @@ def test_autopilot_reports_the_spoofers_drift_between_the_logged_times(tmp_path)
     b, inside, outside = math.radians(att.params["lure_bearing_deg"]), 0, 0
     track = Track.of(p, victim)
     for _, m in parse_each(relay.up):
+        if m.get_type() == "LOCAL_POSITION_NED":  # no spoofed position outside the labelled messages
+            q = track.at(m.time_boot_ms / 1000)
+            assert abs(m.x - q.y_m) < 0.01 and abs(m.y - q.x_m) < 0.01, (m, q)
         if m.get_type() not in ("GLOBAL_POSITION_INT", "GPS_RAW_INT"):
             continue
         ms = m.time_boot_ms if m.get_type() == "GLOBAL_POSITION_INT" else m.time_usec / 1000

@@ -68,26 +68,28 @@ def test_gcs_and_uav_exchange_mission_commands_and_streams_over_udp(tmp_path):
     assert relayed - 1 <= summary["received_by_uav"]["uav0"]["GLOBAL_POSITION_INT"] <= relayed
 
 
-def test_a_lost_stream_request_is_sent_again_for_its_group_alone(tmp_path):
-    # The mixed run of tests/emulation/test_mavlink_root.py once lost uav2's EXTENDED_STATUS
-    # request on a loaded downlink: the other groups streamed, and SYS_STATUS never came.
+def test_a_lost_stream_request_is_sent_again_at_the_next_periodic_request(tmp_path):
+    # MAVProxy sends MAV_DATA_STREAM_ALL to every detected vehicle and again every 15 s
+    # (msg_period): a request lost on a loaded downlink is repaired by the next one. Here the
+    # period is 2 s so that the test is short; the first request is lost.
     from pymavlink.dialects.v20 import common
 
     p = plan(CFG, seed=14, windows=2, window_s=3.0)
     gcs_port = free_port()
-    relay = Relay(gcs_port, drop_once=("REQUEST_DATA_STREAM",))  # the first one: EXTENDED_STATUS
+    relay = Relay(gcs_port, drop_once=("REQUEST_DATA_STREAM",))
     relay.start()
     gspec, uspec = bs0_uav0_specs(tmp_path, p, gcs_port, relay, p.duration_s)
-    run_endpoints(tmp_path, gspec, uspec, relay)
+    gspec = gspec.model_copy(update={"rates": mv.StreamRates(rerequest_s=2.0)})
+    t0 = run_endpoints(tmp_path, gspec, uspec, relay)
 
     assert not relay.drop_once
     down, up = parse_each(relay.down), parse_each(relay.up)
-    requests = [(t, m.req_stream_id) for t, m in down if m.get_type() == "REQUEST_DATA_STREAM"]
-    ext = common.MAV_DATA_STREAM_EXTENDED_STATUS
-    assert [s for _, s in requests[:4]] == [s for s, _ in mv.StreamRates().requests()]
-    assert [s for _, s in requests[4:]] == [ext]  # the lost group again, and only it, once
-    assert requests[4][0] - requests[0][0] == pytest.approx(2.0, abs=0.3)
-    first = {typ: min(t for t, m in up if m.get_type() == typ) for typ in ("SYS_STATUS", "GLOBAL_POSITION_INT")}
-    assert first["GLOBAL_POSITION_INT"] < requests[4][0] < first["SYS_STATUS"]
+    requests = [(t, m.req_stream_id, m.req_message_rate) for t, m in down if m.get_type() == "REQUEST_DATA_STREAM"]
+    assert {(s, r) for _, s, r in requests} == {(common.MAV_DATA_STREAM_ALL, 4)}  # one request, all streams
+    assert requests[0][0] - t0 < 0.3  # at the vehicle's first HEARTBEAT
+    assert requests[1][0] - t0 == pytest.approx(2.0, abs=0.3)  # the periodic one repairs the loss
+    first = min(t for t, m in up if m.get_type() == "ATTITUDE")
+    assert requests[1][0] < first < requests[1][0] + 0.3
     started = {e["group"]: e["requests"] for e in mv.read_log(gspec.log_path) if e["event"] == "stream"}
-    assert started == {s: 2 if s == ext else 1 for s, _ in mv.StreamRates().requests()}
+    assert set(started) == {"RAW_SENSORS", "EXTENDED_STATUS", "POSITION", "RC_CHANNELS", "EXTRA1", "EXTRA2",
+                            "EXTRA3"} and set(started.values()) == {2}

@@ -37,17 +37,19 @@ def _exact_enu_to_geodetic(site: Site, e: float, n: float, u: float) -> tuple[fl
 def test_the_plan_records_the_lw1_site_and_mavlink_sysids_bit_for_bit():
     a, b = plan(CFG, seed=14, windows=4), plan(CFG, seed=14, windows=4)
     assert a.to_json() == b.to_json() and read_plan(a.to_json()) == a
-    assert a.schema_version == SCHEMA_VERSION == 4 and a.site == Site() and a.site.name == "AERPAW LW1"
+    assert a.schema_version == SCHEMA_VERSION == 5 and a.site == Site() and a.site.name == "AERPAW LW1"
     assert (a.site.lat_deg, a.site.lon_deg) == (35.727451, -78.695974)
     assert [n.sysid for n in a.nodes] == [1, 2, 3, 4, 5, 6, 255, 254]
     # a plan.json of schema 1 (no site, no sysids) reads with the same defaults
     old = a.model_dump(mode="json")
     old["schema_version"] = 1
     del old["site"]
+    del old["mavlink_stream_hz"]  # schema 5's field: older plans were run at MAVProxy's default
     for n in old["nodes"]:
         del n["sysid"]
     back = plan_from_data(old)
     assert back.site == a.site and [n.sysid for n in back.nodes] == [n.sysid for n in a.nodes]
+    assert back.mavlink_stream_hz == 4
 
 
 def test_too_many_nodes_for_mavlink_ids_is_one_line():

@@ -160,10 +160,12 @@ def path_fail(path: Path, error: Exception) -> "typer.Exit":
     return fail(msg if str(path) in msg else f"{path}: {msg}")
 
 
-def plan_or_fail(config: str, seed: int, windows: int, window_s: float, profile: str | None, rounds: int = 1):
-    """The plan of a scenario, or a one-line error naming the bad field / profile (exit 2)."""
+def plan_or_fail(config: str, seed: int, windows: int, window_s: float, profile: str | None, rounds: int = 1,
+                 **kw):
+    """The plan of a scenario, or a one-line error naming the bad field / profile (exit 2).
+    `kw`: more of `twin.plan.plan`'s arguments (`stream_hz`)."""
     try:
-        p = make_plan(config, seed=seed, windows=windows, window_s=window_s, profile=profile, rounds=rounds)
+        p = make_plan(config, seed=seed, windows=windows, window_s=window_s, profile=profile, rounds=rounds, **kw)
         if p.config != config:
             err_console.print(f"note: scenario normalised to its canonical form {p.config}", highlight=False)
         return p

@@ -18,6 +18,7 @@ from uavcas.emulation.runner import RunOptions, realize
 from uavcas.events import AttackLogged, AttackRate, RunDone, SetupDone, WindowApplied
 from uavcas.fidelity import audit_run
 from uavcas.traffic.apps import MAVLINK_PAYLOADS
+from uavcas.twin.model import DEFAULT_STREAM_HZ, MAX_STREAM_HZ
 
 from .audit import fidelity_line
 from .common import (
@@ -53,12 +54,20 @@ def run_cmd(
     mavlink_signing: bool = typer.Option(False, "--mavlink-signing/--no-mavlink-signing",
                                          help="MAVLink 2 message signing between ground stations and UAVs, with a "
                                               "per-run key (payload telemetry, video, mixed)."),
+    stream_hz: int = typer.Option(None, "--stream-hz", min=1, max=MAX_STREAM_HZ,
+                                  help="Rate (Hz) at which every ground station requests all of its UAVs' telemetry "
+                                       "streams, as MAVProxy's streamrate (payload telemetry, video, mixed; default "
+                                       f"{DEFAULT_STREAM_HZ}, MAVProxy's). Recorded in plan.json."),
     audit: bool = typer.Option(True, "--audit/--no-audit",
                                help="Audit the run's fidelity at the end (fidelity.json; `uavcas audit` later)."),
 ) -> None:
     """Realise a scenario's plan on real Linux stacks, attack it, capture every switch."""
     check_output(out, "dir")
-    p = plan_or_fail(config, seed, windows, window_s, profile, rounds)
+    p = plan_or_fail(config, seed, windows, window_s, profile, rounds,
+                     **({"stream_hz": stream_hz} if stream_hz is not None else {}))
+    if stream_hz is not None and p.scenario is not None and p.scenario.payload not in MAVLINK_PAYLOADS:
+        raise fail(f"--stream-hz: payload {p.scenario.payload!r} carries no MAVLink "
+                   f"(use {', '.join(MAVLINK_PAYLOADS)})")
     if mavlink_signing and p.scenario is not None and p.scenario.payload not in MAVLINK_PAYLOADS:
         raise fail(f"--mavlink-signing: payload {p.scenario.payload!r} carries no MAVLink "
                    f"(use {', '.join(MAVLINK_PAYLOADS)})")

@@ -20,8 +20,13 @@ from uavcas.scenario_model import SPEC_READER, Scenario, SpecBase, read_spec, sp
 from uavcas.vocabulary import FAMILIES, Family
 
 # 2: Plan.site and Node.sysid; 3: Window.interferers and link_overrides (jamming); 4: Plan.rounds (stored as
-# "episodes"); defaults fill them in older plans
-SCHEMA_VERSION = 4
+# "episodes"); 5: Plan.mavlink_stream_hz; defaults fill them in older plans
+SCHEMA_VERSION = 5
+# The telemetry stream rate a ground station requests of every autopilot (REQUEST_DATA_STREAM, all
+# streams): MAVProxy's `streamrate` default (MAVProxy/mavproxy.py, MPSetting('streamrate', int, 4)).
+# Plans made before it was recorded were run at this rate, so it is also their default.
+DEFAULT_STREAM_HZ = 4
+MAX_STREAM_HZ = 50
 
 NodeKind = Literal["uav", "bs"]
 LinkKind = Literal["air", "backhaul"]
@@ -227,6 +232,8 @@ class Plan(_Frozen):
     profile_sha256: str | None = None  # SHA-256 of the profile's JSON (None: plans made before it was recorded)
     area_m: tuple[float, float, float, float]  # x_max, y_max, z_min, z_max
     site: Site = Field(default_factory=Site)  # the area's origin on Earth (MAVLink positions)
+    # MAVLink telemetry: the rate (Hz) the ground stations request of every stream (traffic/mavlink)
+    mavlink_stream_hz: int = Field(default=DEFAULT_STREAM_HZ, ge=1, le=MAX_STREAM_HZ)
     nodes: list[Node]
     windows: list[Window]
     attacks: list[Attack]

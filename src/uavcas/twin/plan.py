@@ -35,7 +35,18 @@ from uavcas.topology.routing import Topology, nearest_neighbour_topology, route,
 from uavcas.traffic.apps import MAVLINK_PAYLOADS
 
 from .interference import window_interference
-from .model import Attack, Link, Node, Plan, Route, Window, WormholeOverride, mavlink_sysid
+from .model import (
+    DEFAULT_STREAM_HZ,
+    MAX_STREAM_HZ,
+    Attack,
+    Link,
+    Node,
+    Plan,
+    Route,
+    Window,
+    WormholeOverride,
+    mavlink_sysid,
+)
 from .profile import TwinProfile, load_profile, profile_sha256
 from .schedule import schedule_attacks
 
@@ -93,6 +104,7 @@ def plan(
     window_s: float = 5.0,
     profile: TwinProfile | str | None = None,
     rounds: int = 1,
+    stream_hz: int = DEFAULT_STREAM_HZ,
 ) -> Plan:
     if isinstance(scenario, str):
         scenario = parse(scenario)
@@ -100,6 +112,8 @@ def plan(
         raise ValueError(f"windows must be >= 1, got {windows}")
     if not window_s > 0:
         raise ValueError(f"window_s must be > 0, got {window_s}")
+    if isinstance(stream_hz, bool) or not isinstance(stream_hz, int) or not 1 <= stream_hz <= MAX_STREAM_HZ:
+        raise ValueError(f"stream_hz must be an integer in 1..{MAX_STREAM_HZ}, got {stream_hz!r}")
     prof = profile if isinstance(profile, TwinProfile) else load_profile(profile)
     area = prof.area
     nodes = _nodes(scenario)
@@ -195,6 +209,7 @@ def plan(
         profile=prof.name,
         profile_sha256=profile_sha256(prof),
         area_m=(area.x_max_m, area.y_max_m, area.z_min_m, area.z_max_m),
+        mavlink_stream_hz=stream_hz,
         nodes=nodes,
         windows=out_windows,
         attacks=attacks,

@@ -30,7 +30,7 @@ GO_AFTER_S = 1.2  # the injector starts after the mission upload and the first h
 
 
 def _frames(datagrams, key: bytes | None = None):
-    from pymavlink.dialects.v20 import common
+    from pymavlink.dialects.v20 import ardupilotmega as common  # the dialect the endpoints speak
 
     out = []
     for t, d in datagrams:

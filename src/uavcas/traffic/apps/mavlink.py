@@ -44,11 +44,13 @@ class MavlinkApp(TrafficApp):
         run = [sys.executable, "-m", ENDPOINT_MODULE]
         app_s = ctx.duration_s + APP_OVERRUN_S
         timeout_s = mavlink.T0_WAIT_S + app_s + MAVLINK_GRACE_S
+        # the rate is the plan's (plan.json records it); the options keep the GCS's other settings
+        rates = ctx.options.stream_rates.model_copy(update={"stream_rate_hz": plan.mavlink_stream_hz})
         for b in ctx.bss:
             if b.sysid is None:
                 raise ValueError(f"{b.name} has no MAVLink system id in the plan")
             served = [mavlink.gcs_target(plan, uav) for bs, uav in ctx.pairs if bs == b.name]
-            spec = mavlink.GcsSpec(name=b.name, sysid=b.sysid, rates=ctx.options.stream_rates, uavs=served,
+            spec = mavlink.GcsSpec(name=b.name, sysid=b.sysid, rates=rates, uavs=served,
                                    signing=self.signing,
                                    t0_path=self.t0_path, window_s=plan.window_s,
                                    n_windows=len(plan.windows), duration_s=app_s,

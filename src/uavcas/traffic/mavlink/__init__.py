@@ -1,39 +1,42 @@
 """MAVLink v2 between every UAV's autopilot and its base station's ground station (pymavlink).
 
 Two endpoint processes, one per node, each a small MAVLink peer over UDP (one message per
-datagram; every byte is packed and parsed by pymavlink's `dialects.v20.common`):
+datagram; every byte is packed and parsed by pymavlink's `dialects.v20.ardupilotmega`, common
+plus ArduPilot's own messages, on both ends):
 
 * `uav` (autopilot, in the UAV's namespace, bound to UDP `UAV_PORT` = 14550: a fixed port an
   attacker can address): HEARTBEAT at 1 Hz (MAV_TYPE_QUADROTOR, MAV_AUTOPILOT_ARDUPILOTMEGA,
   Copter custom mode: AUTO = 3 until a command changes it) to its BS's port 14550, always, also
-  while the plan marks it disconnected (a radio sends into the void). The streams start at
-  ArduCopter's defaults, which are 0 Hz (libraries/GCS_MAVLink/GCS_MAVLink_Parameters.cpp:
-  AP_MAV_DEFAULT_STREAM_RATE_EXT_STAT, _POSITION, _EXTRA1, _EXTRA2 = 0 for
-  APM_BUILD_COPTER_OR_HELI, i.e. MAVn_EXT_STAT/_POSITION/_EXTRA1/_EXTRA2, formerly
-  SRn_*, default 0): a Copter streams what a GCS asks for with REQUEST_DATA_STREAM, per
-  ArduPilot's group: EXTENDED_STATUS = SYS_STATUS + GPS_RAW_INT, POSITION =
-  GLOBAL_POSITION_INT, EXTRA1 = ATTITUDE, EXTRA2 = VFR_HUD. Values come from the plan's track
-  (`uavcas.twin.track`): position, velocity, heading, ground speed; ATTITUDE has yaw = heading
-  and roll = pitch = 0 (the track's velocity is constant within a window: no acceleration to
-  tilt for); GPS_RAW_INT has fix type 3 (3D) and 12 satellites; the battery drains linearly
-  (`BatterySpec`). It accepts a mission (MISSION_COUNT -> MISSION_REQUEST_INT per item ->
-  MISSION_ACK) and answers every COMMAND_LONG with COMMAND_ACK to the address it came from
-  (`commands`: DO_CHANGE_SPEED, NAV_RETURN_TO_LAUNCH -> mode RTL 6, NAV_LAND -> mode LAND 9
-  ACCEPTED; anything else UNSUPPORTED), whoever sent it: a forged command is obeyed unless signing
-  is on.
-* `gcs` (ground station, in the BS's namespace, UDP 14550, all its UAVs): from the first
-  datagram of a UAV on, HEARTBEAT (MAV_TYPE_GCS) at 1 Hz to it, REQUEST_DATA_STREAM at
-  `StreamRates` (default: MAVProxy's `streamrate` setting, 4 Hz, with which it asks an
-  ArduPilot vehicle for every stream; heartbeat 1 Hz, its `heartbeat` setting), the mission
-  upload (the UAV's window-start positions as MAV_CMD_NAV_WAYPOINT items, relative altitude),
-  and at every window boundary COMMAND_LONG MAV_CMD_DO_CHANGE_SPEED with the UAV's planned
-  ground speed over the new window.
+  while the plan marks it disconnected (a radio sends into the void). Its streams are
+  ArduCopter's (`streams`: the stream groups RAW_SENSORS, EXTENDED_STATUS, POSITION, RC_CHANNELS,
+  EXTRA1, EXTRA2, EXTRA3 with the messages ArduCopter/GCS_Mavlink.cpp lists, less those that need
+  hardware this vehicle lacks: 25 messages per tick, plus TERRAIN_REQUEST at most every 2 s), at
+  ArduCopter's default 0 Hz until a GCS asks with REQUEST_DATA_STREAM (MAV_DATA_STREAM_ALL: every
+  stream but PARAMS). Every field comes from the plan's track (`uavcas.twin.track`) through a
+  flight model (`flight`: attitude from the acceleration the track needs against drag and at its
+  window boundaries, IMU specific force and rates, magnetometer, ISA barometer, motor outputs,
+  battery; sensor noise from a seeded stream per UAV) built into messages by `telemetry`; the
+  IMU, barometer and attitude follow the physical track, GPS_RAW_INT and GLOBAL_POSITION_INT the
+  GPS receiver's fix (`gps`: a spoofer's while one is believed; the messages the attack's truth
+  rule labels). It streams ArduCopter 4.6's 1095 parameters on
+  PARAM_REQUEST_LIST at ArduPilot's pace and answers PARAM_REQUEST_READ (`params`). It accepts a
+  mission (MISSION_COUNT -> MISSION_REQUEST_INT per item -> MISSION_ACK) and answers every
+  COMMAND_LONG with COMMAND_ACK to the address it came from (`commands`: DO_CHANGE_SPEED,
+  NAV_RETURN_TO_LAUNCH -> mode RTL 6, NAV_LAND -> mode LAND 9 ACCEPTED; anything else
+  UNSUPPORTED), whoever sent it: a forged command is obeyed unless signing is on.
+* `gcs` (ground station, in the BS's namespace, UDP 14550, all its UAVs), as MAVProxy: from a
+  UAV's first datagram on, HEARTBEAT (MAV_TYPE_GCS) at 1 Hz to it; when its HEARTBEAT is heard,
+  REQUEST_DATA_STREAM MAV_DATA_STREAM_ALL at `StreamRates.stream_rate_hz` (the plan's
+  `mavlink_stream_hz`, default MAVProxy's `streamrate` 4), sent again every 15 s; the parameter
+  download (PARAM_REQUEST_LIST, then PARAM_REQUEST_READ of the missing indices, 10 at a time,
+  after 1 s without a PARAM_VALUE); the mission upload (the UAV's window-start positions as
+  MAV_CMD_NAV_WAYPOINT items, relative altitude), and at every window boundary COMMAND_LONG
+  MAV_CMD_DO_CHANGE_SPEED with the UAV's planned ground speed over the new window.
 
 Retries: mission messages and commands are resent after `RetrySpec.timeout_s` (0.5 s, MAVSDK's
 default MAVLink timeout), at most `mission_retries` / `command_retries` times (the command's
-`confirmation` counts the resends, as the command protocol asks); a stream group none of whose
-messages was heard 2 s after its REQUEST_DATA_STREAM is requested again, alone, at most
-`mission_retries` times (each group is its own datagram, and a loaded link can lose any one).
+`confirmation` counts the resends, as the command protocol asks); a lost stream request is
+repaired by the next periodic one (15 s, MAVProxy's), lost parameters by PARAM_REQUEST_READ.
 Times are plan times from the run's t0 (time_boot_ms = ms since t0), which an endpoint started
 before t0 reads from a file the runner writes at t0 (`write_t0`). Both ends stop at their
 deadline or on SIGTERM and log JSON lines to `log_path`: one line per mission upload, command and
@@ -44,7 +47,9 @@ MAVLink 2 message signing with the run's key on both ends: every frame sent is s
 frame received unsigned or wrongly signed is dropped unanswered (and logged `rejected`).
 
 Modules: `specs` (the typed specs and what the plan gives them), `link` (what both endpoints
-share: t0, the UDP peer, the log), `autopilot` (the UAV end), `commands` (what a command does to
+share: t0, the UDP peer, the log), `streams` (ArduCopter's stream table), `flight` (the flight
+state behind every field), `telemetry` (one builder per message), `params` (ArduCopter's
+parameters and their pace), `autopilot` (the UAV end), `commands` (what a command does to
 the autopilot's state), `signing` (MAVLink 2 signing and the run's key), `gps` (the UAV's GPS
 receiver: true fixes, or a spoofer's that the `gps_spoof` attack publishes at run time), `ground`
 (the GCS end).

@@ -1,25 +1,31 @@
-"""The UAV end: an ArduCopter-like autopilot sending the plan's track as MAVLink telemetry."""
+"""The UAV end: an ArduCopter-like autopilot sending the plan's track as ArduCopter's streams."""
 
 from __future__ import annotations
 
-import math
 import socket
 import time
 from collections import Counter
 
-from pymavlink.dialects.v20 import common
+from pymavlink.dialects.v20 import ardupilotmega
 
+from uavcas import seeding
 from uavcas.twin.track import local_to_geodetic
 
 from . import signing
 from .commands import VehicleState
-from .gps import POSITION_MESSAGES, GpsReceiver, course_deg
+from .flight import Sensors
+from .gps import POSITION_MESSAGES, GpsReceiver
 from .link import Log, Peer, Periodic, Stop, await_t0, recv_all
-from .specs import COMPONENT_AUTOPILOT, GPS_FIX_3D, GPS_SATELLITES, STREAM_MESSAGES, UavSpec
+from .params import param_rate_hz, param_value, vehicle_params
+from .specs import COMPONENT_AUTOPILOT, UavSpec
+from .streams import GROUP_BY_ID, STREAM_GROUPS, TERRAIN_REQUEST_MIN_INTERVAL_S
+from .telemetry import TelemetryContext, build, terrain_request
+
+SENSOR_STREAM = "mavlink-sensors"  # the noise stream's name (uavcas.seeding)
 
 
 def run_uav(spec: UavSpec) -> dict:
-    m = common
+    m = ardupilotmega
     stop = Stop()
     sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
     sock.bind((spec.bind_ip, spec.bind_port))
@@ -28,17 +34,25 @@ def run_uav(spec: UavSpec) -> dict:
     gcs = Peer(sock, (spec.gcs_ip, spec.gcs_port), spec.sysid, COMPONENT_AUTOPILOT, sent)
     signing.enable(gcs.mav, spec.signing)
     track = spec.track()
+    waypoints = [local_to_geodetic(spec.site, *p) for p in track.positions_m]
+    waypoints = [(lat, lon, alt - spec.site.alt_m) for lat, lon, alt in waypoints]
+    sensors = Sensors(seeding.generator(spec.plan_seed, SENSOR_STREAM, spec.uav_index), spec.site.alt_m)
+    params = vehicle_params(spec.sysid)
     spec = spec.model_copy(update={"t0_unix": await_t0(spec, stop)})
     log = Log(spec.log_path, spec.t0_unix)
     gps = GpsReceiver(spec.gps_path, log)  # true fixes unless the attack executor publishes a spoofer
     deadline = spec.t0_unix + spec.duration_s
     now = time.time()
     heartbeat = Periodic(1.0, now)
-    streams = {sid: Periodic(0.0, now) for sid in STREAM_MESSAGES}  # ArduCopter default: 0 Hz
+    # every stream starts at ArduCopter's default rate, 0 Hz (SRn_* = 0): it sends what a GCS asks for
+    streams = {g.name: Periodic(0.0, now) for g in STREAM_GROUPS if g.messages}
+    terrain_at = [float("-inf")]
+    plist = {"next": None, "pace": Periodic(0.0, now), "sent": 0}  # the PARAM_REQUEST_LIST in progress
     mission: dict = {"count": None, "items": {}, "from_": None, "asked": None, "seq": None, "tries": 0}
     vehicle = VehicleState()
     while not stop.flag and (now := time.time()) < deadline:
-        for data, addr in recv_all(sock, _wait(now, deadline, heartbeat, streams, mission, spec.retry.timeout_s)):
+        waits = [heartbeat.next, plist["pace"].next if plist["next"] is not None else deadline]
+        for data, addr in recv_all(sock, _wait(now, deadline, waits, streams, mission, spec.retry.timeout_s)):
             for msg in gcs.parse(data):
                 typ = msg.get_type()
                 received[typ] += 1
@@ -46,23 +60,37 @@ def run_uav(spec: UavSpec) -> dict:
                     log("rejected", reason=msg.reason, src=f"{addr[0]}:{addr[1]}")  # signing on: no answer
                 if typ == "BAD_DATA" or msg.get_srcSystem() == spec.sysid:
                     continue
-                if typ == "REQUEST_DATA_STREAM" and msg.target_system == spec.sysid:
-                    ids = STREAM_MESSAGES if msg.req_stream_id == m.MAV_DATA_STREAM_ALL else [msg.req_stream_id]
-                    for sid in ids:
-                        if sid in streams:
-                            rate = msg.req_message_rate if msg.start_stop else 0
-                            streams[sid] = Periodic(float(rate), time.time())
-                elif typ == "MISSION_COUNT" and msg.target_system == spec.sysid:
+                if getattr(msg, "target_system", spec.sysid) != spec.sysid:
+                    continue
+                if typ == "REQUEST_DATA_STREAM":
+                    rate = float(msg.req_message_rate if msg.start_stop else 0)
+                    # MAV_DATA_STREAM_ALL: every stream but PARAMS (GCS_Common.cpp handle_request_data_stream)
+                    names = (list(streams) if msg.req_stream_id == m.MAV_DATA_STREAM_ALL
+                             else [GROUP_BY_ID[msg.req_stream_id].name] if msg.req_stream_id in GROUP_BY_ID else [])
+                    for name in names:
+                        if name in streams and streams[name].period != (1.0 / rate if rate > 0 else None):
+                            streams[name] = Periodic(rate, time.time())
+                elif typ == "PARAM_REQUEST_LIST":  # (re)start the list from the first parameter
+                    plist.update(next=0, pace=Periodic(param_rate_hz(spec.telem_baud), time.time()))
+                    log("param_request_list", count=len(params))
+                elif typ == "PARAM_REQUEST_READ":  # answered at once, ahead of the list
+                    idx = msg.param_index
+                    if idx < 0 or idx >= 65535:  # by name
+                        name = msg.param_id.rstrip("\x00") if isinstance(msg.param_id, str) else ""
+                        idx = next((i for i, p in enumerate(params) if p.name == name), -1)
+                    if 0 <= idx < len(params):
+                        gcs.send(param_value(m, params, idx))
+                elif typ == "MISSION_COUNT":
                     mission.update(count=msg.count, items={}, from_=(msg.get_srcSystem(), msg.get_srcComponent()),
                                    asked=None, tries=0)
                     log("mission_count", count=msg.count)
                     _ask_next(gcs, m, mission, spec, log)
-                elif (typ == "MISSION_ITEM_INT" and msg.target_system == spec.sysid and mission["count"]
+                elif (typ == "MISSION_ITEM_INT" and mission["count"]
                       and mission["asked"] is not None and msg.seq == mission["seq"]):
                     # only the item asked for: a duplicate (both ends retried) must not ask again
                     mission["items"][msg.seq] = (msg.x / 1e7, msg.y / 1e7, msg.z)
                     _ask_next(gcs, m, mission, spec, log)
-                elif typ == "COMMAND_LONG" and msg.target_system == spec.sysid:
+                elif typ == "COMMAND_LONG":
                     result = vehicle.command(m, msg)
                     # the answer goes back to the sender's address (a command's link)
                     gcs.send_to(m.MAVLink_command_ack_message(msg.command, result, 0, 0, msg.get_srcSystem(),
@@ -79,30 +107,51 @@ def run_uav(spec: UavSpec) -> dict:
             else:
                 mission["tries"] += 1
                 _ask_next(gcs, m, mission, spec, log, resend=True)
-        p = track.at(t)
         if heartbeat.due(now):
             gcs.send(m.MAVLink_heartbeat_message(
                 m.MAV_TYPE_QUADROTOR, m.MAV_AUTOPILOT_ARDUPILOTMEGA,
                 m.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED | m.MAV_MODE_FLAG_SAFETY_ARMED | m.MAV_MODE_FLAG_STABILIZE_ENABLED
                 | m.MAV_MODE_FLAG_GUIDED_ENABLED | m.MAV_MODE_FLAG_AUTO_ENABLED,
                 vehicle.custom_mode, m.MAV_STATE_ACTIVE, 3))
-        for sid, per in streams.items():
-            if per.due(now):
-                for typ in STREAM_MESSAGES[sid]:
-                    if typ in POSITION_MESSAGES:  # a GPS fix, of this instant (gps.py: spoofing decided then)
-                        gps.report(track, spec.t0_unix, lambda q, tq: gcs.send(_telemetry(m, typ, spec, q, tq)))
-                    else:
-                        gcs.send(_telemetry(m, typ, spec, p, t))
+        if plist["next"] is not None and plist["pace"].due(now):
+            gcs.send(param_value(m, params, plist["next"]))
+            plist["sent"] += 1
+            plist["next"] = plist["next"] + 1 if plist["next"] + 1 < len(params) else None
+        due = [g for g in STREAM_GROUPS if g.name in streams and streams[g.name].due(now)]
+        if not due:
+            continue
+        ctx = TelemetryContext(battery=spec.battery, mission_count=len(waypoints), sensors=sensors,
+                               custom_mode=vehicle.custom_mode)
+        # The GPS receiver's (possibly spoofed) fix goes into GPS_RAW_INT and GLOBAL_POSITION_INT
+        # alone (gps.report below), the messages the gps_spoof truth rule labels; the other
+        # position-bearing messages (LOCAL_POSITION_NED, AHRS2, TERRAIN_REPORT, the navigation to
+        # the next waypoint) carry the physical track until that rule labels them too (flight.py).
+        state = sensors.state(track, spec.site, t, now, track.at(t), waypoints)
+        for g in due:
+            for typ in g.messages:
+                if typ in POSITION_MESSAGES:  # a GPS fix, of this instant (gps.py: spoofing decided then)
+                    gps.report(track, spec.t0_unix, lambda q, tq: gcs.send(build(
+                        m, typ, state.model_copy(update={"fix": q, "t_s": tq, **_geo(spec.site, q)}), ctx)))
+                else:
+                    gcs.send(build(m, typ, state, ctx))
+            if g.name == "EXTRA3" and now - terrain_at[0] >= TERRAIN_REQUEST_MIN_INTERVAL_S:
+                terrain_at[0] = now  # AP_Terrain: grid blocks still missing, last request >= 2 s ago
+                gcs.send(terrain_request(m, state))
     summary = {"node": spec.name, "sysid": spec.sysid, "sent": dict(sent), "received": dict(received),
                "mission_items": len(mission["items"]), "last_speed_mps": vehicle.speed_mps,
-               "custom_mode": vehicle.custom_mode, "gps": gps.summary()}
+               "custom_mode": vehicle.custom_mode, "gps": gps.summary(), "params_sent": plist["sent"]}
     log("summary", **summary)
     return summary
 
 
-def _wait(now, deadline, heartbeat, streams, mission, timeout_s: float) -> float:
+def _geo(site, q) -> dict:
+    lat, lon, amsl = local_to_geodetic(site, q.x_m, q.y_m, q.z_m)
+    return {"lat_deg": lat, "lon_deg": lon, "amsl_m": amsl, "groundspeed_mps": q.groundspeed_mps}
+
+
+def _wait(now, deadline, waits, streams, mission, timeout_s: float) -> float:
     """Seconds until the UAV's next own action: a message due, a mission retry, the deadline."""
-    nxt = [deadline, heartbeat.next] + [p.next for p in streams.values() if p.period is not None]
+    nxt = [deadline, *waits] + [p.next for p in streams.values() if p.period is not None]
     if mission["asked"] is not None:
         nxt.append(mission["asked"] + timeout_s)
     return max(0.0, min(nxt) - now)
@@ -121,28 +170,3 @@ def _ask_next(gcs: Peer, m, mission: dict, spec: UavSpec, log, resend: bool = Fa
         mission["tries"] = 0
     gcs.send(m.MAVLink_mission_request_int_message(sysid, compid, missing[0], m.MAV_MISSION_TYPE_MISSION))
     mission["asked"], mission["seq"] = time.time(), missing[0]
-
-
-def _telemetry(m, typ: str, spec: UavSpec, p, t: float):
-    lat, lon, alt = local_to_geodetic(spec.site, p.x_m, p.y_m, p.z_m)
-    boot_ms = max(0, round(t * 1000)) & 0xFFFFFFFF
-    gs = p.groundspeed_mps
-    if typ == "GLOBAL_POSITION_INT":  # velocities NED, cm/s
-        return m.MAVLink_global_position_int_message(
-            boot_ms, round(lat * 1e7), round(lon * 1e7), round(alt * 1000), round(p.z_m * 1000),
-            round(p.vy_mps * 100), round(p.vx_mps * 100), round(-p.vz_mps * 100), round(p.heading_deg * 100) % 36000)
-    if typ == "GPS_RAW_INT":
-        return m.MAVLink_gps_raw_int_message(
-            boot_ms * 1000, GPS_FIX_3D, round(lat * 1e7), round(lon * 1e7), round(alt * 1000), 100, 100,
-            round(gs * 100), round(course_deg(p) * 100) % 36000, GPS_SATELLITES)
-    if typ == "ATTITUDE":
-        yaw = math.radians(p.heading_deg)
-        return m.MAVLink_attitude_message(boot_ms, 0.0, 0.0, math.atan2(math.sin(yaw), math.cos(yaw)), 0.0, 0.0, 0.0)
-    if typ == "VFR_HUD":  # no wind: airspeed = ground speed
-        return m.MAVLink_vfr_hud_message(gs, gs, round(p.heading_deg) % 360, 50, alt, p.vz_mps)
-    if typ == "SYS_STATUS":
-        mv, ca, pct = spec.battery.at(t)
-        sensors = (m.MAV_SYS_STATUS_SENSOR_3D_GYRO | m.MAV_SYS_STATUS_SENSOR_3D_ACCEL | m.MAV_SYS_STATUS_SENSOR_GPS
-                   | m.MAV_SYS_STATUS_SENSOR_ABSOLUTE_PRESSURE | m.MAV_SYS_STATUS_SENSOR_BATTERY)
-        return m.MAVLink_sys_status_message(sensors, sensors, sensors, 250, mv, ca, pct, 0, 0, 0, 0, 0, 0)
-    raise ValueError(f"no telemetry message {typ!r}")

@@ -1,4 +1,6 @@
-"""The BS end: a ground station that requests streams, uploads missions and commands speeds."""
+"""The BS end: a ground station that requests streams and parameters, uploads missions and
+commands speeds, as MAVProxy does (MAVProxy at f76c4d3d: mavproxy.py `set_stream_rates`,
+modules/mavproxy_param.py `ParamState.fetch_check`; `specs.StreamRates`, `params`)."""
 
 from __future__ import annotations
 
@@ -6,18 +8,27 @@ import socket
 import time
 from collections import Counter
 
-from pymavlink.dialects.v20 import common
+from pymavlink.dialects.v20 import ardupilotmega
 
 from . import signing
 from .link import Log, Peer, Periodic, Stop, await_t0, recv_all
-from .specs import COMPONENT_AUTOPILOT, COMPONENT_GCS, STREAM_MESSAGES, GcsSpec, GcsTarget
+from .specs import COMPONENT_AUTOPILOT, COMPONENT_GCS, GcsSpec, GcsTarget
+from .streams import GROUP_OF
 
-# the stream group each streamed message belongs to (ArduPilot's grouping, `specs.STREAM_MESSAGES`)
-GROUP_OF = {name: sid for sid, names in STREAM_MESSAGES.items() for name in names}
+# MAVProxy's parameter fetch (mavproxy_param.py ParamState): `fetch_check` runs once a second
+# (`param_period = mavutil.periodic_event(1)`); with no parameter yet it sends PARAM_REQUEST_LIST;
+# with some missing and none heard for 1 s (`master.time_since('PARAM_VALUE') >= 1`) it asks for
+# at most 10 missing indices with PARAM_REQUEST_READ, and asks for the next ones at once when all
+# of those have come (`fetch_set` empty -> `fetch_check(force=True)`). MAVProxy downloads by MAVLink
+# FTP first where the vehicle offers it and falls back to this when FTP fails (`ftp_failed`); the
+# autopilot here serves no FTP, so this is the path.
+PARAM_CHECK_S = 1.0
+PARAM_QUIET_S = 1.0
+PARAM_READ_BATCH = 10
 
 
 def run_gcs(spec: GcsSpec) -> dict:
-    m = common
+    m = ardupilotmega
     stop = Stop()
     sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
     sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
@@ -35,14 +46,14 @@ def run_gcs(spec: GcsSpec) -> dict:
     # one signing state checks every datagram (its streams' last timestamps persist across the
     # per-datagram parsers); each peer signs what it sends with its own
     checks = signing.new_signing_state(spec.signing) if spec.signing is not None else None
-    # Re-request the stream groups not heard this long after a request (bounded retries). Each
-    # group is its own REQUEST_DATA_STREAM datagram, and a loaded downlink can drop any one of
-    # them: a UAV heard streaming POSITION may still never have been asked for EXTENDED_STATUS.
-    stream_wait_s = 2.0
+    # MAVProxy's msg_period: every detected vehicle's streams are requested again every
+    # `rerequest_s` (15 s), which repairs a request a loaded downlink lost.
+    rerequest = Periodic(1.0 / spec.rates.rerequest_s, time.time() + spec.rates.rerequest_s)
     while not stop.flag and (now := time.time()) < deadline:
-        waits = [deadline]
+        waits = [deadline, rerequest.next]
         for sysid, st in state.items():
-            waits += [st["hb"].next, st["pending_at"] + spec.retry.timeout_s if st["pending"] else deadline,
+            waits += [st["hb"].next, st["param_check"].next,
+                      st["pending_at"] + spec.retry.timeout_s if st["pending"] else deadline,
                       st["cmd_at"] + spec.retry.timeout_s if st["cmd"] else deadline]
         for k in range(1, spec.n_windows):
             if spec.t0_unix + k * spec.window_s > now:
@@ -65,11 +76,16 @@ def run_gcs(spec: GcsSpec) -> dict:
                     state[src] = {"hb": Periodic(spec.rates.heartbeat_rate_hz, time.time()), "pending": None,
                                   "pending_at": 0.0, "tries": 0, "mission_t0": time.time() - spec.t0_unix,
                                   "uploaded": False, "cmd": None, "cmd_at": 0.0, "cmd_tries": 0,
-                                  "streams_at": None, "stream_tries": 0, "streams_heard": set(),
+                                  "stream_requests": 0, "streams_heard": set(),
+                                  "param_check": Periodic(1.0 / PARAM_CHECK_S, time.time() + PARAM_CHECK_S),
+                                  "params": {}, "param_count": 0, "param_at": 0.0, "fetch_set": None,
+                                  "param_reads": 0, "param_lists": 0, "params_done": False,
                                   "window": max(0, int((time.time() - spec.t0_unix) // spec.window_s))}
                     log("heard", uav=targets[src].name, sysid=src)
-                    _request_streams(peers[src], m, spec, src, state[src])
                     _mission_start(peers[src], m, targets[src], state[src])
+                if typ == "HEARTBEAT" and msg.type != m.MAV_TYPE_GCS and state[src]["stream_requests"] == 0:
+                    # detected (mavproxy_link.py master_callback): its streams are requested now
+                    _request_streams(peers[src], m, spec, src, state[src])
                 peers[src].addr = addr
                 _gcs_handle(m, msg, typ, peers[src], targets[src], state[src], spec, log)
         now = time.time()
@@ -102,29 +118,39 @@ def run_gcs(spec: GcsSpec) -> dict:
                 else:
                     st["cmd_tries"] += 1
                     _send_command(peer, m, src, st)
-            missing = _streams_missing(spec, st)
-            if (missing and st["streams_at"] is not None and now >= st["streams_at"] + stream_wait_s
-                    and st["stream_tries"] < spec.retry.mission_retries):
-                st["stream_tries"] += 1
-                _request_streams(peer, m, spec, src, st, only=missing)
+            if st["param_check"].due(now):
+                _fetch_check(peer, m, src, st)
+        if rerequest.due(now):  # MAVProxy's msg_period: every detected vehicle, every 15 s
+            for src, st in state.items():
+                if st["stream_requests"]:
+                    _request_streams(peers[src], m, spec, src, st)
     summary = {"node": spec.name, "sysid": spec.sysid, "sent": dict(sent), "received": dict(received),
                "received_by_uav": {k: dict(v) for k, v in received_by.items()},
+               "params": {targets[s].name: len(st["params"]) for s, st in state.items()},
                "uploaded": sorted(targets[s].name for s, st in state.items() if st["uploaded"])}
     log("summary", **summary)
     return summary
 
 
-def _streams_missing(spec: GcsSpec, st: dict) -> set[int]:
-    """The stream groups requested at a non-zero rate whose messages have not been heard yet."""
-    return {sid for sid, rate in spec.rates.requests() if rate > 0} - st["streams_heard"]
-
-
-def _request_streams(peer: Peer, m, spec: GcsSpec, src: int, st: dict, only: set[int] | None = None) -> None:
-    """REQUEST_DATA_STREAM for every group (`only`: those groups alone, a re-request)."""
+def _request_streams(peer: Peer, m, spec: GcsSpec, src: int, st: dict) -> None:
+    """REQUEST_DATA_STREAM as MAVProxy sends it: MAV_DATA_STREAM_ALL at `streamrate`, start."""
     for sid, rate in spec.rates.requests():
-        if only is None or sid in only:
-            peer.send(m.MAVLink_request_data_stream_message(src, COMPONENT_AUTOPILOT, sid, rate, 1 if rate else 0))
-    st["streams_at"] = time.time()
+        peer.send(m.MAVLink_request_data_stream_message(src, COMPONENT_AUTOPILOT, sid, rate, 1))
+    st["stream_requests"] += 1
+
+
+def _fetch_check(peer: Peer, m, src: int, st: dict, force: bool = False) -> None:
+    """MAVProxy's `ParamState.fetch_check` (module comment): the list, or the missing ones."""
+    if not st["params"]:
+        peer.send(m.MAVLink_param_request_list_message(src, COMPONENT_AUTOPILOT))
+        st["param_lists"] += 1
+    elif st["param_count"] and len(st["params"]) < st["param_count"] and (
+            force or time.time() - st["param_at"] >= PARAM_QUIET_S):
+        missing = [i for i in range(st["param_count"]) if i not in st["params"]][:PARAM_READ_BATCH]
+        for idx in missing:
+            peer.send(m.MAVLink_param_request_read_message(src, COMPONENT_AUTOPILOT, b"", idx))
+        st["fetch_set"] = (st["fetch_set"] or set()) | set(missing)
+        st["param_reads"] += len(missing)
 
 
 def _mission_start(peer: Peer, m, tgt: GcsTarget, st: dict) -> None:
@@ -162,8 +188,10 @@ def _gcs_handle(m, msg, typ: str, peer: Peer, tgt: GcsTarget, st: dict, spec: Gc
     if typ in GROUP_OF and GROUP_OF[typ] not in st["streams_heard"]:
         st["streams_heard"].add(GROUP_OF[typ])
         log("stream", uav=tgt.name, group=GROUP_OF[typ], message=typ, result="started", t_s=t,
-            requests=st["stream_tries"] + 1)
-    if typ == "MISSION_REQUEST_INT" and msg.target_system == spec.sysid and st["pending"] is not None:
+            requests=st["stream_requests"])
+    if typ == "PARAM_VALUE":
+        _param_value(m, msg, peer, tgt, st, spec, log, t)
+    elif typ == "MISSION_REQUEST_INT" and msg.target_system == spec.sysid and st["pending"] is not None:
         if 0 <= msg.seq < len(tgt.waypoints):
             st["pending"], st["tries"] = ("item", msg.seq), 0
             _resend_mission(peer, m, tgt, st)
@@ -178,3 +206,20 @@ def _gcs_handle(m, msg, typ: str, peer: Peer, tgt: GcsTarget, st: dict, spec: Gc
             result="accepted" if msg.result == m.MAV_RESULT_ACCEPTED else f"result {msg.result}",
             tries=st["cmd_tries"] + 1)
         st["cmd"] = None
+
+
+def _param_value(m, msg, peer: Peer, tgt: GcsTarget, st: dict, spec: GcsSpec, log, t: float) -> None:
+    """MAVProxy's handling of PARAM_VALUE (mavproxy_param.py handle_mavlink_packet)."""
+    st["param_at"] = time.time()
+    if st["fetch_set"] is not None:
+        st["fetch_set"].discard(msg.param_index)
+    new = msg.param_index not in (-1, 65535) and msg.param_index not in st["params"]
+    if new:
+        st["params"][msg.param_index] = msg.param_value
+    st["param_count"] = msg.param_count
+    if new and len(st["params"]) == msg.param_count and not st["params_done"]:
+        st["params_done"], st["fetch_set"] = True, None
+        log("params", uav=tgt.name, result="complete", count=msg.param_count, t_s=t, lists=st["param_lists"],
+            reads=st["param_reads"])
+    if st["fetch_set"] is not None and not st["fetch_set"]:
+        _fetch_check(peer, m, msg.get_srcSystem(), st, force=True)

@@ -10,7 +10,7 @@ import time
 from collections import Counter
 from pathlib import Path
 
-from pymavlink.dialects.v20 import common
+from pymavlink.dialects.v20 import ardupilotmega
 
 T0_WAIT_S = 300.0  # longest an endpoint started before t0 waits for it
 
@@ -54,7 +54,8 @@ class Peer:
 
     def __init__(self, sock: socket.socket, addr, sysid: int, compid: int, sent: Counter) -> None:
         self.sock, self.addr, self.sent = sock, addr, sent
-        self.mav = common.MAVLink(self, srcSystem=sysid, srcComponent=compid)
+        # ardupilotmega: the ArduPilot messages (AHRS, MEMINFO, ...) on top of common, as both ends speak it
+        self.mav = ardupilotmega.MAVLink(self, srcSystem=sysid, srcComponent=compid)
         self.mav.robust_parsing = True  # a bad frame becomes BAD_DATA (counted), not an exception
 
     def write(self, buf: bytes) -> None:  # pymavlink's `file`: one datagram per message

@@ -8,10 +8,12 @@ from typing import Literal
 from pydantic import BaseModel, ConfigDict, Field
 from pymavlink.dialects.v20 import common
 
-from uavcas.twin.model import Site
+from uavcas.twin.model import DEFAULT_STREAM_HZ, Site
 from uavcas.twin.track import Track, local_to_geodetic
 
+from .params import TELEM_BAUD
 from .signing import SigningSpec
+from .streams import message_rates_hz
 
 GCS_PORT = 14550  # the customary ground-station UDP port (MAVProxy, QGroundControl, Mission Planner)
 # The autopilot's own UDP port: fixed (the customary MAVLink port on both ends), so that a sender
@@ -30,36 +32,26 @@ class _Frozen(BaseModel):
 
 
 class StreamRates(_Frozen):
-    """What the GCS requests (Hz, REQUEST_DATA_STREAM's integer rates; ArduPilot allows 0-50).
-
-    Default: MAVProxy's `streamrate` 4 (mavproxy.py MPSettings), which it requests for all
-    streams; heartbeat 1 Hz (MAVProxy `heartbeat`; ArduPilot sends its own at 1 Hz too).
+    """What the GCS requests, as MAVProxy does (MAVProxy/mavproxy.py at f76c4d3d, `set_stream_rates`):
+    one REQUEST_DATA_STREAM with MAV_DATA_STREAM_ALL at its `streamrate` setting (default 4,
+    `MPSetting('streamrate', int, 4, ...)`) to each vehicle it has detected (a non-GCS HEARTBEAT,
+    mavproxy_link.py `master_callback`), sent again every 15 s (`msg_period =
+    mavutil.periodic_event(1.0/15)`), so a request lost on the link is repaired 15 s later. ArduPilot
+    applies it to every stream but PARAMS (`streams.py`); its own HEARTBEAT stays 1 Hz. The GCS's
+    heartbeat: MAVProxy's `heartbeat` setting, 1 Hz.
     """
 
+    stream_rate_hz: int = Field(default=DEFAULT_STREAM_HZ, ge=1, le=50)  # MAVProxy `streamrate`
     heartbeat_rate_hz: float = Field(default=1.0, gt=0, le=50)
-    ext_stat_rate_hz: int = Field(default=4, ge=0, le=50)  # SYS_STATUS, GPS_RAW_INT
-    position_rate_hz: int = Field(default=4, ge=0, le=50)  # GLOBAL_POSITION_INT
-    extra1_rate_hz: int = Field(default=4, ge=0, le=50)  # ATTITUDE
-    extra2_rate_hz: int = Field(default=4, ge=0, le=50)  # VFR_HUD
+    rerequest_s: float = Field(default=15.0, gt=0)  # MAVProxy msg_period
 
     def requests(self) -> list[tuple[int, int]]:
-        """(MAV_DATA_STREAM id, rate Hz) pairs the GCS sends."""
-        m = common
-        return [(m.MAV_DATA_STREAM_EXTENDED_STATUS, self.ext_stat_rate_hz),
-                (m.MAV_DATA_STREAM_POSITION, self.position_rate_hz),
-                (m.MAV_DATA_STREAM_EXTRA1, self.extra1_rate_hz),
-                (m.MAV_DATA_STREAM_EXTRA2, self.extra2_rate_hz)]
+        """(MAV_DATA_STREAM id, rate Hz) pairs the GCS sends: one, for all streams."""
+        return [(common.MAV_DATA_STREAM_ALL, self.stream_rate_hz)]
 
     def expected_hz(self) -> dict[str, float]:
         """Message type -> rate the UAV sends it at once the request is granted."""
-        return {"HEARTBEAT": self.heartbeat_rate_hz, "SYS_STATUS": self.ext_stat_rate_hz,
-                "GPS_RAW_INT": self.ext_stat_rate_hz, "GLOBAL_POSITION_INT": self.position_rate_hz,
-                "ATTITUDE": self.extra1_rate_hz, "VFR_HUD": self.extra2_rate_hz}
-
-
-# ArduPilot's stream groups of the messages we send (GCS_MAVLink_Parameters.cpp STREAM_*_msgs)
-STREAM_MESSAGES = {2: ("SYS_STATUS", "GPS_RAW_INT"), 6: ("GLOBAL_POSITION_INT",), 10: ("ATTITUDE",),
-                   11: ("VFR_HUD",)}  # MAV_DATA_STREAM_EXTENDED_STATUS, _POSITION, _EXTRA1, _EXTRA2
+        return message_rates_hz(self.stream_rate_hz)
 
 
 class BatterySpec(_Frozen):
@@ -104,6 +96,11 @@ class UavSpec(_Frozen):
     retry: RetrySpec = RetrySpec()
     log_path: Path
     gps_path: Path | None = None  # where an attack may publish a GPS spoofer (gps.control_path)
+    # the telemetry port's baud rate, which paces the parameter download (params.param_rate_hz)
+    telem_baud: int = Field(default=TELEM_BAUD, gt=0)
+    # the sensor noise stream: uavcas.seeding stream (plan_seed, "mavlink-sensors", uav_index)
+    plan_seed: int = Field(default=0, ge=0)
+    uav_index: int = Field(default=0, ge=0)
 
     def track(self) -> Track:
         return Track(tuple(self.times_s), tuple(tuple(p) for p in self.positions_m))
@@ -152,6 +149,7 @@ def uav_spec(plan, uav: str, gcs_ip: str, t0_unix: float | None, duration_s: flo
     if node.sysid is None:
         raise ValueError(f"{uav} has no MAVLink system id in the plan")
     track = Track.of(plan, uav)
+    index = [n.name for n in plan.nodes if n.kind == "uav"].index(uav)
     return UavSpec(name=uav, sysid=node.sysid, gcs_ip=gcs_ip, site=plan.site, times_s=list(track.times_s),
                    positions_m=list(track.positions_m), t0_unix=t0_unix, duration_s=duration_s,
-                   log_path=log_path, **kw)
+                   log_path=log_path, plan_seed=plan.seed, uav_index=index, **kw)
