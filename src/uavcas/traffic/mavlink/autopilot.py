@@ -12,6 +12,7 @@ from pymavlink.dialects.v20 import common
 from uavcas.twin.track import local_to_geodetic
 
 from . import signing
+from .bridge import RadioBridge
 from .commands import VehicleState
 from .gps import POSITION_MESSAGES, GpsReceiver, course_deg
 from .link import Log, Peer, Periodic, Stop, await_t0, recv_all
@@ -31,6 +32,7 @@ def run_uav(spec: UavSpec) -> dict:
     spec = spec.model_copy(update={"t0_unix": await_t0(spec, stop)})
     log = Log(spec.log_path, spec.t0_unix)
     gps = GpsReceiver(spec.gps_path, log)  # true fixes unless the attack executor publishes a spoofer
+    radio = RadioBridge(sock, spec)  # the telemetry radio's RADIO_STATUS (radio.py), on this socket
     deadline = spec.t0_unix + spec.duration_s
     now = time.time()
     heartbeat = Periodic(1.0, now)
@@ -86,6 +88,7 @@ def run_uav(spec: UavSpec) -> dict:
                 m.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED | m.MAV_MODE_FLAG_SAFETY_ARMED | m.MAV_MODE_FLAG_STABILIZE_ENABLED
                 | m.MAV_MODE_FLAG_GUIDED_ENABLED | m.MAV_MODE_FLAG_AUTO_ENABLED,
                 vehicle.custom_mode, m.MAV_STATE_ACTIVE, 3))
+            radio.after_heartbeat(t)  # SiK reports once per heartbeat it passes on
         for sid, per in streams.items():
             if per.due(now):
                 for typ in STREAM_MESSAGES[sid]:
@@ -95,7 +98,7 @@ def run_uav(spec: UavSpec) -> dict:
                         gcs.send(_telemetry(m, typ, spec, p, t))
     summary = {"node": spec.name, "sysid": spec.sysid, "sent": dict(sent), "received": dict(received),
                "mission_items": len(mission["items"]), "last_speed_mps": vehicle.speed_mps,
-               "custom_mode": vehicle.custom_mode, "gps": gps.summary()}
+               "custom_mode": vehicle.custom_mode, "gps": gps.summary(), "radio_sent": dict(radio.sent)}
     log("summary", **summary)
     return summary
 

@@ -11,6 +11,7 @@ from pymavlink.dialects.v20 import common
 from uavcas.twin.model import Site
 from uavcas.twin.track import Track, local_to_geodetic
 
+from . import radio as _radio
 from .signing import SigningSpec
 
 GCS_PORT = 14550  # the customary ground-station UDP port (MAVProxy, QGroundControl, Mission Planner)
@@ -104,6 +105,7 @@ class UavSpec(_Frozen):
     retry: RetrySpec = RetrySpec()
     log_path: Path
     gps_path: Path | None = None  # where an attack may publish a GPS spoofer (gps.control_path)
+    radio: _radio.RadioSpec | None = None  # the telemetry radio's RADIO_STATUS reports (radio.py), None: none
 
     def track(self) -> Track:
         return Track(tuple(self.times_s), tuple(tuple(p) for p in self.positions_m))
@@ -152,6 +154,16 @@ def uav_spec(plan, uav: str, gcs_ip: str, t0_unix: float | None, duration_s: flo
     if node.sysid is None:
         raise ValueError(f"{uav} has no MAVLink system id in the plan")
     track = Track.of(plan, uav)
+    kw.setdefault("radio", radio_spec(plan, uav))
     return UavSpec(name=uav, sysid=node.sysid, gcs_ip=gcs_ip, site=plan.site, times_s=list(track.times_s),
                    positions_m=list(track.positions_m), t0_unix=t0_unix, duration_s=duration_s,
                    log_path=log_path, **kw)
+
+
+def radio_spec(plan, uav: str, rates: StreamRates | None = None) -> _radio.RadioSpec:
+    """The UAV radio's reports (radio.py): its load is the telemetry the GCS's `rates` ask for,
+    and it receives the GCS's heartbeats (the GCS's one periodic message to it)."""
+    rates = rates or StreamRates()
+    offered_bps, frame_bytes = _radio.mavlink_load(rates.expected_hz())
+    return _radio.RadioSpec(reports=_radio.radio_reports(plan, uav, offered_bps, frame_bytes,
+                                                         rates.heartbeat_rate_hz))
