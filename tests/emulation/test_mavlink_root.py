@@ -7,9 +7,10 @@ datagram to UDP 14550 at a BS's switch is a MAVLink 2 frame pymavlink parses wit
 each GLOBAL_POSITION_INT, converted back to metres, is the plan's track at its time_boot_ms
 within 1 m (and that time is the capture time within 0.5 s); `uavcas mavlink`'s table counts
 each stream at its configured rate, and each UAV radio's RADIO_STATUS at 1 Hz with the plan's
-values (rssi against the first hop's planned received power: r >= 0.9); the video reaches the BS at its configured bitrate where the
-path's planned rate leaves room for it; both runs' fidelity audits pass (the mixed run's as an
-expected failure while issue 28's saturated-link lateness is open).
+values (rssi against the first hop's planned received power: r >= 0.9); the video reaches the BS
+at its configured bitrate where the path's planned rate leaves room for it; both runs' fidelity
+audits pass (the mixed run's as an expected failure while issue 28's saturated-link lateness is
+open).
 """
 
 from __future__ import annotations

@@ -143,3 +143,25 @@ def test_radio_status_on_the_wire_is_sik_shaped(p):
     assert (msg.get_type(), msg.get_srcSystem(), msg.get_srcComponent()) == ("RADIO_STATUS", 51, 68)
     assert (msg.rssi, msg.remrssi, msg.txbuf, msg.noise, msg.remnoise, msg.rxerrors, msg.fixed) == (
         report.rssi, report.remrssi, report.txbuf, report.noise, report.remnoise, report.rxerrors, report.fixed)
+
+
+def test_a_jammer_raises_the_noise_each_end_reads_while_it_is_on():
+    # SiK samples noise with the RSSI register: a jammer's power at that end adds to the floor
+    pl = plan("jamming=20-5-2-mixed-logdist-adaptive-random-30-95", seed=0, windows=12)
+    floor_dbm = pl.scenario.noise_dbm
+    jammed = 0
+    for uav in _uavs(pl):
+        reports = specs.radio_spec(pl, uav).reports
+        for hop in R.first_hop_budgets(pl, uav):
+            if hop.peer is None:
+                continue
+            w = pl.windows[hop.window]
+            for r in reports[round(w.t_s):round(w.t_s + pl.window_s)]:
+                at = {(o.src, o.dst): o for o in w.link_overrides if o.start_s <= r.t_s < o.stop_s}
+                for (src, dst), field in (((hop.peer, uav), "noise"), ((uav, hop.peer), "remnoise")):
+                    o = at.get((src, dst))
+                    want = floor_dbm if o is None else 10 * math.log10(10 ** (floor_dbm / 10)
+                                                                       + 10 ** (o.interference_dbm / 10))
+                    assert getattr(r, field) == R.dbm_to_units(want), (uav, r, field)
+                    jammed += o is not None and getattr(r, field) > R.dbm_to_units(floor_dbm)
+    assert jammed > 0

@@ -11,8 +11,9 @@ SiK firmware of the 3DR / HM-TRP Si1000 radios (ArduPilot/SiK, commit 50189f2990
 * ids: system '3' = 51, component 'D' = 68 ("use '3D' for 3DRadio": RADIO_SOURCE_SYSTEM and
   RADIO_SOURCE_COMPONENT in mavlink.c). Ground stations key the unit conversion on them:
   QGroundControl converts rssi/remrssi to dBm only when sysid == '3' and compid == 'D'
-  (src/Vehicle/Vehicle.cc, Vehicle::_handleRadioStatus). Every SiK radio has these ids: a
-  capture tells two UAVs' radios apart by their addresses, as a real one would.
+  (src/Vehicle/Vehicle.cc, Vehicle::_handleRadioStatus; older releases in MAVLinkProtocol.cc).
+  Every SiK radio has these ids: a capture tells two UAVs' radios apart by their addresses, as
+  a real one would (a UAV whose own sysid is 51, uav50, shares it with every radio).
 * rate: SiK injects one report after each MAVLink heartbeat it sees on its serial input
   (packet.c check_response sets seen_mavlink; tdm.c's loop calls MAVLink_report() and clears
   it), i.e. at the autopilot's 1 Hz heartbeat; the MAVLink version is the heartbeat's (2 here).
@@ -71,7 +72,9 @@ Values (`radio_reports`), per UAV and second k (t = k s, the k-th heartbeat), fr
   (tdm.c keeps calling MAVLink_report), its receiver reads the background (rssi = noise), and
   with no peer heard SiK clears remote_statistics (tdm.c: memset when unlock_count > 5):
   remrssi = remnoise = 0. No frames arrive, so rxerrors does not grow; txbuf stays at its
-  idle 100 (SiK transmits its TDM slots whether or not anyone hears: the buffer drains).
+  idle 100: tdm.c's transmit path takes the next packet from the serial buffer
+  (packet_get_next) in each of its transmit windows without checking that the peer is locked,
+  so the buffer drains whether or not anyone hears.
   ArduPilot reads remrssi == 0 as "the GCS hears no radio" (GCS_Common.cpp
   handle_radio_status records last_radio_status.remrssi_ms only when remrssi != 0).
 """
