@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+import json
 import math
 
 import numpy as np
 import pytest
 from pymavlink.dialects.v20 import ardupilotmega, common
 
+from uavcas.mavlink_capture import decode_datagrams
 from uavcas.traffic.mavlink import radio as R
 from uavcas.traffic.mavlink import specs
 from uavcas.twin.plan import plan
@@ -143,6 +145,11 @@ def test_radio_status_on_the_wire_is_sik_shaped(p):
     assert (msg.get_type(), msg.get_srcSystem(), msg.get_srcComponent()) == ("RADIO_STATUS", 51, 68)
     assert (msg.rssi, msg.remrssi, msg.txbuf, msg.noise, msg.remnoise, msg.rxerrors, msg.fixed) == (
         report.rssi, report.remrssi, report.txbuf, report.noise, report.remnoise, report.rxerrors, report.fixed)
+    # `uavcas mavlink`'s decoder gives it a good row with its fields
+    (row,) = decode_datagrams([frame]).to_dict("records")
+    assert (row["msg_name"], row["msg_id"], row["crc_ok"], row["sysid"], row["compid"]) == (
+        "RADIO_STATUS", 109, True, 51, 68)
+    assert json.loads(row["fields_json"])["rssi"] == report.rssi
 
 
 def test_a_jammer_raises_the_noise_each_end_reads_while_it_is_on():
@@ -165,3 +172,15 @@ def test_a_jammer_raises_the_noise_each_end_reads_while_it_is_on():
                     assert getattr(r, field) == R.dbm_to_units(want), (uav, r, field)
                     jammed += o is not None and getattr(r, field) > R.dbm_to_units(floor_dbm)
     assert jammed > 0
+
+
+def test_the_fading_is_the_plans_profiles_or_none(p):
+    assert R.plan_fading(p) == load_profile(p.profile).channel.fading
+    # a plan whose recorded profile is not the one its name now finds: no fading, not another's
+    other = p.model_copy(update={"profile_sha256": "0" * 64})
+    assert R.plan_fading(other) is None
+    flat = R.radio_reports(other, "uav0", 0.0, 0.0, 1.0)
+    per = round(p.window_s)
+    for hop in R.first_hop_budgets(other, "uav0"):
+        assert hop.k_db is None
+        assert {r.rssi for r in flat[hop.window * per:(hop.window + 1) * per]} == {R.dbm_to_units(hop.rx_dbm)}

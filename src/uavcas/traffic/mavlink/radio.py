@@ -44,11 +44,13 @@ Values (`radio_reports`), per UAV and second k (t = k s, the k-th heartbeat), fr
 * small-scale fading: one Rician power gain g per end and report (E g = 1), with the K factor
   the profile's fading model gives at the link's aerial end (`channel.fading.KFactorProfile`,
   the altitude the chain uses: the UAV's for UAV-BS, the higher UAV's for UAV-UAV), drawn from
-  the named stream `seeding.generator(plan.seed, RADIO_STREAM, uav index)`. rssi is the local
-  end's P_rx + g_local, remrssi the peer's P_rx + g_remote (the path is reciprocal; the two
-  ends' averages are taken at different instants, so their fades are independent draws). SiK
-  smooths the register over received packets (tdm.c: avg = (last + 7 avg) / 8); one draw per
-  report stands for that average, which overstates its spread (no per-packet model here).
+  the named stream `seeding.generator(plan.seed, RADIO_STREAM, uav index)` (the profile is
+  found by the plan's recorded name and SHA-256, `plan_fading`; none found: no fading). rssi
+  is the local end's P_rx + g_local, remrssi the peer's P_rx + g_remote (the path is
+  reciprocal; the two ends' averages are taken at different instants, so their fades are
+  independent draws). SiK smooths the register over received packets (tdm.c: avg = (last +
+  7 avg) / 8); one draw per report stands for that average, which overstates its spread (no
+  per-packet model here).
 * units: the Si1000 RSSI register, dBm = units / 1.9 - 127 (QGroundControl Vehicle.cc, citing
   the Si1000 datasheet fig. 23.25 and Silicon Labs AN474), so units = round((dBm + 127) * 1.9),
   clipped to 0..255 (the register and the field are uint8; radio_443x.c reads
@@ -82,6 +84,7 @@ Values (`radio_reports`), per UAV and second k (t = k s, the k-th heartbeat), fr
 from __future__ import annotations
 
 import math
+from typing import Literal
 
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field
@@ -90,7 +93,7 @@ from pymavlink.dialects.v20 import common
 from uavcas import seeding
 from uavcas.channel.fading import KFactorProfile
 from uavcas.twin.model import Link, Plan, Window
-from uavcas.twin.profile import load_profile
+from uavcas.twin.profile import ProfileError, load_profile, profile_sha256
 
 RADIO_STREAM = "radio-status"  # the named stream of the reports' fading and error draws
 SIK_SYSID = ord("3")  # SiK mavlink.c RADIO_SOURCE_SYSTEM '3' = 51
@@ -193,11 +196,26 @@ def _aerial_altitude_m(plan: Plan, window: Window, a: str, b: str) -> float:
     return max(za, zb)
 
 
-def first_hop_budgets(plan: Plan, uav: str, fading: KFactorProfile | None = None) -> list[HopBudget]:
+def plan_fading(plan: Plan) -> KFactorProfile | None:
+    """The K model of the profile the plan was made with, found by the name the plan records and
+    checked against its recorded SHA-256. None when it has none, or when that name finds no
+    profile or another one (a profile read from a file under another name, or since edited):
+    the reports then carry no fading rather than another profile's."""
+    try:
+        prof = load_profile(plan.profile)
+    except ProfileError:
+        return None
+    if plan.profile_sha256 is not None and profile_sha256(prof) != plan.profile_sha256:
+        return None
+    return prof.channel.fading
+
+
+def first_hop_budgets(plan: Plan, uav: str,
+                      fading: KFactorProfile | None | Literal["plan"] = "plan") -> list[HopBudget]:
     """Per window, the UAV's first hop towards its BS and its planned budget (module docstring).
-    `fading`: the profile's K model (default: the plan's profile's)."""
-    if fading is None:
-        fading = load_profile(plan.profile).channel.fading
+    `fading`: the K model ("plan": `plan_fading`; None: no fading)."""
+    if fading == "plan":
+        fading = plan_fading(plan)
     noise_dbm = plan.scenario.noise_dbm
     bs = _bs_of(plan, uav)
     out = []
@@ -239,7 +257,7 @@ def _noise_dbm(noise_dbm: float, override) -> float:
 
 
 def radio_reports(plan: Plan, uav: str, offered_bps: float, frame_bytes: float, rx_frames_per_s: float,
-                  fading: KFactorProfile | None = None) -> list[RadioReport]:
+                  fading: KFactorProfile | None | Literal["plan"] = "plan") -> list[RadioReport]:
     """The UAV radio's RADIO_STATUS values for each second of the plan (module docstring).
 
     offered_bps: the UAV's planned MAVLink load into its radio (bits/s), frame_bytes its mean

@@ -154,7 +154,8 @@ def uav_spec(plan, uav: str, gcs_ip: str, t0_unix: float | None, duration_s: flo
     if node.sysid is None:
         raise ValueError(f"{uav} has no MAVLink system id in the plan")
     track = Track.of(plan, uav)
-    kw.setdefault("radio", radio_spec(plan, uav))
+    if "radio" not in kw:  # the caller's (the run's stream rates), else the default rates'
+        kw["radio"] = radio_spec(plan, uav)
     return UavSpec(name=uav, sysid=node.sysid, gcs_ip=gcs_ip, site=plan.site, times_s=list(track.times_s),
                    positions_m=list(track.positions_m), t0_unix=t0_unix, duration_s=duration_s,
                    log_path=log_path, **kw)
