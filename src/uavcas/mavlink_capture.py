@@ -36,6 +36,8 @@ Columns (`COLUMNS`, then `POSITION_COLUMNS`, then effect and family):
   effect (`vocabulary.EFFECTS`) and family (`vocabulary.FAMILIES`; missing for benign and
   channel_loss).
 For a row whose CRC failed, sysid/compid/seq/msg_id/msg_name are what its header claims.
+A UAV radio's RADIO_STATUS (`traffic.mavlink.radio`) carries SiK's ids, sysid 51 / compid 68,
+for every UAV, as real SiK radios do: its UAV is its src_ip, not its sysid.
 """
 
 from __future__ import annotations

@@ -47,7 +47,10 @@ def test_gcs_and_uav_exchange_mission_commands_and_streams_over_udp(tmp_path):
     up, down = parse_each(relay.up), parse_each(relay.down)
     assert {m.get_type() for _, m in down} >= {"HEARTBEAT", "REQUEST_DATA_STREAM", "MISSION_COUNT",
                                                "MISSION_ITEM_INT", "COMMAND_LONG"}
-    assert all(m.get_srcSystem() == 255 for _, m in down) and all(m.get_srcSystem() == 1 for _, m in up)
+    assert all(m.get_srcSystem() == 255 for _, m in down)
+    # up: the autopilot's frames, and its radio's RADIO_STATUS under SiK's ids (radio.py)
+    assert all(m.get_srcSystem() == 1 for _, m in up if m.get_type() != "RADIO_STATUS")
+    assert {(m.get_srcSystem(), m.get_srcComponent()) for _, m in up if m.get_type() == "RADIO_STATUS"} == {(51, 68)}
     # rates: from the first streamed message to the UAV's end, each type at its configured rate
     first = min(t for t, m in up if m.get_type() == "GLOBAL_POSITION_INT")
     span = max(t for t, _ in up) - first

@@ -62,7 +62,8 @@ class MavlinkApp(TrafficApp):
         for bs, uav in ctx.pairs:
             spec = mavlink.uav_spec(plan, uav, plan.node(bs).ip, None, app_s,
                                     ctx.log_dir / f"mavlink-{uav}.jsonl", t0_path=self.t0_path,
-                                    signing=self.signing, gps_path=mavlink.gps.control_path(ctx.work_dir, uav))
+                                    signing=self.signing, gps_path=mavlink.gps.control_path(ctx.work_dir, uav),
+                                    radio=mavlink.radio_spec(plan, uav, rates))
             path = spec_dir / f"{uav}.json"
             path.write_text(spec.model_dump_json())
             self.procs.append(spawn(ctx.starter(uav), f"mavlink-{uav}", run + ["uav", str(path)],

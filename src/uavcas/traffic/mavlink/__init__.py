@@ -24,6 +24,19 @@ plus ArduPilot's own messages, on both ends):
   COMMAND_LONG with COMMAND_ACK to the address it came from (`commands`: DO_CHANGE_SPEED,
   NAV_RETURN_TO_LAUNCH -> mode RTL 6, NAV_LAND -> mode LAND 9 ACCEPTED; anything else
   UNSUPPORTED), whoever sent it: a forged command is obeyed unless signing is on.
+* the UAV's telemetry radio (`radio`, `bridge`; `UavSpec.radio`, filled by `uav_spec` /
+  `radio_spec`): right after each autopilot heartbeat, one RADIO_STATUS (id 109) from the same
+  socket to the same GCS address, unsigned, under SiK's ids (system '3' = 51, component 'D' =
+  68), with SiK's fields and units: rssi / remrssi the plan's first-hop received power (snr_db +
+  noise_dbm, shadowing included) plus a seeded Rician fade, in Si1000 register units
+  (dBm + 127) * 1.9; noise / remnoise the noise floor (plus a jammer's power while a
+  LinkOverride is active); rxerrors a saturating uint16 count of Binomial(GCS frames, planned
+  loss) per second; fixed 0 (SiK's default ECC is off); txbuf SiK's % free serial buffer under
+  an M/M/1 queue of the planned telemetry on the link's rate (100 when idle); a disconnected
+  UAV reports rssi = noise and remrssi = remnoise = 0. Precomputed per second by the pure
+  `radio.radio_reports` (a SiK pair keeps its report off the air; a WiFi bridge such as
+  mavesp8266 sends it over UDP to the GCS, which is what the twin's link is: `radio`'s
+  docstring). The GCS ignores it (not a UAV's sysid); captures and `uavcas mavlink` show it.
 * `gcs` (ground station, in the BS's namespace, UDP 14550, all its UAVs), as MAVProxy: from a
   UAV's first datagram on, HEARTBEAT (MAV_TYPE_GCS) at 1 Hz to it; when its HEARTBEAT is heard,
   REQUEST_DATA_STREAM MAV_DATA_STREAM_ALL at `StreamRates.stream_rate_hz` (the plan's
@@ -52,7 +65,7 @@ state behind every field), `telemetry` (one builder per message), `params` (Ardu
 parameters and their pace), `autopilot` (the UAV end), `commands` (what a command does to
 the autopilot's state), `signing` (MAVLink 2 signing and the run's key), `gps` (the UAV's GPS
 receiver: true fixes, or a spoofer's that the `gps_spoof` attack publishes at run time), `ground`
-(the GCS end).
+(the GCS end), `radio` (what the UAV's radio reports, pure, from the plan), `bridge` (its sender).
 
 Run: python -m uavcas.traffic.mavlink {uav|gcs} SPEC.json
 """
@@ -70,9 +83,10 @@ from .specs import (
     StreamRates,
     UavSpec,
     gcs_target,
+    radio_spec,
     uav_spec,
 )
 
 __all__ = ["gps", "GCS_PORT", "T0_WAIT_S", "UAV_PORT", "BatterySpec", "GcsSpec", "GcsTarget", "RetrySpec",
-           "SigningSpec", "StreamRates", "UavSpec", "gcs_target", "read_log", "signing_key", "signing_spec", "uav_spec",
-           "write_t0"]
+           "SigningSpec", "StreamRates", "UavSpec", "gcs_target", "radio_spec", "read_log", "signing_key",
+           "signing_spec", "uav_spec", "write_t0"]

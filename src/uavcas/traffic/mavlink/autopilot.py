@@ -12,6 +12,7 @@ from uavcas import seeding
 from uavcas.twin.track import local_to_geodetic
 
 from . import signing
+from .bridge import RadioBridge
 from .commands import VehicleState
 from .flight import Sensors
 from .gps import POSITION_MESSAGES, GpsReceiver
@@ -41,6 +42,7 @@ def run_uav(spec: UavSpec) -> dict:
     spec = spec.model_copy(update={"t0_unix": await_t0(spec, stop)})
     log = Log(spec.log_path, spec.t0_unix)
     gps = GpsReceiver(spec.gps_path, log)  # true fixes unless the attack executor publishes a spoofer
+    radio = RadioBridge(sock, spec)  # the telemetry radio's RADIO_STATUS (radio.py), on this socket
     deadline = spec.t0_unix + spec.duration_s
     now = time.time()
     heartbeat = Periodic(1.0, now)
@@ -113,6 +115,7 @@ def run_uav(spec: UavSpec) -> dict:
                 m.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED | m.MAV_MODE_FLAG_SAFETY_ARMED | m.MAV_MODE_FLAG_STABILIZE_ENABLED
                 | m.MAV_MODE_FLAG_GUIDED_ENABLED | m.MAV_MODE_FLAG_AUTO_ENABLED,
                 vehicle.custom_mode, m.MAV_STATE_ACTIVE, 3))
+            radio.after_heartbeat(t)  # SiK reports once per heartbeat it passes on
         if plist["next"] is not None and plist["pace"].due(now):
             gcs.send(param_value(m, params, plist["next"]))
             plist["sent"] += 1
@@ -139,7 +142,8 @@ def run_uav(spec: UavSpec) -> dict:
                 gcs.send(terrain_request(m, state))
     summary = {"node": spec.name, "sysid": spec.sysid, "sent": dict(sent), "received": dict(received),
                "mission_items": len(mission["items"]), "last_speed_mps": vehicle.speed_mps,
-               "custom_mode": vehicle.custom_mode, "gps": gps.summary(), "params_sent": plist["sent"]}
+               "custom_mode": vehicle.custom_mode, "gps": gps.summary(), "params_sent": plist["sent"],
+               "radio_sent": dict(radio.sent)}
     log("summary", **summary)
     return summary
 

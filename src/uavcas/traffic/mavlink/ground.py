@@ -67,7 +67,9 @@ def run_gcs(spec: GcsSpec) -> dict:
             for msg in probe.parse_buffer(data) or []:
                 typ, src = msg.get_type(), msg.get_srcSystem()
                 received[typ] += 1
-                if typ == "BAD_DATA" or src not in targets:
+                # a UAV is its autopilot's (system, component): its radio's RADIO_STATUS comes under
+                # SiK's fixed ids (radio.py: system 51 = uav50's own id), from any UAV's address
+                if typ == "BAD_DATA" or src not in targets or msg.get_srcComponent() != COMPONENT_AUTOPILOT:
                     continue
                 received_by[targets[src].name][typ] += 1
                 if src not in peers:

@@ -11,6 +11,7 @@ from pymavlink.dialects.v20 import common
 from uavcas.twin.model import DEFAULT_STREAM_HZ, Site
 from uavcas.twin.track import Track, local_to_geodetic
 
+from . import radio as _radio
 from .params import TELEM_BAUD
 from .signing import SigningSpec
 from .streams import message_rates_hz
@@ -101,6 +102,7 @@ class UavSpec(_Frozen):
     # the sensor noise stream: uavcas.seeding stream (plan_seed, "mavlink-sensors", uav_index)
     plan_seed: int = Field(default=0, ge=0)
     uav_index: int = Field(default=0, ge=0)
+    radio: _radio.RadioSpec | None = None  # the telemetry radio's RADIO_STATUS reports (radio.py), None: none
 
     def track(self) -> Track:
         return Track(tuple(self.times_s), tuple(tuple(p) for p in self.positions_m))
@@ -150,6 +152,18 @@ def uav_spec(plan, uav: str, gcs_ip: str, t0_unix: float | None, duration_s: flo
         raise ValueError(f"{uav} has no MAVLink system id in the plan")
     track = Track.of(plan, uav)
     index = [n.name for n in plan.nodes if n.kind == "uav"].index(uav)
+    if "radio" not in kw:  # the caller's, else the one the plan's stream rate loads
+        kw["radio"] = radio_spec(plan, uav)
     return UavSpec(name=uav, sysid=node.sysid, gcs_ip=gcs_ip, site=plan.site, times_s=list(track.times_s),
                    positions_m=list(track.positions_m), t0_unix=t0_unix, duration_s=duration_s,
                    log_path=log_path, plan_seed=plan.seed, uav_index=index, **kw)
+
+
+def radio_spec(plan, uav: str, rates: StreamRates | None = None) -> _radio.RadioSpec:
+    """The UAV radio's reports (radio.py): its load is the telemetry the GCS's `rates` ask for
+    (default: the plan's stream rate), and it receives the GCS's heartbeats (the GCS's one
+    periodic message to it)."""
+    rates = rates or StreamRates(stream_rate_hz=plan.mavlink_stream_hz)
+    offered_bps, frame_bytes = _radio.mavlink_load(rates.expected_hz())
+    return _radio.RadioSpec(reports=_radio.radio_reports(plan, uav, offered_bps, frame_bytes,
+                                                         rates.heartbeat_rate_hz))
