@@ -25,9 +25,14 @@ def test_gcs_and_uav_exchange_mission_commands_and_streams_over_udp(tmp_path):
     relay = Relay(gcs_port)
     relay.start()
     gspec, uspec = bs0_uav0_specs(tmp_path, p, gcs_port, relay, p.duration_s + 0.5)
+    # a served UAV whose system id is SiK's (uav50 has 51): uav0's radio frames must not pass for it
+    sik = mv.GcsTarget(name="uav50", sysid=51, waypoints=[(35.7, -78.7, 30.0)], speeds_mps=[0.0] * len(p.windows))
+    gspec = gspec.model_copy(update={"uavs": [*gspec.uavs, sik]})
     run_endpoints(tmp_path, gspec, uspec, relay)
 
     glog, ulog = mv.read_log(gspec.log_path), mv.read_log(uspec.log_path)
+    assert not [e for e in glog if e.get("uav") == "uav50"]
+    assert not [e for e in glog if e["event"] == "summary"][0]["received_by_uav"]["uav50"]
     uploads = [e for e in glog if e["event"] == "mission_upload"]
     assert [e["result"] for e in uploads] == ["accepted"] and uploads[0]["items"] == 3
     assert uploads[0]["t_s"] < 1.2  # at once (both ends were up before t0) but for one 0.5 s retry
