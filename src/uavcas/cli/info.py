@@ -33,17 +33,20 @@ def info_cmd(
         return
     total = int(card.get("n_flows", 0))
     unit = card_view(card).row.plural
-    table = Table(title=f"{dataset_dir}: {total} {unit}, {card.get('n_runs', 0)} runs")
+    # the heading and the summary are lines of their own: a table's title and caption wrap at the
+    # table's width, which cut a long dataset path in two even in a pipe
+    console.print(f"{dataset_dir}: {total} {unit}, {card.get('n_runs', 0)} runs", highlight=False, soft_wrap=True)
+    table = Table()
     table.add_column("class")
     table.add_column("flows", justify="right")
     table.add_column("share", justify="right")
     for cls, n in card.get("class_counts", {}).items():
         table.add_row(cls, str(n), percent(n, total))
     std = card_standard(card)
-    table.caption = (f"features: {std}; views: {', '.join(card.get('views', []))}; "
-                     f"labels: {', '.join(card.get('label_modes', []))}; "
-                     f"schema v{card.get('schema_version')}")
     console.print(table)
+    console.print(f"features: {std}; views: {', '.join(card.get('views', []))}; "
+                  f"labels: {', '.join(card.get('label_modes', []))}; schema v{card.get('schema_version')}",
+                  highlight=False, soft_wrap=True)
     runs = dataset_runs(dataset_dir, card)
     fid = card.get("fidelity") or {}
     console.print("fidelity: " + (", ".join(f"{n} {v}" for v, n in fid.items()) or "not recorded")
