@@ -65,12 +65,9 @@ def run_cmd(
     check_output(out, "dir")
     p = plan_or_fail(config, seed, windows, window_s, profile, rounds,
                      **({"stream_hz": stream_hz} if stream_hz is not None else {}))
-    if stream_hz is not None and p.scenario is not None and p.scenario.payload not in MAVLINK_PAYLOADS:
-        raise fail(f"--stream-hz: payload {p.scenario.payload!r} carries no MAVLink "
-                   f"(use {', '.join(MAVLINK_PAYLOADS)})")
-    if mavlink_signing and p.scenario is not None and p.scenario.payload not in MAVLINK_PAYLOADS:
-        raise fail(f"--mavlink-signing: payload {p.scenario.payload!r} carries no MAVLink "
-                   f"(use {', '.join(MAVLINK_PAYLOADS)})")
+    for flag, given in (("--stream-hz", stream_hz is not None), ("--mavlink-signing", mavlink_signing)):
+        if given and p.scenario is not None and p.scenario.payload not in MAVLINK_PAYLOADS:
+            raise fail(f"{flag}: payload {p.scenario.payload!r} carries no MAVLink (use {', '.join(MAVLINK_PAYLOADS)})")
     prefix_or_fail(prefix)
 
     reason = preflight(p, out)

@@ -18,7 +18,7 @@ from .flight import Sensors
 from .gps import POSITION_MESSAGES, GpsReceiver
 from .link import Log, Peer, Periodic, Stop, await_t0, recv_all
 from .params import param_rate_hz, param_value, vehicle_params
-from .specs import COMPONENT_AUTOPILOT, UavSpec
+from .specs import COMPONENT_AUTOPILOT, UavSpec, mission_waypoints
 from .streams import GROUP_BY_ID, STREAM_GROUPS, TERRAIN_REQUEST_MIN_INTERVAL_S
 from .telemetry import TelemetryContext, build, terrain_request
 
@@ -35,8 +35,7 @@ def run_uav(spec: UavSpec) -> dict:
     gcs = Peer(sock, (spec.gcs_ip, spec.gcs_port), spec.sysid, COMPONENT_AUTOPILOT, sent)
     signing.enable(gcs.mav, spec.signing)
     track = spec.track()
-    waypoints = [local_to_geodetic(spec.site, *p) for p in track.positions_m]
-    waypoints = [(lat, lon, alt - spec.site.alt_m) for lat, lon, alt in waypoints]
+    waypoints = mission_waypoints(spec.site, track)
     sensors = Sensors(seeding.generator(spec.plan_seed, SENSOR_STREAM, spec.uav_index), spec.site.alt_m)
     params = vehicle_params(spec.sysid)
     spec = spec.model_copy(update={"t0_unix": await_t0(spec, stop)})

@@ -139,10 +139,15 @@ def gcs_target(plan, uav: str) -> GcsTarget:
     if node.sysid is None:
         raise ValueError(f"{uav} has no MAVLink system id in the plan")
     track = Track.of(plan, uav)
-    wps = [local_to_geodetic(plan.site, *p) for p in track.positions_m]
-    return GcsTarget(name=uav, sysid=node.sysid,
-                     waypoints=[(lat, lon, alt - plan.site.alt_m) for lat, lon, alt in wps],
+    return GcsTarget(name=uav, sysid=node.sysid, waypoints=mission_waypoints(plan.site, track),
                      speeds_mps=[track.speed_in_window_mps(k) for k in range(len(plan.windows))])
+
+
+def mission_waypoints(site: Site, track: Track) -> list[tuple[float, float, float]]:
+    """The track's window-start positions as mission waypoints: lat deg, lon deg, metres above the
+    site (what the GCS uploads and the autopilot navigates to)."""
+    wps = [local_to_geodetic(site, *p) for p in track.positions_m]
+    return [(lat, lon, alt - site.alt_m) for lat, lon, alt in wps]
 
 
 def uav_spec(plan, uav: str, gcs_ip: str, t0_unix: float | None, duration_s: float, log_path: Path,
@@ -151,7 +156,7 @@ def uav_spec(plan, uav: str, gcs_ip: str, t0_unix: float | None, duration_s: flo
     if node.sysid is None:
         raise ValueError(f"{uav} has no MAVLink system id in the plan")
     track = Track.of(plan, uav)
-    index = [n.name for n in plan.nodes if n.kind == "uav"].index(uav)
+    index = node.index  # the UAV's index, as the radio's stream takes it (radio.radio_reports)
     if "radio" not in kw:  # the caller's, else the one the plan's stream rate loads
         kw["radio"] = radio_spec(plan, uav)
     return UavSpec(name=uav, sysid=node.sysid, gcs_ip=gcs_ip, site=plan.site, times_s=list(track.times_s),
